@@ -1,0 +1,254 @@
+//! The application: an ECS `World` and `Schedule` driven by the command line or the watcher.
+
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
+
+use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::{SystemCondition, common_conditions::resource_changed};
+
+use crate::ecs::resources::{
+    Accumulation, ActiveCamera, ChangeSummary, Counters, MaterialTable, Output, OwnerMaterials,
+    PackedGeometry, PassPlan, PendingScene, RenderControl, RenderSettings, SceneVersion, Timings,
+};
+use crate::ecs::sets::RenderSystems;
+use crate::film::Film;
+use crate::render::TraceStats;
+use crate::scene::error::SceneError;
+use crate::scene::format::{CameraDesc, SettingsDesc};
+use crate::scene::load::{LoadedScene, TextureCache, load_scene};
+use crate::systems::{
+    apply_scene, assign_materials, geometry_changed, material_refs_changed, rebuild_geometry,
+    render_frame, write_image,
+};
+
+/// Command-line overrides of a scene's settings.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Overrides {
+    /// Image width.
+    pub width: Option<u32>,
+    /// Image height.
+    pub height: Option<u32>,
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// Rays per path.
+    pub max_depth: Option<u32>,
+    /// Random seed.
+    pub seed: Option<u64>,
+}
+
+impl Overrides {
+    /// Applies the overrides and checks the result against the format's limits.
+    pub fn apply(&self, s: &mut SettingsDesc) -> Result<(), String> {
+        s.width = self.width.unwrap_or(s.width);
+        s.height = self.height.unwrap_or(s.height);
+        s.spp = self.spp.unwrap_or(s.spp);
+        s.max_depth = self.max_depth.unwrap_or(s.max_depth);
+        s.seed = self.seed.unwrap_or(s.seed);
+        s.validate()
+    }
+}
+
+/// What [`Renderer::load`] loaded.
+#[derive(Clone, Debug)]
+pub struct LoadInfo {
+    /// Every file the scene depends on.
+    pub dependencies: Vec<std::path::PathBuf>,
+    /// The settings, overrides applied.
+    pub settings: SettingsDesc,
+}
+
+/// The renderer: owns the world, the schedule, the texture cache and the thread pool.
+pub struct Renderer {
+    world: World,
+    schedule: Schedule,
+    textures: TextureCache,
+    pool: rayon::ThreadPool,
+    overrides: Overrides,
+}
+
+impl Renderer {
+    /// A renderer with `threads` worker threads (all cores if `None`) and the given pass plan.
+    pub fn new(
+        threads: Option<usize>,
+        plan: PassPlan,
+    ) -> Result<Self, rayon::ThreadPoolBuildError> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads.unwrap_or(0))
+            .build()?;
+        let mut world = World::new();
+        world.init_resource::<PendingScene>();
+        world.insert_resource(ActiveCamera(CameraDesc {
+            position: glam::Vec3::ZERO,
+            direction: glam::Vec3::Z,
+            up: glam::Vec3::Y,
+            fov: 40.0,
+        }));
+        world.init_resource::<RenderSettings>();
+        world.init_resource::<MaterialTable>();
+        world.init_resource::<SceneVersion>();
+        world.init_resource::<PackedGeometry>();
+        world.init_resource::<OwnerMaterials>();
+        world.init_resource::<ChangeSummary>();
+        world.init_resource::<Counters>();
+        world.init_resource::<Timings>();
+        world.init_resource::<Accumulation>();
+        world.init_resource::<Output>();
+        world.insert_resource(RenderControl {
+            cancel: Arc::new(AtomicBool::new(false)),
+            plan,
+            progress: None,
+        });
+
+        let mut schedule = Schedule::default();
+        schedule.configure_sets(
+            (
+                RenderSystems::Load,
+                RenderSystems::Build,
+                RenderSystems::Render,
+                RenderSystems::Output,
+            )
+                .chain(),
+        );
+        schedule.add_systems((
+            apply_scene.in_set(RenderSystems::Load),
+            (
+                rebuild_geometry.run_if(geometry_changed),
+                assign_materials.run_if(
+                    resource_changed::<PackedGeometry>
+                        .or_eager(resource_changed::<MaterialTable>)
+                        .or_eager(material_refs_changed),
+                ),
+            )
+                .chain()
+                .in_set(RenderSystems::Build),
+            render_frame.in_set(RenderSystems::Render),
+            write_image.in_set(RenderSystems::Output),
+        ));
+        Ok(Self {
+            world,
+            schedule,
+            textures: TextureCache::default(),
+            pool,
+            overrides: Overrides::default(),
+        })
+    }
+
+    /// Sets the settings overrides applied to every scene loaded from now on.
+    pub fn set_overrides(&mut self, overrides: Overrides) {
+        self.overrides = overrides;
+    }
+
+    /// Sets the output file; `every_pass` writes after each pass (live preview).
+    pub fn set_output(&mut self, path: Option<&Path>, every_pass: bool) {
+        let mut out = self.world.resource_mut::<Output>();
+        out.path = path.map(Path::to_path_buf);
+        out.every_pass = every_pass;
+    }
+
+    /// Attaches a progress bar advanced by rendered rows.
+    pub fn set_progress(&mut self, bar: Option<indicatif::ProgressBar>) {
+        self.world.resource_mut::<RenderControl>().progress = bar;
+    }
+
+    /// The flag that cancels the pass in flight (shared with a watcher thread).
+    pub fn cancel_flag(&self) -> Arc<AtomicBool> {
+        self.world.resource::<RenderControl>().cancel.clone()
+    }
+
+    /// Loads the scene at `path` (textures through the cache), applies the overrides and queues
+    /// it for the next frame. Returns what was loaded.
+    pub fn load(&mut self, path: &Path) -> Result<LoadInfo, SceneError> {
+        let mut scene = load_scene(path, &mut self.textures)?;
+        self.overrides
+            .apply(&mut scene.settings)
+            .map_err(|m| SceneError::at(path, None, m))?;
+        let info = LoadInfo {
+            dependencies: scene.dependencies.clone(),
+            settings: scene.settings,
+        };
+        self.submit(scene);
+        Ok(info)
+    }
+
+    /// Queues an already loaded scene for the next frame.
+    pub fn submit(&mut self, scene: LoadedScene) {
+        self.world.resource_mut::<PendingScene>().0 = Some(scene);
+    }
+
+    /// Runs the schedule once: applies a pending scene, rebuilds what changed, renders one pass
+    /// and writes the image if due.
+    pub fn run_once(&mut self) {
+        let Self {
+            world,
+            schedule,
+            pool,
+            ..
+        } = self;
+        pool.install(|| schedule.run(world));
+    }
+
+    /// Runs frames until the film holds every sample. Returns the wall time of the render.
+    pub fn render_to_completion(&mut self) -> Duration {
+        let start = Instant::now();
+        self.run_once();
+        while !self.is_complete() {
+            self.run_once();
+        }
+        start.elapsed()
+    }
+
+    /// Whether the film holds every sample of the current scene.
+    pub fn is_complete(&self) -> bool {
+        self.world.resource::<Accumulation>().complete
+    }
+
+    /// The accumulated film.
+    pub fn film(&self) -> &Film {
+        &self.world.resource::<Accumulation>().film
+    }
+
+    /// Trace counters of the current render.
+    pub fn stats(&self) -> TraceStats {
+        self.world.resource::<Accumulation>().stats
+    }
+
+    /// Work counters since creation.
+    pub fn counters(&self) -> Counters {
+        *self.world.resource::<Counters>()
+    }
+
+    /// Step durations.
+    pub fn timings(&self) -> Timings {
+        *self.world.resource::<Timings>()
+    }
+
+    /// What the last applied scene changed.
+    pub fn change_summary(&self) -> ChangeSummary {
+        self.world.resource::<ChangeSummary>().clone()
+    }
+
+    /// The current settings.
+    pub fn settings(&self) -> SettingsDesc {
+        self.world.resource::<RenderSettings>().0
+    }
+
+    /// The output status (images written, last write error).
+    pub fn output(&self) -> &Output {
+        self.world.resource::<Output>()
+    }
+
+    /// Number of primitives in the packed geometry.
+    pub fn primitive_count(&self) -> usize {
+        self.world
+            .resource::<PackedGeometry>()
+            .geometry
+            .primitive_count()
+    }
+
+    /// Number of image decodes by the texture cache.
+    pub fn texture_decodes(&self) -> u64 {
+        self.textures.decodes()
+    }
+}

@@ -1,0 +1,5 @@
+//! The ECS layer: components, resources and system sets. Kernels never see it.
+
+pub mod components;
+pub mod resources;
+pub mod sets;

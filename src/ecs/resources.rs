@@ -1,0 +1,142 @@
+//! World resources: the scene-wide state (camera, settings, materials) and the render-side
+//! snapshot the render system reads instead of querying entities.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+use bevy_ecs::entity::Entity;
+use bevy_ecs::resource::Resource;
+
+use crate::film::Film;
+use crate::geometry::packed::Geometry;
+use crate::render::TraceStats;
+use crate::scene::format::{CameraDesc, SettingsDesc};
+use crate::scene::load::LoadedScene;
+use crate::shading::material::Material;
+
+/// A freshly loaded scene waiting for [`crate::systems::apply_scene`].
+#[derive(Resource, Default)]
+pub struct PendingScene(pub Option<LoadedScene>);
+
+/// The camera of the current scene.
+#[derive(Resource, Clone, Copy, Debug, PartialEq)]
+pub struct ActiveCamera(pub CameraDesc);
+
+/// Image and sampling settings of the current scene.
+#[derive(Resource, Clone, Copy, Debug, PartialEq, Default)]
+pub struct RenderSettings(pub SettingsDesc);
+
+/// Materials of the current scene by name.
+#[derive(Resource, Clone, Debug, PartialEq, Default)]
+pub struct MaterialTable(pub BTreeMap<String, Material>);
+
+/// Bumped on every applied scene, changed or not: every save re-renders.
+#[derive(Resource, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct SceneVersion(pub u64);
+
+/// Packed geometry with its BVHs, rebuilt only when shapes or transforms change.
+#[derive(Resource, Default)]
+pub struct PackedGeometry {
+    /// Primitives and BVHs.
+    pub geometry: Geometry,
+    /// The entity behind each owner slot of the geometry.
+    pub owners: Vec<Entity>,
+}
+
+/// Material table in the order the renderer indexes it, and the material of each owner slot.
+#[derive(Resource, Clone, Debug, Default, PartialEq)]
+pub struct OwnerMaterials {
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// Index into `materials` per owner slot.
+    pub owner_material: Vec<u32>,
+}
+
+/// What the last reload changed.
+#[derive(Resource, Clone, Debug, Default, PartialEq, Eq)]
+pub struct ChangeSummary {
+    /// Entities spawned.
+    pub added: usize,
+    /// Entities whose shape, transform or material changed.
+    pub changed: usize,
+    /// Entities despawned.
+    pub removed: usize,
+    /// Whether the material table changed.
+    pub materials: bool,
+    /// Whether the camera changed.
+    pub camera: bool,
+    /// Whether the settings changed.
+    pub settings: bool,
+}
+
+/// Work counters, so tests can assert what a reload did.
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// BVH (geometry) builds so far.
+    pub bvh_builds: u64,
+    /// Material assignments so far.
+    pub material_syncs: u64,
+    /// Render passes completed so far.
+    pub passes: u64,
+}
+
+/// Durations of the last runs of each step.
+#[derive(Resource, Clone, Copy, Debug, Default)]
+pub struct Timings {
+    /// Last geometry pack + BVH build.
+    pub bvh: Duration,
+    /// Last render pass.
+    pub pass: Duration,
+    /// Rendering since the last reset (all passes).
+    pub render: Duration,
+}
+
+/// How samples are split into passes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PassPlan {
+    /// All samples in one pass (batch renders).
+    Single,
+    /// A first pass of `first` samples, then passes that double the total (live preview).
+    Progressive {
+        /// Samples of the first pass.
+        first: u32,
+    },
+}
+
+/// Render control shared with the outside (cancel flag, progress bar).
+#[derive(Resource, Clone)]
+pub struct RenderControl {
+    /// Set to abandon the current pass (checked per band of rows).
+    pub cancel: Arc<AtomicBool>,
+    /// Pass plan.
+    pub plan: PassPlan,
+    /// Progress bar advanced by rows, if any.
+    pub progress: Option<indicatif::ProgressBar>,
+}
+
+/// The accumulating image and the statistics of the current render.
+#[derive(Resource, Default)]
+pub struct Accumulation {
+    /// Sample sums.
+    pub film: Film,
+    /// Counters since the last reset.
+    pub stats: TraceStats,
+    /// Whether `film` holds every sample the settings ask for.
+    pub complete: bool,
+}
+
+/// Where and whether [`crate::systems::write_image`] writes the film.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct Output {
+    /// Target file (`.png` or `.exr`); none to keep the image in memory only.
+    pub path: Option<PathBuf>,
+    /// Write after every pass (live preview) instead of only when complete.
+    pub every_pass: bool,
+    /// Result of the last write.
+    pub last_error: Option<String>,
+    /// Images written so far.
+    pub writes: u64,
+}

@@ -1,0 +1,23 @@
+//! rondo: a data-oriented ECS path tracer for hand-written RON scenes, with hot reload.
+//!
+//! Scenes are RON files ([`scene`]). Their entities become bevy_ecs entities with [`Shape`],
+//! [`Transform`] and [`MaterialRef`] components; systems ([`systems`]) pack them into
+//! structure-of-arrays geometry with a BVH (obvhs) only when geometry changed, and the path
+//! tracer ([`render`]) renders the packed snapshot with rayon. Kernels ([`geometry`],
+//! [`shading`], [`camera`], [`film`]) know nothing about the ECS. See `ARCHITECTURE.md`.
+
+pub mod app;
+pub mod camera;
+pub mod ecs;
+pub mod film;
+pub mod geometry;
+pub mod render;
+pub mod scene;
+pub mod shading;
+pub mod systems;
+
+pub use app::{Overrides, Renderer};
+pub use ecs::components::{EntityName, MaterialRef, Shape, Transform};
+pub use ecs::resources::PassPlan;
+pub use film::Film;
+pub use scene::error::SceneError;

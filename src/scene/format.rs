@@ -1,0 +1,443 @@
+//! Serde mirror of the RON scene format. Values are validated while they are parsed, so a bad
+//! value is reported at its own line and column by the RON parser.
+
+use std::collections::BTreeMap;
+use std::num::NonZeroU32;
+
+use glam::Vec3;
+use serde::de::Error as _;
+use serde::{Deserialize, Deserializer};
+
+use crate::ecs::components::{Shape, Transform};
+
+/// A finite number (RON accepts `inf` and `NaN`; scenes may not).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Real(pub f32);
+
+impl<'de> Deserialize<'de> for Real {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = f64::deserialize(d)?;
+        let f = v as f32;
+        if !f.is_finite() {
+            return Err(D::Error::custom(format!("{v} is not a finite number")));
+        }
+        Ok(Self(f))
+    }
+}
+
+/// A number > 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Positive(pub f32);
+
+impl<'de> Deserialize<'de> for Positive {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let Real(v) = Real::deserialize(d)?;
+        if v <= 0.0 {
+            return Err(D::Error::custom(format!("{v} must be greater than 0")));
+        }
+        Ok(Self(v))
+    }
+}
+
+/// A number ≥ 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NonNegative(pub f32);
+
+impl<'de> Deserialize<'de> for NonNegative {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let Real(v) = Real::deserialize(d)?;
+        if v < 0.0 {
+            return Err(D::Error::custom(format!("{v} must not be negative")));
+        }
+        Ok(Self(v))
+    }
+}
+
+/// A finite vector written `(x, y, z)`; integers are accepted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct V3(pub Vec3);
+
+impl<'de> Deserialize<'de> for V3 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let [x, y, z] = <[Real; 3]>::deserialize(d)?;
+        Ok(Self(Vec3::new(x.0, y.0, z.0)))
+    }
+}
+
+/// A colour `(r, g, b)` with non-negative components.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Color(pub Vec3);
+
+impl<'de> Deserialize<'de> for Color {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let [r, g, b] = <[NonNegative; 3]>::deserialize(d)?;
+        Ok(Self(Vec3::new(r.0, g.0, b.0)))
+    }
+}
+
+/// The whole scene file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Scene")]
+pub struct SceneDesc {
+    /// The camera.
+    pub camera: CameraDesc,
+    /// Image and sampling settings.
+    #[serde(default)]
+    pub settings: SettingsDesc,
+    /// Named materials.
+    #[serde(default)]
+    pub materials: BTreeMap<String, MaterialDesc>,
+    /// The objects.
+    #[serde(default)]
+    pub entities: Vec<EntityDesc>,
+}
+
+/// `Camera(position, look_at | direction, up, fov)`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Camera", try_from = "RawCamera")]
+pub struct CameraDesc {
+    /// Eye position.
+    pub position: Vec3,
+    /// View direction (from `look_at − position` or `direction`), non-zero.
+    pub direction: Vec3,
+    /// Up vector, not parallel to `direction`.
+    pub up: Vec3,
+    /// Vertical field of view in degrees, in (0, 180).
+    pub fov: f32,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename = "Camera")]
+struct RawCamera {
+    position: V3,
+    look_at: Option<V3>,
+    direction: Option<V3>,
+    #[serde(default = "default_up")]
+    up: V3,
+    #[serde(default = "default_fov")]
+    fov: Real,
+}
+
+fn default_up() -> V3 {
+    V3(Vec3::Y)
+}
+
+fn default_fov() -> Real {
+    Real(40.0)
+}
+
+impl TryFrom<RawCamera> for CameraDesc {
+    type Error = String;
+    fn try_from(raw: RawCamera) -> Result<Self, String> {
+        let direction = match (raw.look_at, raw.direction) {
+            (Some(at), None) => at.0 - raw.position.0,
+            (None, Some(d)) => d.0,
+            (Some(_), Some(_)) => {
+                return Err("camera: give `look_at` or `direction`, not both".into());
+            }
+            (None, None) => return Err("camera: `look_at` or `direction` is required".into()),
+        };
+        if direction.length_squared() == 0.0 || !direction.length_squared().is_normal() {
+            return Err("camera: the view direction is zero (look_at equals position?)".into());
+        }
+        let up = raw.up.0;
+        if direction.normalize().cross(up).length_squared() < 1e-12 {
+            return Err("camera: `up` is zero or parallel to the view direction".into());
+        }
+        let fov = raw.fov.0;
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(format!("camera: fov {fov} must be in (0, 180) degrees"));
+        }
+        Ok(Self {
+            position: raw.position.0,
+            direction,
+            up,
+            fov,
+        })
+    }
+}
+
+/// Largest accepted image side, in pixels.
+pub const MAX_SIDE: u32 = 16_384;
+/// Largest accepted pixel count (width · height).
+pub const MAX_PIXELS: u64 = 1 << 26;
+/// Largest accepted samples per pixel.
+pub const MAX_SPP: u32 = 1 << 20;
+/// Largest accepted path depth.
+pub const MAX_DEPTH: u32 = 1024;
+
+/// `Settings(width, height, spp, max_depth, background, seed)`; every field optional.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Settings", try_from = "RawSettings")]
+pub struct SettingsDesc {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Rays per path, camera ray included (1 = emitters only).
+    pub max_depth: u32,
+    /// Radiance of rays that miss everything.
+    pub background: Vec3,
+    /// Random seed.
+    pub seed: u64,
+}
+
+impl Default for SettingsDesc {
+    fn default() -> Self {
+        Self {
+            width: 512,
+            height: 512,
+            spp: 64,
+            max_depth: 8,
+            background: Vec3::ZERO,
+            seed: 0,
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename = "Settings")]
+struct RawSettings {
+    width: Option<NonZeroU32>,
+    height: Option<NonZeroU32>,
+    spp: Option<NonZeroU32>,
+    max_depth: Option<NonZeroU32>,
+    background: Option<Color>,
+    seed: Option<u64>,
+}
+
+impl TryFrom<RawSettings> for SettingsDesc {
+    type Error = String;
+    fn try_from(raw: RawSettings) -> Result<Self, String> {
+        let d = Self::default();
+        let s = Self {
+            width: raw.width.map_or(d.width, NonZeroU32::get),
+            height: raw.height.map_or(d.height, NonZeroU32::get),
+            spp: raw.spp.map_or(d.spp, NonZeroU32::get),
+            max_depth: raw.max_depth.map_or(d.max_depth, NonZeroU32::get),
+            background: raw.background.map_or(d.background, |c| c.0),
+            seed: raw.seed.unwrap_or(d.seed),
+        };
+        s.validate()?;
+        Ok(s)
+    }
+}
+
+impl SettingsDesc {
+    /// Checks the limits that keep a render from asking for absurd amounts of memory or time.
+    pub fn validate(&self) -> Result<(), String> {
+        let pixels = u64::from(self.width) * u64::from(self.height);
+        if self.width == 0 || self.height == 0 || self.spp == 0 || self.max_depth == 0 {
+            return Err("width, height, spp and max_depth must be at least 1".into());
+        }
+        if self.width > MAX_SIDE || self.height > MAX_SIDE || pixels > MAX_PIXELS {
+            return Err(format!(
+                "image {}×{} is too large (at most {MAX_SIDE} per side and {MAX_PIXELS} pixels)",
+                self.width, self.height
+            ));
+        }
+        if self.spp > MAX_SPP {
+            return Err(format!("spp {} is too large (at most {MAX_SPP})", self.spp));
+        }
+        if self.max_depth > MAX_DEPTH {
+            return Err(format!(
+                "max_depth {} is too large (at most {MAX_DEPTH})",
+                self.max_depth
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A texture: wherever a colour is expected.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum TextureDesc {
+    /// `Constant((r, g, b))`.
+    Constant(Color),
+    /// `Checker(scale, even, odd)`: `even` where `sin(scale·u)·sin(scale·v) > 0`.
+    Checker {
+        /// Frequency k.
+        scale: Real,
+        /// Texture of the positive cells.
+        even: Box<TextureDesc>,
+        /// Texture of the other cells.
+        odd: Box<TextureDesc>,
+    },
+    /// `Image(path: "file.png")`, relative to the scene file.
+    Image {
+        /// Path to a PNG file.
+        path: String,
+    },
+}
+
+/// A material.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum MaterialDesc {
+    /// `Diffuse(albedo)`.
+    Diffuse {
+        /// Reflectance.
+        albedo: TextureDesc,
+    },
+    /// `Metal(albedo, roughness)`; roughness is clamped to [0, 1].
+    Metal {
+        /// Reflectance.
+        albedo: TextureDesc,
+        /// Fuzz.
+        #[serde(default = "zero")]
+        roughness: Real,
+    },
+    /// `Dielectric(ior)`.
+    Dielectric {
+        /// Index of refraction.
+        ior: Positive,
+    },
+    /// `Light(emit, intensity, two_sided)`.
+    Light {
+        /// Emitted colour.
+        emit: TextureDesc,
+        /// Scale of `emit`.
+        #[serde(default = "one")]
+        intensity: NonNegative,
+        /// Emit on both sides.
+        #[serde(default)]
+        two_sided: bool,
+    },
+}
+
+fn zero() -> Real {
+    Real(0.0)
+}
+
+fn one() -> NonNegative {
+    NonNegative(1.0)
+}
+
+/// `Entity(name, material, shape, transform)`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Entity")]
+pub struct EntityDesc {
+    /// Unique name; defaults to `#<index>`.
+    pub name: Option<String>,
+    /// Name of a material in the scene's table.
+    pub material: String,
+    /// The shape.
+    pub shape: ShapeDesc,
+    /// Placement.
+    pub transform: Option<TransformDesc>,
+}
+
+/// A validated [`Shape`] as written in RON.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "RawShape")]
+pub struct ShapeDesc(pub Shape);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+enum RawShape {
+    Sphere { center: V3, radius: Positive },
+    Plane { point: V3, normal: V3 },
+    Triangle { a: V3, b: V3, c: V3 },
+    Quad { a: V3, b: V3, c: V3, d: V3 },
+    Box { min: V3, max: V3 },
+}
+
+/// Twice the area of a triangle, relative to the square of its longest edge: 0 when degenerate.
+fn relative_area(a: Vec3, b: Vec3, c: Vec3) -> f32 {
+    let longest = (b - a)
+        .length_squared()
+        .max((c - a).length_squared())
+        .max((c - b).length_squared());
+    if longest == 0.0 {
+        return 0.0;
+    }
+    (b - a).cross(c - a).length() / longest
+}
+
+impl TryFrom<RawShape> for ShapeDesc {
+    type Error = String;
+    fn try_from(raw: RawShape) -> Result<Self, String> {
+        const MIN_AREA: f32 = 1e-6;
+        let shape = match raw {
+            RawShape::Sphere { center, radius } => Shape::Sphere {
+                center: center.0,
+                radius: radius.0,
+            },
+            RawShape::Plane { point, normal } => {
+                let n = normal.0;
+                if n.length_squared() == 0.0 || !n.length_squared().is_normal() {
+                    return Err("plane: the normal is zero".into());
+                }
+                Shape::Plane {
+                    point: point.0,
+                    normal: n.normalize(),
+                }
+            }
+            RawShape::Triangle { a, b, c } => {
+                if relative_area(a.0, b.0, c.0) < MIN_AREA {
+                    return Err("triangle: zero area (collinear or repeated vertices)".into());
+                }
+                Shape::Triangle {
+                    a: a.0,
+                    b: b.0,
+                    c: c.0,
+                }
+            }
+            RawShape::Quad { a, b, c, d } => {
+                if relative_area(a.0, b.0, c.0) < MIN_AREA
+                    || relative_area(a.0, c.0, d.0) < MIN_AREA
+                {
+                    return Err("quad: zero area (collinear or repeated corners)".into());
+                }
+                Shape::Quad {
+                    a: a.0,
+                    b: b.0,
+                    c: c.0,
+                    d: d.0,
+                }
+            }
+            RawShape::Box { min, max } => {
+                if !min.0.cmplt(max.0).all() {
+                    return Err("box: `min` must be less than `max` on every axis".into());
+                }
+                Shape::Box {
+                    min: min.0,
+                    max: max.0,
+                }
+            }
+        };
+        Ok(Self(shape))
+    }
+}
+
+/// A validated [`Transform`] as written in RON: `Transform(translate, rotate, scale)`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(try_from = "RawTransform")]
+pub struct TransformDesc(pub Transform);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename = "Transform")]
+struct RawTransform {
+    translate: Option<V3>,
+    rotate: Option<V3>,
+    scale: Option<V3>,
+}
+
+impl TryFrom<RawTransform> for TransformDesc {
+    type Error = String;
+    fn try_from(raw: RawTransform) -> Result<Self, String> {
+        let d = Transform::default();
+        let t = Transform {
+            translate: raw.translate.map_or(d.translate, |v| v.0),
+            rotate: raw.rotate.map_or(d.rotate, |v| v.0),
+            scale: raw.scale.map_or(d.scale, |v| v.0),
+        };
+        if t.scale.abs().min_element() < 1e-12 {
+            return Err("transform: scale must not be zero on any axis".into());
+        }
+        Ok(Self(t))
+    }
+}

@@ -1,0 +1,301 @@
+//! Materials: how a surface scatters or emits light.
+//!
+//! The thesis's formulas are corrected here: Schlick's R0 is `((n1 − n2)/(n1 + n2))²` (the thesis
+//! uses n1/n2), the dielectric *reflects* with probability R (the thesis refracts), and diffuse
+//! directions are cosine-sampled in a frame, so they are never the zero vector.
+
+use glam::{Vec2, Vec3};
+
+use super::rng::Rng;
+use super::sampling::{Frame, cosine_hemisphere, uniform_ball};
+use super::texture::Texture;
+
+/// A surface material.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Material {
+    /// Lambertian reflector.
+    Diffuse {
+        /// Reflectance.
+        albedo: Texture,
+    },
+    /// Mirror with the thesis's fuzz: the reflected direction plus `roughness` times a random
+    /// point of the unit ball; directions that end up below the surface are absorbed.
+    Metal {
+        /// Reflectance.
+        albedo: Texture,
+        /// Fuzz radius in [0, 1].
+        roughness: f32,
+    },
+    /// Smooth glass: Fresnel (Schlick) reflection, Snell refraction, total internal reflection.
+    Dielectric {
+        /// Index of refraction relative to the outside medium.
+        ior: f32,
+    },
+    /// Emitter ("diffuse light"): emits `emit · intensity`, scatters nothing.
+    Light {
+        /// Emitted colour.
+        emit: Texture,
+        /// Scale of `emit`.
+        intensity: f32,
+        /// Emit from both sides instead of only the side the geometric normal points to.
+        two_sided: bool,
+    },
+}
+
+/// A sampled continuation of a path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scatter {
+    /// Unit direction of the new ray.
+    pub direction: Vec3,
+    /// Path throughput factor (BSDF · cos / pdf).
+    pub attenuation: Vec3,
+}
+
+/// Mirror reflection of `d` about `n`.
+#[inline]
+pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
+    d - 2.0 * d.dot(n) * n
+}
+
+/// Refraction of unit `d` through a surface with unit normal `n` facing against `d`, with relative
+/// index `eta = n1 / n2`. `None` on total internal reflection.
+#[inline]
+pub fn refract(d: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
+    let cos_i = (-d.dot(n)).min(1.0);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some((eta * d + (eta * cos_i - cos_t) * n).normalize())
+}
+
+/// Schlick's approximation of the Fresnel reflectance for light going from index `n1` to `n2` at
+/// incidence cosine `cos_i`. Uses the cosine on the optically thinner side, as the approximation
+/// requires; returns 1 on total internal reflection.
+#[inline]
+pub fn schlick(cos_i: f32, n1: f32, n2: f32) -> f32 {
+    let r0 = ((n1 - n2) / (n1 + n2)).powi(2);
+    let cos = if n1 > n2 {
+        let sin2_t = (n1 / n2).powi(2) * (1.0 - cos_i * cos_i).max(0.0);
+        if sin2_t >= 1.0 {
+            return 1.0;
+        }
+        (1.0 - sin2_t).sqrt()
+    } else {
+        cos_i
+    };
+    r0 + (1.0 - r0) * (1.0 - cos).powi(5)
+}
+
+impl Material {
+    /// Whether the material emits light.
+    pub fn is_emissive(&self) -> bool {
+        matches!(self, Self::Light { .. })
+    }
+
+    /// Radiance emitted towards a ray travelling along `d` that hit a surface with geometric
+    /// normal `n`.
+    #[inline]
+    pub fn emitted(&self, d: Vec3, n: Vec3, uv: Vec2) -> Vec3 {
+        match self {
+            Self::Light {
+                emit,
+                intensity,
+                two_sided,
+            } if *two_sided || d.dot(n) < 0.0 => emit.eval(uv) * *intensity,
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// Samples the continuation of a ray travelling along unit `d` that hit a surface with unit
+    /// geometric normal `n`. `None` if the path ends here (absorbed, or an emitter).
+    #[inline]
+    pub fn scatter(&self, d: Vec3, n: Vec3, uv: Vec2, rng: &mut Rng) -> Option<Scatter> {
+        // Surfaces are two-sided: shade with the normal on the side the ray came from.
+        let facing = if d.dot(n) < 0.0 { n } else { -n };
+        match self {
+            Self::Diffuse { albedo } => {
+                let local = cosine_hemisphere(Vec2::new(rng.next_f32(), rng.next_f32()));
+                let direction = Frame::from_normal(facing).to_world(local).normalize();
+                Some(Scatter {
+                    direction,
+                    attenuation: albedo.eval(uv),
+                })
+            }
+            Self::Metal { albedo, roughness } => {
+                let fuzz = uniform_ball(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()));
+                let r = reflect(d, facing) + *roughness * fuzz;
+                if r.dot(facing) <= 0.0 {
+                    return None;
+                }
+                Some(Scatter {
+                    direction: r.normalize(),
+                    attenuation: albedo.eval(uv),
+                })
+            }
+            Self::Dielectric { ior } => {
+                let entering = d.dot(n) < 0.0;
+                let (n1, n2) = if entering { (1.0, *ior) } else { (*ior, 1.0) };
+                let cos_i = (-d.dot(facing)).clamp(0.0, 1.0);
+                let r = schlick(cos_i, n1, n2);
+                let direction = match refract(d, facing, n1 / n2) {
+                    Some(t) if rng.next_f32() >= r => t,
+                    _ => reflect(d, facing).normalize(),
+                };
+                Some(Scatter {
+                    direction,
+                    attenuation: Vec3::ONE,
+                })
+            }
+            Self::Light { .. } => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn schlick_at_normal_incidence_is_r0() {
+        assert!((schlick(1.0, 1.0, 1.5) - 0.04).abs() < 1e-6);
+        assert!((schlick(1.0, 1.5, 1.0) - 0.04).abs() < 1e-6);
+        // Grazing incidence reflects everything.
+        assert!((schlick(0.0, 1.0, 1.5) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn schlick_is_close_to_the_exact_fresnel_equations() {
+        // Exact unpolarised Fresnel reflectance for air→glass (n = 1.5), from the Fresnel
+        // equations: 0.0400, 0.0415, 0.0502, 0.0892 at 0°, 30°, 45°, 60°. Schlick's curve stays
+        // within 0.02 of it there (0.0400, 0.0400, 0.0421, 0.0700).
+        let exact = |theta_i: f32, n: f32| {
+            let (ci, si) = (theta_i.cos(), theta_i.sin());
+            let ct = (1.0 - (si / n).powi(2)).sqrt();
+            let rs = ((ci - n * ct) / (ci + n * ct)).powi(2);
+            let rp = ((ct - n * ci) / (ct + n * ci)).powi(2);
+            0.5 * (rs + rp)
+        };
+        for deg in [0.0f32, 30.0, 45.0, 60.0] {
+            let t = deg.to_radians();
+            let (s, e) = (schlick(t.cos(), 1.0, 1.5), exact(t, 1.5));
+            assert!((s - e).abs() < 0.02, "{deg}°: schlick {s}, exact {e}");
+        }
+    }
+
+    #[test]
+    fn dielectric_reflects_four_percent_at_normal_incidence() {
+        let glass = Material::Dielectric { ior: 1.5 };
+        let mut rng = Rng::new(11, 13);
+        let n = 1_000_000;
+        let reflected = (0..n)
+            .filter(|_| {
+                let s = glass
+                    .scatter(-Vec3::Z, Vec3::Z, Vec2::ZERO, &mut rng)
+                    .expect("scatters");
+                s.direction.z > 0.0
+            })
+            .count();
+        let fraction = reflected as f64 / n as f64;
+        assert!((fraction - 0.04).abs() < 0.001, "{fraction}");
+    }
+
+    #[test]
+    fn glass_to_air_beyond_the_critical_angle_always_reflects() {
+        let glass = Material::Dielectric { ior: 1.5 };
+        let critical = (1.0f32 / 1.5).asin();
+        let mut rng = Rng::new(1, 2);
+        for k in 1..=50 {
+            let theta = critical + (std::f32::consts::FRAC_PI_2 - critical) * k as f32 / 51.0;
+            // Inside the glass, travelling out through a surface whose normal points outwards (+z).
+            let d = Vec3::new(theta.sin(), 0.0, theta.cos());
+            for _ in 0..100 {
+                let s = glass
+                    .scatter(d, Vec3::Z, Vec2::ZERO, &mut rng)
+                    .expect("scatters");
+                assert!(
+                    s.direction.z < 0.0,
+                    "θ = {theta}: escaped along {}",
+                    s.direction
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn refraction_obeys_snell_and_is_unit_length() {
+        for deg in [1.0f32, 20.0, 40.0, 60.0, 80.0, 89.0] {
+            let t = deg.to_radians();
+            let d = Vec3::new(t.sin(), 0.0, -t.cos());
+            let r = refract(d, Vec3::Z, 1.0 / 1.5).expect("no TIR entering glass");
+            assert!((r.length() - 1.0).abs() < 1e-6);
+            let sin_t = r.x.hypot(r.y);
+            assert!((1.0 * t.sin() - 1.5 * sin_t).abs() < 1e-5, "{deg}°");
+            assert!(r.z < 0.0, "refracted ray continues through the surface");
+        }
+    }
+
+    #[test]
+    fn diffuse_never_scatters_a_zero_or_nan_direction() {
+        let m = Material::Diffuse {
+            albedo: Texture::Constant(Vec3::splat(0.5)),
+        };
+        let mut rng = Rng::new(5, 5);
+        let n = Vec3::new(0.0, 1.0, 0.0);
+        for _ in 0..100_000 {
+            let s = m
+                .scatter(-n, n, Vec2::ZERO, &mut rng)
+                .expect("diffuse always scatters");
+            assert!((s.direction.length() - 1.0).abs() < 1e-4 && s.direction.dot(n) >= 0.0);
+        }
+    }
+
+    #[test]
+    fn metal_scatters_to_the_side_of_the_incoming_ray_or_absorbs() {
+        let m = Material::Metal {
+            albedo: Texture::Constant(Vec3::ONE),
+            roughness: 1.0,
+        };
+        let mut rng = Rng::new(8, 1);
+        let n = Vec3::Z;
+        let d = Vec3::new(1.0, 0.0, -0.1).normalize();
+        let mut absorbed = 0;
+        for _ in 0..10_000 {
+            match m.scatter(d, n, Vec2::ZERO, &mut rng) {
+                Some(s) => assert!(s.direction.z > 0.0),
+                None => absorbed += 1,
+            }
+        }
+        assert!(
+            absorbed > 0,
+            "a grazing rough reflection loses some rays below the surface"
+        );
+        let smooth = Material::Metal {
+            albedo: Texture::Constant(Vec3::ONE),
+            roughness: 0.0,
+        };
+        let s = smooth.scatter(d, n, Vec2::ZERO, &mut rng).expect("mirror");
+        assert!((s.direction - reflect(d, n)).length() < 1e-6);
+    }
+
+    #[test]
+    fn light_emits_only_on_its_front_side_unless_two_sided() {
+        let one = Material::Light {
+            emit: Texture::Constant(Vec3::ONE),
+            intensity: 15.0,
+            two_sided: false,
+        };
+        assert_eq!(
+            one.emitted(-Vec3::Y, Vec3::Y, Vec2::ZERO),
+            Vec3::splat(15.0)
+        );
+        assert_eq!(one.emitted(Vec3::Y, Vec3::Y, Vec2::ZERO), Vec3::ZERO);
+        let two = Material::Light {
+            emit: Texture::Constant(Vec3::ONE),
+            intensity: 2.0,
+            two_sided: true,
+        };
+        assert_eq!(two.emitted(Vec3::Y, Vec3::Y, Vec2::ZERO), Vec3::splat(2.0));
+    }
+}

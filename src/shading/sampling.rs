@@ -1,0 +1,125 @@
+//! Sampling routines: directions on hemispheres and spheres, orthonormal frames.
+
+use glam::{Vec2, Vec3};
+use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+
+/// Maps the unit square to the unit disk preserving relative areas (Shirley & Chiu, "A Low
+/// Distortion Map Between Disk and Square", 1997).
+#[inline]
+pub fn concentric_disk(u: Vec2) -> Vec2 {
+    let o = 2.0 * u - Vec2::ONE;
+    if o.x == 0.0 && o.y == 0.0 {
+        return Vec2::ZERO;
+    }
+    let (r, theta) = if o.x.abs() > o.y.abs() {
+        (o.x, FRAC_PI_4 * (o.y / o.x))
+    } else {
+        (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y))
+    };
+    r * Vec2::new(theta.cos(), theta.sin())
+}
+
+/// A cosine-distributed direction about +z (pdf cos θ / π), by Malley's method. Its z is always
+/// ≥ 0 and its length 1, so it is never the zero vector the thesis's `N + random` can produce.
+#[inline]
+pub fn cosine_hemisphere(u: Vec2) -> Vec3 {
+    let d = concentric_disk(u);
+    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
+    Vec3::new(d.x, d.y, z)
+}
+
+/// A uniformly distributed point inside the unit ball.
+#[inline]
+pub fn uniform_ball(u: Vec3) -> Vec3 {
+    let z = 1.0 - 2.0 * u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    u.z.cbrt() * Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// An orthonormal frame around a unit normal.
+#[derive(Clone, Copy, Debug)]
+pub struct Frame {
+    /// First tangent.
+    pub s: Vec3,
+    /// Second tangent.
+    pub t: Vec3,
+    /// The normal.
+    pub n: Vec3,
+}
+
+impl Frame {
+    /// A frame with `n` as its z axis (Duff et al., "Building an Orthonormal Basis, Revisited",
+    /// JCGT 2017, as implemented by glam).
+    #[inline]
+    pub fn from_normal(n: Vec3) -> Self {
+        let (s, t) = n.any_orthonormal_pair();
+        Self { s, t, n }
+    }
+
+    /// A local direction expressed in world space.
+    #[inline]
+    pub fn to_world(&self, v: Vec3) -> Vec3 {
+        v.x * self.s + v.y * self.t + v.z * self.n
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shading::rng::Rng;
+
+    #[test]
+    fn cosine_directions_are_unit_and_never_below_the_surface() {
+        let mut rng = Rng::new(7, 7);
+        for _ in 0..100_000 {
+            let d = cosine_hemisphere(Vec2::new(rng.next_f32(), rng.next_f32()));
+            assert!((d.length() - 1.0).abs() < 1e-5 && d.z >= 0.0);
+        }
+        // The corners and centre of the square.
+        for u in [Vec2::ZERO, Vec2::splat(0.5), Vec2::ONE, Vec2::new(0.0, 1.0)] {
+            let d = cosine_hemisphere(u);
+            assert!(
+                d.is_finite() && (d.length() - 1.0).abs() < 1e-5,
+                "{u} -> {d}"
+            );
+        }
+    }
+
+    #[test]
+    fn cosine_directions_pass_a_chi_square_test() {
+        // Under pdf cos θ/π, cos²θ is uniform on [0,1] and φ uniform on [0,2π), independently:
+        // a 10×10 grid over (cos²θ, φ) has equal expected counts.
+        let (bins, n) = (10usize, 200_000usize);
+        let mut counts = vec![0usize; bins * bins];
+        let mut rng = Rng::new(3, 5);
+        for _ in 0..n {
+            let d = cosine_hemisphere(Vec2::new(rng.next_f32(), rng.next_f32()));
+            let a = ((d.z * d.z) * bins as f32).min(bins as f32 - 1.0) as usize;
+            let phi = d.y.atan2(d.x).rem_euclid(2.0 * PI);
+            let b = (phi / (2.0 * PI) * bins as f32).min(bins as f32 - 1.0) as usize;
+            counts[a * bins + b] += 1;
+        }
+        let expected = n as f64 / (bins * bins) as f64;
+        let chi2: f64 = counts
+            .iter()
+            .map(|&c| (c as f64 - expected).powi(2) / expected)
+            .sum();
+        // 99 degrees of freedom: the 99.9th percentile is 148.2.
+        assert!(chi2 < 148.2, "chi2 = {chi2}");
+    }
+
+    #[test]
+    fn ball_points_are_inside_with_the_right_mean_radius() {
+        let mut rng = Rng::new(1, 9);
+        let n = 100_000;
+        let mut sum = 0.0f64;
+        for _ in 0..n {
+            let p = uniform_ball(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()));
+            assert!(p.length() <= 1.0 + 1e-6);
+            sum += f64::from(p.length());
+        }
+        // E|p| = 3/4 for the uniform ball; sd of |p| = sqrt(3/5 − 9/16) ≈ 0.194.
+        assert!((sum / n as f64 - 0.75).abs() < 5.0 * 0.194 / (n as f64).sqrt());
+    }
+}

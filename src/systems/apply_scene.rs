@@ -1,0 +1,78 @@
+//! Applies a loaded scene to the world, touching only what changed.
+
+use std::collections::HashMap;
+
+use bevy_ecs::prelude::*;
+
+use crate::ecs::components::{EntityName, MaterialRef, Shape, Transform};
+use crate::ecs::resources::{
+    ActiveCamera, ChangeSummary, MaterialTable, PendingScene, RenderSettings, SceneVersion,
+};
+
+/// Diffs the pending scene against the world by entity name: unchanged entities are not touched
+/// (`set_if_neq`, so change detection stays quiet), changed ones are updated in place, missing
+/// ones despawned and new ones spawned.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "one parameter per piece of scene state"
+)]
+pub fn apply_scene(
+    mut commands: Commands,
+    mut pending: ResMut<PendingScene>,
+    mut entities: Query<(
+        Entity,
+        &EntityName,
+        &mut Shape,
+        &mut Transform,
+        &mut MaterialRef,
+    )>,
+    mut camera: ResMut<ActiveCamera>,
+    mut settings: ResMut<RenderSettings>,
+    mut materials: ResMut<MaterialTable>,
+    mut version: ResMut<SceneVersion>,
+    mut summary: ResMut<ChangeSummary>,
+) {
+    let Some(scene) = pending.0.take() else {
+        return;
+    };
+    let mut report = ChangeSummary::default();
+    let mut incoming: HashMap<&str, usize> = scene
+        .entities
+        .iter()
+        .enumerate()
+        .map(|(i, e)| (e.name.as_str(), i))
+        .collect();
+
+    for (entity, name, mut shape, mut transform, mut material) in &mut entities {
+        let Some(i) = incoming.remove(name.0.as_str()) else {
+            commands.entity(entity).despawn();
+            report.removed += 1;
+            continue;
+        };
+        let new = &scene.entities[i];
+        let a = shape.set_if_neq(new.shape.clone());
+        let b = transform.set_if_neq(new.transform);
+        let c = material.set_if_neq(MaterialRef(new.material.clone()));
+        if a || b || c {
+            report.changed += 1;
+        }
+    }
+    let mut fresh: Vec<usize> = incoming.into_values().collect();
+    fresh.sort_unstable();
+    for i in fresh {
+        let e = &scene.entities[i];
+        commands.spawn((
+            EntityName(e.name.clone()),
+            e.shape.clone(),
+            e.transform,
+            MaterialRef(e.material.clone()),
+        ));
+        report.added += 1;
+    }
+
+    report.camera = camera.set_if_neq(ActiveCamera(scene.camera));
+    report.settings = settings.set_if_neq(RenderSettings(scene.settings));
+    report.materials = materials.set_if_neq(MaterialTable(scene.materials));
+    version.0 += 1;
+    *summary = report;
+}

@@ -1,0 +1,13 @@
+//! Systems, one per file, named verb_noun. They move data between the ECS and the kernels.
+
+mod apply_scene;
+mod assign_materials;
+mod rebuild_geometry;
+mod render_frame;
+mod write_image;
+
+pub use apply_scene::apply_scene;
+pub use assign_materials::{assign_materials, material_refs_changed};
+pub use rebuild_geometry::{geometry_changed, rebuild_geometry, world_primitives};
+pub use render_frame::render_frame;
+pub use write_image::write_image;

@@ -1,0 +1,90 @@
+//! Traces the next pass of samples into the accumulation film.
+
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+use bevy_ecs::prelude::*;
+
+use crate::camera::Camera;
+use crate::ecs::resources::{
+    Accumulation, ActiveCamera, Counters, OwnerMaterials, PackedGeometry, PassPlan, RenderControl,
+    RenderSettings, SceneVersion, Timings,
+};
+use crate::film::Film;
+use crate::render::{SceneView, TraceStats, render_pass};
+
+/// Renders one pass. A new scene version resets the film first. The samples of the pass follow
+/// the [`PassPlan`]; a cancelled pass leaves the film incomplete and is redone on the next run.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "reads the whole render-side snapshot"
+)]
+pub fn render_frame(
+    packed: Res<PackedGeometry>,
+    materials: Res<OwnerMaterials>,
+    camera: Res<ActiveCamera>,
+    settings: Res<RenderSettings>,
+    version: Res<SceneVersion>,
+    control: Res<RenderControl>,
+    mut acc: ResMut<Accumulation>,
+    mut counters: ResMut<Counters>,
+    mut timings: ResMut<Timings>,
+) {
+    let s = settings.0;
+    if version.is_changed() || acc.film.width != s.width || acc.film.height != s.height {
+        acc.film = Film::new(s.width, s.height);
+        acc.stats = TraceStats::default();
+        acc.complete = false;
+        timings.render = Default::default();
+    }
+    if acc.complete || version.0 == 0 {
+        return;
+    }
+    let done = acc.film.samples;
+    let end = match control.plan {
+        PassPlan::Single => s.spp,
+        PassPlan::Progressive { first } if done == 0 => first.min(s.spp),
+        PassPlan::Progressive { .. } => (2 * done).min(s.spp),
+    };
+    let c = camera.0;
+    let cam = Camera::new(c.position, c.direction, c.up, c.fov);
+    let view = SceneView {
+        geometry: &packed.geometry,
+        materials: &materials.materials,
+        owner_material: &materials.owner_material,
+        camera: &cam,
+        background: s.background,
+        max_depth: s.max_depth,
+    };
+    let start = Instant::now();
+    let progress = |rows: u64| {
+        if let Some(bar) = &control.progress {
+            bar.inc(rows);
+        }
+    };
+    let acc = &mut *acc;
+    let result = render_pass(
+        &view,
+        &mut acc.film,
+        s.seed,
+        done..end,
+        &control.cancel,
+        &progress,
+    );
+    let elapsed = start.elapsed();
+    timings.pass = elapsed;
+    match result {
+        Ok(stats) => {
+            timings.render += elapsed;
+            acc.stats = acc.stats + stats;
+            acc.complete = end == s.spp;
+            counters.passes += 1;
+        }
+        Err(_) => {
+            // Restart cleanly: the partial pass added samples to some rows only.
+            control.cancel.store(false, Ordering::Relaxed);
+            acc.film = Film::new(s.width, s.height);
+            acc.stats = TraceStats::default();
+        }
+    }
+}
