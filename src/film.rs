@@ -19,7 +19,7 @@ pub struct Film {
     pub samples: u32,
 }
 
-/// The sRGB opto-electronic transfer function: linear in [0,1] → encoded.
+/// The sRGB opto-electronic transfer function: linear in `[0, 1]` → encoded.
 #[inline]
 pub fn linear_to_srgb(c: f32) -> f32 {
     if c <= 0.003_130_8 {

@@ -1,6 +1,6 @@
 //! Ray queries and the robust ray–box slab test.
 
-use glam::Vec3;
+use glam::{Mat3, Vec3, Vec3A};
 
 use super::ray::Ray;
 
@@ -13,16 +13,16 @@ const GAMMA3: f32 = 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
 pub struct RayQuery {
     /// The ray.
     pub ray: Ray,
-    /// `1 / direction`, exactly (±∞ where a component is ±0).
-    pub inv_dir: Vec3,
-    /// Axis of the largest |direction| component (the triangle test's z after permutation).
-    pub kz: usize,
-    /// The axis after `kz`.
-    pub kx: usize,
-    /// The axis after `kx`.
-    pub ky: usize,
-    /// Shear constants of the watertight triangle test: `-d_x/d_z`, `-d_y/d_z`, `1/d_z`.
-    pub shear: Vec3,
+    /// Origin as a SIMD vector.
+    origin: Vec3A,
+    /// `1 / direction` (±∞ where a component is ±0).
+    inv_dir: Vec3A,
+    /// Whether a direction component is zero: then `0 · ∞` can occur and the slab test takes
+    /// its NaN-aware path.
+    axis_parallel: bool,
+    /// The watertight test's permute-and-shear transform as three vectors: a vertex `p` relative
+    /// to the origin maps to `(x_axis·p, y_axis·p, z_axis·p)`.
+    shear: Mat3,
 }
 
 impl RayQuery {
@@ -31,6 +31,7 @@ impl RayQuery {
     pub fn new(ray: Ray) -> Self {
         let d = ray.direction;
         let a = d.abs();
+        // z is the axis of the largest |d| component; x and y follow it cyclically.
         let kz = if a.x > a.y {
             if a.x > a.z { 0 } else { 2 }
         } else if a.y > a.z {
@@ -38,31 +39,63 @@ impl RayQuery {
         } else {
             2
         };
-        let kx = (kz + 1) % 3;
-        let ky = (kx + 1) % 3;
-        let shear = Vec3::new(-d[kx] / d[kz], -d[ky] / d[kz], 1.0 / d[kz]);
+        let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        let axis = |k: usize| Vec3::AXES[k];
+        let (sx, sy, sz) = (-d[kx] / d[kz], -d[ky] / d[kz], 1.0 / d[kz]);
+        // Woop et al.'s permutation then shear, written as dot products whose zero terms add
+        // exactly nothing: (p_kx + sx·p_kz, p_ky + sy·p_kz, sz·p_kz) in the same rounding.
+        let shear = Mat3::from_cols(
+            axis(kx) + sx * axis(kz),
+            axis(ky) + sy * axis(kz),
+            sz * axis(kz),
+        );
         Self {
             ray,
-            inv_dir: Vec3::ONE / d,
-            kz,
-            kx,
-            ky,
+            origin: ray.origin.into(),
+            inv_dir: Vec3A::ONE / Vec3A::from(d),
+            axis_parallel: d.cmpeq(Vec3::ZERO).any(),
             shear,
         }
+    }
+
+    /// A vertex in the ray's sheared frame, where the ray is the +z axis from the origin
+    /// (z not yet scaled by 1/d_z, as the watertight test needs).
+    #[inline(always)]
+    pub fn to_ray_frame(&self, p: Vec3) -> Vec3 {
+        let rel = p - self.ray.origin;
+        Vec3::new(
+            self.shear.x_axis.dot(rel),
+            self.shear.y_axis.dot(rel),
+            rel.dot(self.shear.z_axis),
+        )
     }
 
     /// Entry distance of the ray into the box `[min, max]` if it enters before `t_max`.
     ///
     /// Robust in the sense of pbrt-v4's `Bounds3::IntersectP` (Ize, "Robust BVH Ray Traversal",
     /// JCGT 2013): the far distance is widened by `1 + 2·gamma(3)` so rounding never culls a box
-    /// the ray grazes, and a NaN from `0 · ∞` (a ray lying in a slab plane) is ignored by the
-    /// comparisons instead of poisoning the result. Flat boxes (min == max on an axis) work.
+    /// the ray grazes. Flat boxes (min == max on an axis) work.
     #[inline(always)]
-    pub fn enter_box(&self, min: Vec3, max: Vec3, t_max: f32) -> Option<f32> {
+    pub fn enter_box(&self, min: Vec3A, max: Vec3A, t_max: f32) -> Option<f32> {
+        if self.axis_parallel {
+            return self.enter_box_axis_parallel(min, max, t_max);
+        }
+        let t0 = (min - self.origin) * self.inv_dir;
+        let t1 = (max - self.origin) * self.inv_dir;
+        let near = t0.min(t1).max_element().max(0.0);
+        let far = (t0.max(t1).min_element() * (1.0 + 2.0 * GAMMA3)).min(t_max);
+        (near <= far).then_some(near)
+    }
+
+    /// The slab test for rays with a zero direction component. A ray lying in a slab plane makes
+    /// `0 · ∞ = NaN`; the comparisons are written so a NaN bound is ignored (the ray is inside
+    /// that slab), as pbrt does.
+    #[cold]
+    fn enter_box_axis_parallel(&self, min: Vec3A, max: Vec3A, t_max: f32) -> Option<f32> {
         let mut t0 = 0.0f32;
         let mut t1 = t_max;
         for axis in 0..3 {
-            let o = self.ray.origin[axis];
+            let o = self.origin[axis];
             let inv = self.inv_dir[axis];
             let mut near = (min[axis] - o) * inv;
             let mut far = (max[axis] - o) * inv;
@@ -70,7 +103,6 @@ impl RayQuery {
                 std::mem::swap(&mut near, &mut far);
             }
             far *= 1.0 + 2.0 * GAMMA3;
-            // Written so that a NaN `near`/`far` leaves t0/t1 unchanged.
             t0 = if near > t0 { near } else { t0 };
             t1 = if far < t1 { far } else { t1 };
             if t0 > t1 {
@@ -94,9 +126,12 @@ mod tests {
         let (min, max) = (Vec3::ZERO, Vec3::ONE);
         for dz in [0.0f32, -0.0] {
             let q = query(Vec3::new(-1.0, 0.5, 0.5), Vec3::new(1.0, dz, dz));
-            assert_eq!(q.enter_box(min, max, f32::INFINITY), Some(1.0));
+            assert_eq!(
+                q.enter_box(min.into(), max.into(), f32::INFINITY),
+                Some(1.0)
+            );
             let q = query(Vec3::new(-1.0, 1.5, 0.5), Vec3::new(1.0, dz, dz));
-            assert_eq!(q.enter_box(min, max, f32::INFINITY), None);
+            assert_eq!(q.enter_box(min.into(), max.into(), f32::INFINITY), None);
         }
     }
 
@@ -104,23 +139,29 @@ mod tests {
     fn ray_lying_in_a_box_face_hits_without_nan() {
         // Origin on the y = 0 face plane, moving along x: 0 · ∞ = NaN on the y axis.
         let q = query(Vec3::new(-1.0, 0.0, 0.5), Vec3::X);
-        assert_eq!(q.enter_box(Vec3::ZERO, Vec3::ONE, f32::INFINITY), Some(1.0));
+        assert_eq!(
+            q.enter_box(Vec3A::ZERO, Vec3A::ONE, f32::INFINITY),
+            Some(1.0)
+        );
         let q = query(Vec3::new(-1.0, 1.0, 0.5), Vec3::X);
-        assert_eq!(q.enter_box(Vec3::ZERO, Vec3::ONE, f32::INFINITY), Some(1.0));
+        assert_eq!(
+            q.enter_box(Vec3A::ZERO, Vec3A::ONE, f32::INFINITY),
+            Some(1.0)
+        );
     }
 
     #[test]
     fn flat_box_is_hit_by_a_crossing_ray() {
         let q = query(Vec3::new(0.5, 2.0, 0.5), -Vec3::Y);
-        let hit = q.enter_box(Vec3::ZERO, Vec3::new(1.0, 0.0, 1.0), f32::INFINITY);
+        let hit = q.enter_box(Vec3A::ZERO, Vec3A::new(1.0, 0.0, 1.0), f32::INFINITY);
         assert_eq!(hit, Some(2.0));
     }
 
     #[test]
     fn box_behind_or_beyond_t_max_is_missed() {
         let q = query(Vec3::new(0.5, 0.5, 3.0), Vec3::Z);
-        assert_eq!(q.enter_box(Vec3::ZERO, Vec3::ONE, f32::INFINITY), None);
+        assert_eq!(q.enter_box(Vec3A::ZERO, Vec3A::ONE, f32::INFINITY), None);
         let q = query(Vec3::new(0.5, 0.5, -3.0), Vec3::Z);
-        assert_eq!(q.enter_box(Vec3::ZERO, Vec3::ONE, 2.0), None);
+        assert_eq!(q.enter_box(Vec3A::ZERO, Vec3A::ONE, 2.0), None);
     }
 }

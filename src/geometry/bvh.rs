@@ -3,7 +3,7 @@
 //! obvhs builds the tree (PLOC + reinsertion + leaf collapse). Traversal is ours, because it must
 //! use the robust slab test of [`RayQuery::enter_box`]: obvhs's own box test is not conservative
 //! for grazing rays. Leaves hand a contiguous range of primitive slots to a closure; the caller
-//! stores its primitives in BVH order (see [`Bvh::order`]) so that range indexes them directly.
+//! stores its primitives in BVH order (see [`Bvh::build`], which returns the order) so that range indexes them directly.
 
 use std::ops::Range;
 
@@ -84,7 +84,7 @@ impl Bvh {
         let Some(root) = nodes.first() else { return };
         let enter = |i: usize, t_max: f32| {
             let b = nodes[i].aabb();
-            q.enter_box(b.min.into(), b.max.into(), t_max)
+            q.enter_box(b.min, b.max, t_max)
         };
         if enter(0, *t_max).is_none() {
             return;

@@ -38,21 +38,7 @@ pub fn intersect_triangle(
     p2: Vec3,
     t_max: f32,
 ) -> Option<TriangleHit> {
-    let o = q.ray.origin;
-    let (kx, ky, kz) = (q.kx, q.ky, q.kz);
-    let permute = |p: Vec3| {
-        let d = p - o;
-        Vec3::new(d[kx], d[ky], d[kz])
-    };
-    let (mut a, mut b, mut c) = (permute(p0), permute(p1), permute(p2));
-    let s = q.shear;
-    a.x += s.x * a.z;
-    a.y += s.y * a.z;
-    b.x += s.x * b.z;
-    b.y += s.y * b.z;
-    c.x += s.x * c.z;
-    c.y += s.y * c.z;
-
+    let (a, b, c) = (q.to_ray_frame(p0), q.to_ray_frame(p1), q.to_ray_frame(p2));
     let mut e0 = b.x * c.y - b.y * c.x;
     let mut e1 = c.x * a.y - c.y * a.x;
     let mut e2 = a.x * b.y - a.y * b.x;
@@ -72,9 +58,6 @@ pub fn intersect_triangle(
         return None;
     }
 
-    a.z *= s.z;
-    b.z *= s.z;
-    c.z *= s.z;
     let t_scaled = e0 * a.z + e1 * b.z + e2 * c.z;
     if det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det) {
         return None;

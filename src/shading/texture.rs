@@ -12,7 +12,7 @@ pub struct ImageTexture {
     texels: Vec<Vec3>,
 }
 
-/// The sRGB electro-optical transfer function: encoded value in [0,1] → linear.
+/// The sRGB electro-optical transfer function: encoded value in `[0, 1]` → linear.
 #[inline]
 pub fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 {

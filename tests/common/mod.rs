@@ -1,0 +1,43 @@
+//! Helpers shared by the integration tests.
+#![allow(
+    dead_code,
+    reason = "each test binary uses a different subset of the helpers"
+)]
+
+use std::path::{Path, PathBuf};
+
+use rondo::{Film, Overrides, PassPlan, Renderer};
+
+/// A fresh, empty directory for one test.
+pub fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rondo-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create temp dir");
+    dir
+}
+
+/// Writes `source` to `dir/name` and returns the path.
+pub fn write_scene(dir: &Path, name: &str, source: &str) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, source).expect("write scene");
+    path
+}
+
+/// Renders a scene file with overrides and a thread count; returns the renderer when done.
+pub fn render(path: &Path, overrides: Overrides, threads: Option<usize>) -> Renderer {
+    let mut r = Renderer::new(threads, PassPlan::Single).expect("thread pool");
+    r.set_overrides(overrides);
+    r.load(path).unwrap_or_else(|e| panic!("{e}"));
+    r.render_to_completion();
+    r
+}
+
+/// Mean radiance per pixel of a film.
+pub fn pixels(film: &Film) -> Vec<glam::Vec3> {
+    film.mean()
+}
+
+/// The repository's `scenes/` directory.
+pub fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+}
