@@ -16,7 +16,7 @@ use crate::ecs::sets::RenderSystems;
 use crate::film::Film;
 use crate::render::TraceStats;
 use crate::scene::error::SceneError;
-use crate::scene::format::{CameraDesc, SettingsDesc};
+use crate::scene::format::{CameraDesc, Method, SettingsDesc};
 use crate::scene::load::{LoadedScene, TextureCache, load_scene};
 use crate::systems::{
     apply_scene, assign_materials, geometry_changed, material_refs_changed, rebuild_geometry,
@@ -36,6 +36,8 @@ pub struct Overrides {
     pub max_depth: Option<u32>,
     /// Random seed.
     pub seed: Option<u64>,
+    /// Light-transport method.
+    pub method: Option<Method>,
 }
 
 impl Overrides {
@@ -46,6 +48,7 @@ impl Overrides {
         s.spp = self.spp.unwrap_or(s.spp);
         s.max_depth = self.max_depth.unwrap_or(s.max_depth);
         s.seed = self.seed.unwrap_or(s.seed);
+        s.method = self.method.unwrap_or(s.method);
         s.validate()
     }
 }
@@ -99,6 +102,7 @@ impl Renderer {
             cancel: Arc::new(AtomicBool::new(false)),
             plan,
             progress: None,
+            roulette: true,
         });
 
         let mut schedule = Schedule::default();
@@ -145,6 +149,11 @@ impl Renderer {
         let mut out = self.world.resource_mut::<Output>();
         out.path = path.map(Path::to_path_buf);
         out.every_pass = every_pass;
+    }
+
+    /// Turns Russian roulette on or off (on by default; both are unbiased).
+    pub fn set_roulette(&mut self, on: bool) {
+        self.world.resource_mut::<RenderControl>().roulette = on;
     }
 
     /// Attaches a progress bar advanced by rendered rows.

@@ -11,6 +11,7 @@ pub mod camera;
 pub mod ecs;
 pub mod film;
 pub mod geometry;
+pub mod lights;
 pub mod render;
 pub mod scene;
 pub mod shading;

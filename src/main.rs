@@ -8,6 +8,7 @@ use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use rondo::film::OutputKind;
+use rondo::scene::format::Method;
 use rondo::{Overrides, PassPlan, Renderer};
 
 #[derive(Parser)]
@@ -75,6 +76,9 @@ struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+    /// Light-transport method: naive, nee or mis (overrides the scene).
+    #[arg(long)]
+    method: Option<Method>,
 }
 
 impl RenderArgs {
@@ -89,6 +93,7 @@ impl RenderArgs {
             spp: self.spp,
             max_depth: self.max_depth,
             seed: self.seed,
+            method: self.method,
         });
         Ok(r)
     }

@@ -3,13 +3,15 @@
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::camera::Camera;
 use crate::film::Film;
-use crate::geometry::packed::Geometry;
-use crate::geometry::ray::{Ray, offset_ray_origin};
+use crate::geometry::packed::{Geometry, Hit, HitKind, Surface};
+use crate::geometry::ray::{Ray, gamma, spawn_origin};
+use crate::lights::LightSet;
+use crate::scene::format::Method;
 use crate::shading::material::Material;
 use crate::shading::rng::Rng;
 
@@ -25,18 +27,24 @@ pub struct SceneView<'a> {
     pub materials: &'a [Material],
     /// Material index of every owner slot.
     pub owner_material: &'a [u32],
+    /// Emitters, for next-event estimation.
+    pub lights: &'a LightSet,
     /// The camera.
     pub camera: &'a Camera,
     /// Radiance of rays that leave the scene.
     pub background: Vec3,
     /// Rays per path, camera ray included.
     pub max_depth: u32,
+    /// Light-transport method.
+    pub method: Method,
+    /// Whether paths may be ended early by Russian roulette (unbiased either way).
+    pub roulette: bool,
 }
 
 /// Counters of one render.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TraceStats {
-    /// Rays traced (camera and scattered).
+    /// Rays traced (camera, scattered and shadow rays).
     pub rays: u64,
     /// Samples whose radiance was NaN or infinite; they are dropped, never written.
     pub nonfinite: u64,
@@ -56,11 +64,65 @@ impl std::ops::Add for TraceStats {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Cancelled;
 
-/// Radiance arriving along `ray`, by unidirectional path tracing with BSDF sampling (the thesis's
-/// algorithm): emission counts when a path hits an emitter.
+/// Bounces after which Russian roulette may end a path.
+const ROULETTE_DEPTH: u32 = 3;
+
+/// Veach's power heuristic (β = 2) weight of a strategy with density `a` against one with `b`.
+#[inline]
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2.is_infinite() {
+        1.0
+    } else if a2 + b2 == 0.0 {
+        0.0
+    } else {
+        a2 / (a2 + b2)
+    }
+}
+
+/// Absolute error bound of the hit point `s.p` of `hit`, per component (pbrt-v4, Section 6.8.5):
+/// the point is recomputed from the primitive, so its error scales with the primitive's own
+/// coordinates, not with the ray's travel.
+#[inline]
+fn point_error(geometry: &Geometry, hit: &Hit, p: Vec3) -> Vec3 {
+    let i = hit.index as usize;
+    match hit.kind {
+        HitKind::Sphere => {
+            let (c, r) = geometry.spheres.get(i);
+            gamma(6.0) * (c.abs() + Vec3::splat(r))
+        }
+        HitKind::Triangle => {
+            let [p0, p1, p2] = geometry.triangles.get(i);
+            let b0 = 1.0 - hit.b1 - hit.b2;
+            gamma(7.0) * ((b0 * p0).abs() + (hit.b1 * p1).abs() + (hit.b2 * p2).abs())
+        }
+        HitKind::Plane => gamma(8.0) * (p.abs() + geometry.planes[i].point.abs()),
+    }
+}
+
+/// A ray from surface point `p` (geometric normal `n`, error `err`) along `dir`, started on the
+/// side it leaves to.
+#[inline]
+fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
+    let side = if dir.dot(n) > 0.0 { n } else { -n };
+    Ray::new(spawn_origin(p, side, err), dir)
+}
+
+/// Radiance arriving along `ray`, by path tracing with the view's [`Method`]:
+/// - `Naive`: BSDF sampling only; emitters count when a path hits them (the thesis's algorithm).
+/// - `Nee`: at every diffuse vertex a shadow ray goes to a point sampled on an emitter; emitters
+///   hit by the BSDF-sampled continuation of such a vertex are then not counted again.
+/// - `Mis`: both, weighted by the power heuristic (Veach 1997, ch. 9).
+///
+/// Emission seen by the camera or after a glass/mirror bounce always counts in full. Russian
+/// roulette (after a few bounces, survival probability = the path's throughput) ends paths
+/// early without bias.
 pub fn trace_path(view: &SceneView, mut ray: Ray, rng: &mut Rng, stats: &mut TraceStats) -> Vec3 {
     let mut radiance = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
+    // Point and BSDF density of the previous vertex, if it was one that sampled lights.
+    let mut previous: Option<(Vec3, f32)> = None;
+    let sample_lights = view.method != Method::Naive && !view.lights.is_empty();
     for depth in 0..view.max_depth {
         stats.rays += 1;
         let Some(hit) = view.geometry.intersect(&ray, f32::INFINITY) else {
@@ -68,26 +130,117 @@ pub fn trace_path(view: &SceneView, mut ray: Ray, rng: &mut Rng, stats: &mut Tra
             break;
         };
         let s = view.geometry.surface(&ray, &hit);
+        let err = point_error(view.geometry, &hit, s.p);
         let material = &view.materials[view.owner_material[s.owner as usize] as usize];
-        radiance += throughput * material.emitted(ray.direction, s.n, s.uv);
+        if material.is_emissive() {
+            let emitted = material.emitted(ray.direction, s.n, s.uv);
+            let weight = match previous {
+                Some((p_prev, pdf_bsdf)) if sample_lights => {
+                    let pdf_area = view.lights.pdf_area(hit.kind, hit.index);
+                    if pdf_area == 0.0 {
+                        1.0
+                    } else if view.method == Method::Nee {
+                        0.0
+                    } else {
+                        let cos = ray.direction.dot(s.n).abs();
+                        let pdf_light = pdf_area * (s.p - p_prev).length_squared() / cos;
+                        power_heuristic(pdf_bsdf, pdf_light)
+                    }
+                }
+                _ => 1.0,
+            };
+            radiance += throughput * emitted * weight;
+        }
         if depth + 1 == view.max_depth {
             break;
+        }
+        if sample_lights && material.samples_lights() {
+            radiance +=
+                throughput * direct_light(view, &s, err, ray.direction, material, rng, stats);
         }
         let Some(scatter) = material.scatter(ray.direction, s.n, s.uv, rng) else {
             break;
         };
+        previous = scatter.pdf.map(|pdf| (s.p, pdf));
         throughput *= scatter.attenuation;
         if throughput == Vec3::ZERO {
             break;
         }
-        let side = if scatter.direction.dot(s.n) > 0.0 {
-            s.n
-        } else {
-            -s.n
-        };
-        ray = Ray::new(offset_ray_origin(s.p, side), scatter.direction);
+        if view.roulette && depth >= ROULETTE_DEPTH {
+            let survive = throughput.max_element().min(1.0);
+            if rng.next_f32() >= survive {
+                break;
+            }
+            throughput /= survive;
+        }
+        ray = spawn(s.p, s.n, err, scatter.direction);
     }
     radiance
+}
+
+/// One light sample at surface `s` for a ray arriving along `d`: emitted radiance from a point
+/// sampled on an emitter, times the BSDF and cosine, over the light density, MIS-weighted
+/// against BSDF sampling under `Method::Mis`.
+fn direct_light(
+    view: &SceneView,
+    s: &Surface,
+    err: Vec3,
+    d: Vec3,
+    material: &Material,
+    rng: &mut Rng,
+    stats: &mut TraceStats,
+) -> Vec3 {
+    let u_select = rng.next_f32();
+    let u = Vec2::new(rng.next_f32(), rng.next_f32());
+    let Some(light) = view.lights.sample(view.geometry, u_select, u) else {
+        return Vec3::ZERO;
+    };
+    let to_light = light.p - s.p;
+    let dist2 = to_light.length_squared();
+    if dist2.is_nan() || dist2 <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let wi = to_light / dist2.sqrt();
+    let emitted = view.materials[light.material as usize].emitted(wi, light.n, light.uv);
+    if emitted == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let Some((f_cos, pdf_bsdf)) = material.eval(d, wi, s.n, s.uv) else {
+        return Vec3::ZERO;
+    };
+    if f_cos == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let cos_light = wi.dot(light.n).abs();
+    let pdf_light = light.pdf_area * dist2 / cos_light;
+    if !(pdf_light > 0.0 && pdf_light.is_finite()) {
+        return Vec3::ZERO;
+    }
+    // Shadow ray between the two offset points, so neither surface can block it.
+    let from = spawn(s.p, s.n, err, wi).origin;
+    let to_side = if wi.dot(light.n) < 0.0 {
+        light.n
+    } else {
+        -light.n
+    };
+    let to = spawn_origin(light.p, to_side, light.err);
+    let span = to - from;
+    let length = span.length();
+    stats.rays += 1;
+    if length.is_nan()
+        || length <= 0.0
+        || view
+            .geometry
+            .occluded(&Ray::new(from, span / length), length)
+    {
+        return Vec3::ZERO;
+    }
+    let weight = if view.method == Method::Mis {
+        power_heuristic(pdf_light, pdf_bsdf)
+    } else {
+        1.0
+    };
+    f_cos * emitted * (weight / pdf_light)
 }
 
 /// Adds samples `samples` of every pixel to `film`, in parallel over bands of rows.

@@ -180,3 +180,13 @@ fn the_binary_exits_non_zero_with_a_located_message_and_no_panic() {
     );
     assert!(!dir.join("out.png").exists());
 }
+
+#[test]
+fn an_explicit_name_cannot_collide_with_a_default_one() {
+    let src = format!(
+        "{HEADER}    materials: {{ \"w\": Diffuse(albedo: Constant((1, 1, 1))) }},\n    entities: [\n        Entity(name: \"#1\", material: \"w\", shape: Sphere(center: (0, 0, 0), radius: 1)),\n        Entity(material: \"w\", shape: Sphere(center: (3, 0, 0), radius: 1)),\n    ],\n)"
+    );
+    let e = error_of("default-name", &src);
+    assert!(e.contains("duplicate entity name \"#1\""), "{e}");
+    assert_eq!(location(&e).0, 7, "{e}");
+}

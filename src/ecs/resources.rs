@@ -12,6 +12,7 @@ use bevy_ecs::resource::Resource;
 
 use crate::film::Film;
 use crate::geometry::packed::Geometry;
+use crate::lights::LightSet;
 use crate::render::TraceStats;
 use crate::scene::format::{CameraDesc, SettingsDesc};
 use crate::scene::load::LoadedScene;
@@ -46,13 +47,16 @@ pub struct PackedGeometry {
     pub owners: Vec<Entity>,
 }
 
-/// Material table in the order the renderer indexes it, and the material of each owner slot.
+/// Material table in the order the renderer indexes it, the material of each owner slot, and
+/// the emitters those materials make (rebuilt together, without touching the BVH).
 #[derive(Resource, Clone, Debug, Default, PartialEq)]
 pub struct OwnerMaterials {
     /// Materials.
     pub materials: Vec<Material>,
     /// Index into `materials` per owner slot.
     pub owner_material: Vec<u32>,
+    /// Emitters for next-event estimation.
+    pub lights: LightSet,
 }
 
 /// What the last reload changed.
@@ -115,6 +119,8 @@ pub struct RenderControl {
     pub plan: PassPlan,
     /// Progress bar advanced by rows, if any.
     pub progress: Option<indicatif::ProgressBar>,
+    /// Russian roulette on (the default; off only to test that it is unbiased).
+    pub roulette: bool,
 }
 
 /// The accumulating image and the statistics of the current render.

@@ -52,6 +52,26 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
     Vec3::new(offset(p.x, n.x), offset(p.y, n.y), offset(p.z, n.z))
 }
 
+/// pbrt's `gamma(n)`: bound on the relative error of `n` floating-point operations.
+#[inline(always)]
+pub const fn gamma(n: f32) -> f32 {
+    let u = f32::EPSILON * 0.5;
+    n * u / (1.0 - n * u)
+}
+
+/// Where a ray leaving surface point `p` must start: first past the point's absolute error
+/// bound `err` along the normal (pbrt-v4's `OffsetRayOrigin`), then a few ulps further
+/// ([`offset_ray_origin`]). `n` is the geometric normal on the side the ray leaves to.
+///
+/// The error bound matters when `p` is small but was computed from large numbers (a point near
+/// the origin on a sphere of radius 1000 centred at (0, −1000, 0)): ulps of `p` alone are then
+/// far smaller than its real error, and the new ray would start inside the surface.
+#[inline]
+pub fn spawn_origin(p: Vec3, n: Vec3, err: Vec3) -> Vec3 {
+    let d = n.abs().dot(err);
+    offset_ray_origin(p + d * n, n)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -3,6 +3,7 @@
 use glam::Vec3;
 
 use super::aabb::RayQuery;
+use super::ray::gamma;
 
 /// Where a ray crosses a triangle: distance and the barycentric weights of its vertices.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -13,13 +14,6 @@ pub struct TriangleHit {
     pub b1: f32,
     /// Weight of the third vertex (`c`); the first vertex's weight is `1 − b1 − b2`.
     pub b2: f32,
-}
-
-/// pbrt's `gamma(n)`: bound on the relative error of `n` floating-point operations.
-#[inline(always)]
-const fn gamma(n: f32) -> f32 {
-    let u = f32::EPSILON * 0.5;
-    n * u / (1.0 - n * u)
 }
 
 /// Intersects the ray of `q` with triangle `(p0, p1, p2)` in `(0, t_max)`.

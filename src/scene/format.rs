@@ -166,7 +166,45 @@ pub const MAX_SPP: u32 = 1 << 20;
 /// Largest accepted path depth.
 pub const MAX_DEPTH: u32 = 1024;
 
-/// `Settings(width, height, spp, max_depth, background, seed)`; every field optional.
+/// Light-transport method.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize)]
+pub enum Method {
+    /// The thesis's path tracer: BSDF sampling only; light counts when a path hits an emitter.
+    #[serde(alias = "naive")]
+    Naive,
+    /// Next-event estimation: a shadow ray to a sampled point on an emitter at every diffuse
+    /// vertex; emitters hit by BSDF-sampled rays after such a vertex are not counted again.
+    #[serde(alias = "nee")]
+    Nee,
+    /// NEE and BSDF sampling combined by the power heuristic (Veach 1997).
+    #[default]
+    #[serde(alias = "mis")]
+    Mis,
+}
+
+impl std::str::FromStr for Method {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "naive" => Ok(Self::Naive),
+            "nee" => Ok(Self::Nee),
+            "mis" => Ok(Self::Mis),
+            _ => Err(format!("unknown method {s:?} (naive, nee or mis)")),
+        }
+    }
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Naive => "naive",
+            Self::Nee => "nee",
+            Self::Mis => "mis",
+        })
+    }
+}
+
+/// `Settings(width, height, spp, max_depth, background, seed, method)`; every field optional.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Settings", try_from = "RawSettings")]
 pub struct SettingsDesc {
@@ -182,6 +220,8 @@ pub struct SettingsDesc {
     pub background: Vec3,
     /// Random seed.
     pub seed: u64,
+    /// Light-transport method.
+    pub method: Method,
 }
 
 impl Default for SettingsDesc {
@@ -193,6 +233,7 @@ impl Default for SettingsDesc {
             max_depth: 8,
             background: Vec3::ZERO,
             seed: 0,
+            method: Method::Mis,
         }
     }
 }
@@ -206,6 +247,7 @@ struct RawSettings {
     max_depth: Option<NonZeroU32>,
     background: Option<Color>,
     seed: Option<u64>,
+    method: Option<Method>,
 }
 
 impl TryFrom<RawSettings> for SettingsDesc {
@@ -219,6 +261,7 @@ impl TryFrom<RawSettings> for SettingsDesc {
             max_depth: raw.max_depth.map_or(d.max_depth, NonZeroU32::get),
             background: raw.background.map_or(d.background, |c| c.0),
             seed: raw.seed.unwrap_or(d.seed),
+            method: raw.method.unwrap_or(d.method),
         };
         s.validate()?;
         Ok(s)

@@ -166,20 +166,20 @@ pub fn load_scene(path: &Path, cache: &mut TextureCache) -> Result<LoadedScene, 
     for (i, e) in desc.entities.iter().enumerate() {
         let name = e.name.clone().unwrap_or_else(|| format!("#{i}"));
         let at = match &e.name {
-            Some(n) => {
-                let first = find_quoted(&source, n, 0);
-                if names.contains(n) {
-                    let again = first.and_then(|f| find_quoted(&source, n, f + 1));
-                    return Err(SceneError::at(
-                        path,
-                        loc(again),
-                        format!("duplicate entity name \"{n}\""),
-                    ));
-                }
-                first
-            }
+            Some(n) => find_quoted(&source, n, 0),
             None => find_entity(&source, i),
         };
+        if names.contains(&name) {
+            let again = match &e.name {
+                Some(n) => at.and_then(|f| find_quoted(&source, n, f + 1)).or(at),
+                None => at,
+            };
+            return Err(SceneError::at(
+                path,
+                loc(again),
+                format!("duplicate entity name \"{name}\""),
+            ));
+        }
         if !materials.contains_key(&e.material) {
             let known: Vec<&str> = materials.keys().map(String::as_str).collect();
             let offset = at.and_then(|a| find_quoted(&source, &e.material, a)).or(at);

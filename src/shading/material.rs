@@ -49,6 +49,9 @@ pub struct Scatter {
     pub direction: Vec3,
     /// Path throughput factor (BSDF · cos / pdf).
     pub attenuation: Vec3,
+    /// Solid-angle density of `direction`, if the BSDF can evaluate it (`None` for mirror,
+    /// glass and the fuzzed metal, which next-event estimation cannot use).
+    pub pdf: Option<f32>,
 }
 
 /// Mirror reflection of `d` about `n`.
@@ -94,6 +97,31 @@ impl Material {
         matches!(self, Self::Light { .. })
     }
 
+    /// Whether next-event estimation applies: the BSDF can be evaluated for any pair of
+    /// directions (see [`Material::eval`]).
+    pub fn samples_lights(&self) -> bool {
+        matches!(self, Self::Diffuse { .. })
+    }
+
+    /// BSDF times the cosine at the surface, and the density [`Material::scatter`] would give,
+    /// for light arriving from `wi` and leaving against `d` (the incoming ray's direction).
+    /// `None` where the BSDF has no density to evaluate (delta or fuzzed lobes).
+    #[inline]
+    pub fn eval(&self, d: Vec3, wi: Vec3, n: Vec3, uv: Vec2) -> Option<(Vec3, f32)> {
+        match self {
+            Self::Diffuse { albedo } => {
+                let facing = if d.dot(n) < 0.0 { n } else { -n };
+                let cos = wi.dot(facing);
+                if cos <= 0.0 {
+                    return Some((Vec3::ZERO, 0.0));
+                }
+                let pdf = cos * std::f32::consts::FRAC_1_PI;
+                Some((albedo.eval(uv) * pdf, pdf))
+            }
+            _ => None,
+        }
+    }
+
     /// Radiance emitted towards a ray travelling along `d` that hit a surface with geometric
     /// normal `n`.
     #[inline]
@@ -121,6 +149,7 @@ impl Material {
                 Some(Scatter {
                     direction,
                     attenuation: albedo.eval(uv),
+                    pdf: Some(local.z * std::f32::consts::FRAC_1_PI),
                 })
             }
             Self::Metal { albedo, roughness } => {
@@ -132,6 +161,7 @@ impl Material {
                 Some(Scatter {
                     direction: r.normalize(),
                     attenuation: albedo.eval(uv),
+                    pdf: None,
                 })
             }
             Self::Dielectric { ior } => {
@@ -146,6 +176,7 @@ impl Material {
                 Some(Scatter {
                     direction,
                     attenuation: Vec3::ONE,
+                    pdf: None,
                 })
             }
             Self::Light { .. } => None,
@@ -249,6 +280,38 @@ mod tests {
                 .expect("diffuse always scatters");
             assert!((s.direction.length() - 1.0).abs() < 1e-4 && s.direction.dot(n) >= 0.0);
         }
+    }
+
+    #[test]
+    fn diffuse_eval_matches_its_sampling_and_integrates_to_the_albedo() {
+        let m = Material::Diffuse {
+            albedo: Texture::Constant(Vec3::splat(0.6)),
+        };
+        let n = Vec3::Y;
+        let d = Vec3::new(0.3, -1.0, 0.2).normalize();
+        let mut rng = Rng::new(2, 3);
+        let mut estimate = Vec3::ZERO;
+        let count = 100_000;
+        for _ in 0..count {
+            let s = m.scatter(d, n, Vec2::ZERO, &mut rng).expect("scatters");
+            let (f_cos, pdf) = m.eval(d, s.direction, n, Vec2::ZERO).expect("evaluable");
+            assert!((pdf - s.pdf.expect("pdf")).abs() < 1e-5);
+            assert!((f_cos / pdf - s.attenuation).abs().max_element() < 1e-4);
+            // Uniform hemisphere estimate of ∫ f cos dω = albedo (pdf 1/2π).
+            let z = rng.next_f32();
+            let phi = 2.0 * std::f32::consts::PI * rng.next_f32();
+            let r = (1.0 - z * z).sqrt();
+            let wi = Vec3::new(r * phi.cos(), z, r * phi.sin());
+            estimate +=
+                m.eval(d, wi, n, Vec2::ZERO).expect("evaluable").0 * 2.0 * std::f32::consts::PI;
+        }
+        let mean = estimate / count as f32;
+        assert!(
+            (mean - Vec3::splat(0.6)).abs().max_element() < 0.01,
+            "{mean}"
+        );
+        // Below the surface (on the far side from the viewer) the BSDF is zero.
+        assert_eq!(m.eval(d, -n, n, Vec2::ZERO), Some((Vec3::ZERO, 0.0)));
     }
 
     #[test]

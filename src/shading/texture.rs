@@ -41,6 +41,18 @@ impl ImageTexture {
         }
     }
 
+    /// Wraps linear RGB floats (row-major, top row first); `pixels.len()` must be
+    /// `3 · width · height`.
+    pub fn from_linear(width: u32, height: u32, pixels: &[f32]) -> Self {
+        debug_assert_eq!(pixels.len(), 3 * width as usize * height as usize);
+        let texels = pixels.chunks_exact(3).map(Vec3::from_slice).collect();
+        Self {
+            width,
+            height,
+            texels,
+        }
+    }
+
     /// The texel at `uv` by the thesis's mapping `i = ⌊u(Nx−1)⌋`, `j = ⌊(1−v)(Ny−1)⌋` (v = 0 is
     /// the bottom row), with u and v clamped to [0, 1].
     #[inline]

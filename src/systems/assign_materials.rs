@@ -4,14 +4,15 @@ use bevy_ecs::prelude::*;
 
 use crate::ecs::components::MaterialRef;
 use crate::ecs::resources::{Counters, MaterialTable, OwnerMaterials, PackedGeometry};
+use crate::lights::LightSet;
 
 /// Run condition: a `MaterialRef` was added or changed.
 pub fn material_refs_changed(changed: Query<(), Changed<MaterialRef>>) -> bool {
     !changed.is_empty()
 }
 
-/// Rebuilds [`OwnerMaterials`]: cheap (one entry per entity and material), and never touches the
-/// BVH, so a material-only edit costs no geometry work.
+/// Rebuilds [`OwnerMaterials`] and the light set: linear in entities and primitives, and never
+/// touches the BVH, so a material-only edit costs no geometry build.
 pub fn assign_materials(
     refs: Query<&MaterialRef>,
     packed: Res<PackedGeometry>,
@@ -20,7 +21,7 @@ pub fn assign_materials(
     mut counters: ResMut<Counters>,
 ) {
     let names: Vec<&String> = table.0.keys().collect();
-    let owner_material = packed
+    let owner_material: Vec<u32> = packed
         .owners
         .iter()
         .map(|&e| {
@@ -30,9 +31,12 @@ pub fn assign_materials(
                 .unwrap_or(0) as u32
         })
         .collect();
+    let materials: Vec<_> = table.0.values().cloned().collect();
+    let lights = LightSet::build(&packed.geometry, &materials, &owner_material);
     out.set_if_neq(OwnerMaterials {
-        materials: table.0.values().cloned().collect(),
+        materials,
         owner_material,
+        lights,
     });
     counters.material_syncs += 1;
 }

@@ -52,9 +52,12 @@ pub fn render_frame(
         geometry: &packed.geometry,
         materials: &materials.materials,
         owner_material: &materials.owner_material,
+        lights: &materials.lights,
         camera: &cam,
         background: s.background,
         max_depth: s.max_depth,
+        method: s.method,
+        roulette: control.roulette,
     };
     let start = Instant::now();
     let progress = |rows: u64| {
