@@ -14,10 +14,11 @@ use crate::ecs::resources::{
 };
 use crate::ecs::sets::RenderSystems;
 use crate::film::Film;
+use crate::geometry::packed::LayoutKind;
 use crate::render::TraceStats;
 use crate::scene::error::SceneError;
 use crate::scene::format::{CameraDesc, Method, SettingsDesc};
-use crate::scene::load::{LoadedScene, TextureCache, load_scene};
+use crate::scene::load::{AssetCache, LoadedScene, load_scene};
 use crate::systems::{
     apply_scene, assign_materials, geometry_changed, material_refs_changed, rebuild_geometry,
     render_frame, write_image,
@@ -66,7 +67,7 @@ pub struct LoadInfo {
 pub struct Renderer {
     world: World,
     schedule: Schedule,
-    textures: TextureCache,
+    assets: AssetCache,
     pool: rayon::ThreadPool,
     overrides: Overrides,
 }
@@ -103,6 +104,7 @@ impl Renderer {
             plan,
             progress: None,
             roulette: true,
+            layout: LayoutKind::default(),
         });
 
         let mut schedule = Schedule::default();
@@ -133,7 +135,7 @@ impl Renderer {
         Ok(Self {
             world,
             schedule,
-            textures: TextureCache::default(),
+            assets: AssetCache::default(),
             pool,
             overrides: Overrides::default(),
         })
@@ -149,6 +151,12 @@ impl Renderer {
         let mut out = self.world.resource_mut::<Output>();
         out.path = path.map(Path::to_path_buf);
         out.every_pass = every_pass;
+    }
+
+    /// Sets the geometry layout the renderer traces (default: [`LayoutKind::default`]). Images
+    /// are bit-identical in every layout; only speed differs.
+    pub fn set_layout(&mut self, layout: LayoutKind) {
+        self.world.resource_mut::<RenderControl>().layout = layout;
     }
 
     /// Turns Russian roulette on or off (on by default; both are unbiased).
@@ -169,7 +177,7 @@ impl Renderer {
     /// Loads the scene at `path` (textures through the cache), applies the overrides and queues
     /// it for the next frame. Returns what was loaded.
     pub fn load(&mut self, path: &Path) -> Result<LoadInfo, SceneError> {
-        let mut scene = load_scene(path, &mut self.textures)?;
+        let mut scene = load_scene(path, &mut self.assets)?;
         self.overrides
             .apply(&mut scene.settings)
             .map_err(|m| SceneError::at(path, None, m))?;
@@ -256,8 +264,13 @@ impl Renderer {
             .primitive_count()
     }
 
-    /// Number of image decodes by the texture cache.
+    /// Number of mesh file loads by the asset cache.
+    pub fn mesh_loads(&self) -> u64 {
+        self.assets.mesh_loads()
+    }
+
+    /// Number of image decodes by the asset cache.
     pub fn texture_decodes(&self) -> u64 {
-        self.textures.decodes()
+        self.assets.decodes()
     }
 }

@@ -7,15 +7,19 @@
 //! [`shading`], [`camera`], [`film`]) know nothing about the ECS. See `ARCHITECTURE.md`.
 
 pub mod app;
+pub mod bench;
+pub mod bench_accuracy;
 pub mod camera;
 pub mod ecs;
 pub mod film;
 pub mod geometry;
 pub mod lights;
+pub mod metrics;
 pub mod render;
 pub mod scene;
 pub mod shading;
 pub mod systems;
+pub mod watch;
 
 pub use app::{Overrides, Renderer};
 pub use ecs::components::{EntityName, MaterialRef, Shape, Transform};

@@ -7,6 +7,7 @@
 
 use glam::{Vec2, Vec3};
 
+use crate::geometry::layout::{Layout, SphereStore, TriangleStore};
 use crate::geometry::packed::{Geometry, HitKind};
 use crate::geometry::ray::gamma;
 use crate::geometry::sphere::sphere_uv;
@@ -150,7 +151,12 @@ impl LightSet {
 
     /// Samples a point: `u_select` picks the emitter, `u` the point on it.
     #[inline]
-    pub fn sample(&self, geometry: &Geometry, u_select: f32, u: Vec2) -> Option<LightSample> {
+    pub fn sample<L: Layout>(
+        &self,
+        geometry: &Geometry<L>,
+        u_select: f32,
+        u: Vec2,
+    ) -> Option<LightSample> {
         let k = self
             .cdf
             .partition_point(|&c| c <= u_select)

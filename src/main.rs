@@ -7,8 +7,11 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
+use rondo::bench::layout;
 use rondo::film::OutputKind;
+use rondo::geometry::layout::LayoutKind;
 use rondo::scene::format::Method;
+use rondo::watch::{Report, Watch, WatchOptions, WatchSession};
 use rondo::{Overrides, PassPlan, Renderer};
 
 #[derive(Parser)]
@@ -34,6 +37,39 @@ enum Command {
         #[command(flatten)]
         options: RenderArgs,
     },
+    /// Render a scene, then re-render it on every save of the scene or its textures: a quick
+    /// first pass, then passes doubling the samples, rewriting the image after each. Ctrl-C stops.
+    Watch {
+        /// Scene file (.ron).
+        scene: PathBuf,
+        /// Output image (.png or .exr).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Samples per pixel of the first pass.
+        #[arg(long, default_value_t = 1)]
+        first_spp: u32,
+        #[command(flatten)]
+        options: RenderArgs,
+    },
+    /// Compare an image with a reference: RMSE, relative MSE (ε = 0.01) and mean absolute
+    /// error over all pixels and channels; optionally a false-colour picture of the error.
+    Diff {
+        /// Image to judge (.exr; a .png is compared as its stored 8-bit values / 255).
+        image: PathBuf,
+        /// Reference image, of the same size.
+        reference: PathBuf,
+        /// Write a false-colour picture of the per-pixel error here (.png).
+        #[arg(long)]
+        error_image: Option<PathBuf>,
+    },
+    /// Load a scene and list what looks wrong without rendering it: overlapping coplanar
+    /// surfaces, lights facing away from everything, non-planar quads, unused materials,
+    /// entities far outside the view, albedos above 1. Exit code 0 with warnings, 1 if the scene
+    /// does not load.
+    Check {
+        /// Scene file (.ron).
+        scene: PathBuf,
+    },
     /// Measure rendering speed.
     Bench {
         #[command(subcommand)]
@@ -51,6 +87,69 @@ enum BenchCommand {
         /// Number of timed runs.
         #[arg(long, default_value_t = 5)]
         runs: usize,
+        #[command(flatten)]
+        options: RenderArgs,
+    },
+    /// SoA against AoS (and SoA with SIMD lanes): leaf kernel, traversal, render and extraction
+    /// throughput over primitive counts; writes layout.csv, layout.md and layout.svg.
+    Layout {
+        /// Output directory.
+        #[arg(long, default_value = "bench/layout")]
+        out: PathBuf,
+        /// Largest primitive count.
+        #[arg(long, default_value_t = 1_000_000)]
+        max_count: usize,
+        /// Interleaved rounds per point (at most 7 above 10⁴ primitives, 5 above 10⁵).
+        #[arg(long, default_value_t = 9)]
+        reps: usize,
+        /// Tiny sizes and two rounds: checks that the command works; measures nothing.
+        #[arg(long)]
+        smoke: bool,
+        /// Run only this workload (kernel, traverse, render, extract, pack); repeatable.
+        #[arg(long = "workload")]
+        workloads: Vec<String>,
+    },
+    /// Error against a reference image as a function of render time, for each light-transport
+    /// method over a sweep of spp (renders interleaved); writes accuracy.csv, accuracy.svg (log-log
+    /// RMSE against time) and summary.md (equal-time comparison) in --out.
+    Accuracy {
+        /// Scene file (.ron).
+        scene: PathBuf,
+        /// Reference image (.exr, e.g. `rondo render SCENE -o ref.exr --spp 4096`); the renders
+        /// take its size. Make it with a seed below --seed (the scene's default 0 is fine).
+        #[arg(long)]
+        reference: PathBuf,
+        /// Output directory.
+        #[arg(long, default_value = "bench/acc")]
+        out: PathBuf,
+        /// Samples per pixel of the sweep, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32,64")]
+        spp_list: Vec<u32>,
+        /// Methods compared, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "naive,nee,mis")]
+        methods: Vec<Method>,
+        /// Rays per path, camera ray included (overrides the scene).
+        #[arg(long)]
+        max_depth: Option<u32>,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// First seed of the sweep (render k uses seed + k).
+        #[arg(long, default_value_t = rondo::bench_accuracy::DEFAULT_SEED)]
+        seed: u64,
+    },
+    /// Latency of `watch`: from a saved edit to the first and to the full-quality image, for a
+    /// material edit and a geometry edit of the Cornell box (edited in a temporary copy).
+    Watch {
+        /// Scene file (.ron): the Cornell box, or a scene with the same red material and tall box.
+        #[arg(default_value = "scenes/cornell.ron")]
+        scene: PathBuf,
+        /// Edits per kind.
+        #[arg(long, default_value_t = 5)]
+        runs: usize,
+        /// Samples per pixel of the first pass.
+        #[arg(long, default_value_t = 1)]
+        first_spp: u32,
         #[command(flatten)]
         options: RenderArgs,
     },
@@ -79,6 +178,9 @@ struct RenderArgs {
     /// Light-transport method: naive, nee or mis (overrides the scene).
     #[arg(long)]
     method: Option<Method>,
+    /// Geometry layout: soa, aos or soa-simd. Images are bit-identical; only speed differs.
+    #[arg(long, default_value_t = LayoutKind::default())]
+    layout: LayoutKind,
 }
 
 impl RenderArgs {
@@ -95,6 +197,7 @@ impl RenderArgs {
             seed: self.seed,
             method: self.method,
         });
+        r.set_layout(self.layout);
         Ok(r)
     }
 }
@@ -108,6 +211,7 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Check { scene } => check(&scene),
         Command::Render {
             scene,
             output,
@@ -121,7 +225,87 @@ fn run(cli: Cli) -> Result<()> {
                     options,
                 },
         } => bench_render(&scene, runs, &options),
+        Command::Bench {
+            what:
+                BenchCommand::Layout {
+                    out,
+                    max_count,
+                    reps,
+                    smoke,
+                    workloads,
+                },
+        } => bench_layout(out, max_count, reps, smoke, workloads),
+        Command::Diff {
+            image,
+            reference,
+            error_image,
+        } => diff(&image, &reference, error_image.as_deref()),
+        Command::Bench {
+            what:
+                BenchCommand::Accuracy {
+                    scene,
+                    reference,
+                    out,
+                    spp_list,
+                    methods,
+                    max_depth,
+                    threads,
+                    seed,
+                },
+        } => bench_accuracy(&rondo::bench_accuracy::AccuracyOptions {
+            scene,
+            reference,
+            out,
+            spp_list,
+            methods,
+            threads,
+            max_depth,
+            seed,
+        }),
+        Command::Watch {
+            scene,
+            output,
+            first_spp,
+            options,
+        } => watch(options.watch_options(&scene, &output, first_spp)?),
+        Command::Bench {
+            what:
+                BenchCommand::Watch {
+                    scene,
+                    runs,
+                    first_spp,
+                    options,
+                },
+        } => bench_watch(&scene, runs, first_spp, &options),
     }
+}
+
+fn bench_layout(
+    out: PathBuf,
+    max_count: usize,
+    reps: usize,
+    smoke: bool,
+    workloads: Vec<String>,
+) -> Result<()> {
+    if let Some(w) = workloads
+        .iter()
+        .find(|w| !layout::WORKLOADS.iter().any(|k| k.0 == w.as_str()))
+    {
+        bail!("unknown workload {w:?} (expected kernel, traverse, render, extract or pack)");
+    }
+    let mut options = if smoke {
+        layout::Options::smoke(out)
+    } else {
+        layout::Options::full(out, max_count, reps)
+    };
+    options.command = std::env::args().collect::<Vec<_>>().join(" ");
+    options.workloads = workloads;
+    layout::run(&options).with_context(|| format!("{}", options.out.display()))?;
+    println!(
+        "wrote {}/layout.csv, layout.md and layout.svg",
+        options.out.display()
+    );
+    Ok(())
 }
 
 fn render(scene: &Path, output: &Path, options: &RenderArgs) -> Result<()> {
@@ -144,6 +328,22 @@ fn render(scene: &Path, output: &Path, options: &RenderArgs) -> Result<()> {
         bail!("{e}");
     }
     eprintln!("{}", summary(&r, wall));
+    Ok(())
+}
+
+/// `rondo check`: one line per warning on stdout, then a count; load errors go to `main`.
+fn check(scene: &Path) -> Result<()> {
+    let loaded =
+        rondo::scene::load::load_scene(scene, &mut rondo::scene::load::AssetCache::default())?;
+    let warnings = rondo::scene::check::check_scene(&loaded);
+    for w in &warnings {
+        println!("warning: {}: {w}", scene.display());
+    }
+    match warnings.len() {
+        0 => println!("{}: no warnings", scene.display()),
+        1 => println!("{}: 1 warning", scene.display()),
+        n => println!("{}: {n} warnings", scene.display()),
+    }
     Ok(())
 }
 
@@ -195,4 +395,196 @@ fn summary_from(r: &Renderer, wall: Duration, rays: u64) -> String {
         samples / secs / 1e6,
         rays as f64 / secs / 1e6
     )
+}
+
+impl RenderArgs {
+    fn watch_options(&self, scene: &Path, output: &Path, first_spp: u32) -> Result<WatchOptions> {
+        if self.threads == Some(0) {
+            bail!("--threads must be at least 1");
+        }
+        if first_spp == 0 {
+            bail!("--first-spp must be at least 1");
+        }
+        let mut options = WatchOptions::new(scene, output);
+        options.threads = self.threads;
+        options.first_pass = first_spp;
+        options.overrides = Overrides {
+            width: self.width,
+            height: self.height,
+            spp: self.spp,
+            max_depth: self.max_depth,
+            seed: self.seed,
+            method: self.method,
+        };
+        Ok(options)
+    }
+}
+
+/// `rondo watch`: runs until Ctrl-C, one line per reload on stderr.
+fn watch(options: WatchOptions) -> Result<()> {
+    let watch = Watch::new(options)?;
+    let stop = watch.stop_handle();
+    ctrlc::set_handler(move || stop.stop()).context("cannot install the Ctrl-C handler")?;
+    watch.run(|report| {
+        if let Some(line) = report.line() {
+            eprintln!("{line}");
+        }
+    });
+    eprintln!("stopped");
+    Ok(())
+}
+
+/// `rondo bench watch`: edits a temporary copy of the scene and times each save to the first
+/// and to the full-quality image, as seen by the watch loop's own reports.
+fn bench_watch(scene: &Path, runs: usize, first_spp: u32, options: &RenderArgs) -> Result<()> {
+    let kinds = [
+        ("material", "(0.65, 0.05, 0.05)", "(0.05, 0.05, 0.65)"),
+        (
+            "geometry",
+            "translate: (265, 0, 295)",
+            "translate: (265, 0, 305)",
+        ),
+    ];
+    let original = std::fs::read_to_string(scene)
+        .with_context(|| format!("{}: cannot read", scene.display()))?;
+    for (kind, from, _) in kinds {
+        if !original.contains(from) {
+            bail!(
+                "{}: no `{from}` to edit for the {kind} edit",
+                scene.display()
+            );
+        }
+    }
+    let dir = std::env::temp_dir().join(format!("rondo-bench-watch-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let rows = time_edits(
+        &dir,
+        &original,
+        &kinds,
+        runs,
+        options.watch_options(&dir.join("scene.ron"), &dir.join("out.png"), first_spp)?,
+    );
+    std::fs::remove_dir_all(&dir).ok();
+    let rows = rows?;
+    let stats = |v: &mut Vec<Duration>| {
+        v.sort();
+        let ms = |d: Duration| d.as_secs_f64() * 1e3;
+        format!("{:8.1} ms (min {:8.1})", ms(v[v.len() / 2]), ms(v[0]))
+    };
+    println!(
+        "watch latency, save -> image written, {} (debounce {} ms, first pass {first_spp} spp), median of {} edits:",
+        scene.display(),
+        rondo::watch::DEBOUNCE.as_millis(),
+        runs.max(1)
+    );
+    for (kind, mut first_image, mut full) in rows {
+        println!(
+            "  {kind:<8} edit: first image {}, full quality {}",
+            stats(&mut first_image),
+            stats(&mut full)
+        );
+    }
+    Ok(())
+}
+
+/// Per edit kind: the latencies from each save to the first image and to the full-quality one.
+type EditTimes = Vec<(&'static str, Vec<Duration>, Vec<Duration>)>;
+
+/// Times `runs` edits of each kind, each replacing `from` by `to` (or back) in a copy of the
+/// scene under `dir`.
+fn time_edits(
+    dir: &Path,
+    original: &str,
+    kinds: &[(&'static str, &str, &str)],
+    runs: usize,
+    options: WatchOptions,
+) -> Result<EditTimes> {
+    const WAIT: Duration = Duration::from_secs(120);
+    let copy = dir.join("scene.ron");
+    std::fs::write(&copy, original)?;
+    let session = WatchSession::start(options)?;
+    let finished = |min: u64| {
+        session.wait_for(
+            WAIT,
+            |r| matches!(r, Report::Rendered(r) if r.completed() && r.number >= min),
+        )
+    };
+    let Ok(Report::Rendered(first)) = finished(0) else {
+        bail!("the first render did not finish");
+    };
+    eprintln!("{first}");
+    let mut reload = first.number;
+    let mut text = original.to_string();
+    let mut rows = Vec::new();
+    for &(kind, from, to) in kinds {
+        let (mut first_image, mut full) = (Vec::new(), Vec::new());
+        for _ in 0..runs.max(1) {
+            text = if text.contains(from) {
+                text.replace(from, to)
+            } else {
+                text.replace(to, from)
+            };
+            std::fs::write(&copy, &text)?;
+            let saved = std::time::Instant::now();
+            let Ok(Report::Wrote { reload: r, at, .. }) = session.wait_for(
+                WAIT,
+                |r| matches!(r, Report::Wrote { reload: n, .. } if *n > reload),
+            ) else {
+                bail!("no image after a {kind} edit");
+            };
+            let Ok(Report::Rendered(report)) = finished(r) else {
+                bail!("the render after a {kind} edit did not finish");
+            };
+            reload = report.number;
+            first_image.push(at.saturating_duration_since(saved));
+            full.push(saved.elapsed());
+            eprintln!("{kind}: {report}");
+        }
+        rows.push((kind, first_image, full));
+    }
+    Ok(rows)
+}
+
+/// `rondo diff`: prints the metrics of `image` against `reference`, one per line.
+fn diff(image: &Path, reference: &Path, error_image: Option<&Path>) -> Result<()> {
+    let d = rondo::metrics::diff_files(image, reference, error_image)?;
+    let m = d.metrics;
+    println!("rmse     {:.6e}", m.rmse);
+    println!(
+        "rel_mse  {:.6e}   (mean of (a - r)^2 / (r^2 + {}))",
+        m.rel_mse,
+        rondo::metrics::REL_EPSILON
+    );
+    println!("mae      {:.6e}", m.mae);
+    if let (Some(path), Some(scale)) = (error_image, d.error_scale) {
+        eprintln!(
+            "error image {}: |a - r| averaged over channels, dark blue = 0, yellow >= {scale:.4e} (99th percentile)",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
+/// `rondo bench accuracy`: runs the sweep, printing a line per render, then the summary.
+fn bench_accuracy(options: &rondo::bench_accuracy::AccuracyOptions) -> Result<()> {
+    if options.threads == Some(0) {
+        bail!("--threads must be at least 1");
+    }
+    let report = rondo::bench_accuracy::run(options, |r| {
+        eprintln!(
+            "{:>5} {:>6} spp  {:9.4} s  rmse {:.4e}  rel_mse {:.4e}  mae {:.4e}",
+            r.method.to_string(),
+            r.spp,
+            r.seconds,
+            r.metrics.rmse,
+            r.metrics.rel_mse,
+            r.metrics.mae
+        );
+    })?;
+    println!("{}", rondo::bench_accuracy::summary_markdown(&report));
+    println!(
+        "wrote {}/accuracy.csv, accuracy.svg, accuracy_relative.svg, summary.md",
+        options.out.display()
+    );
+    Ok(())
 }

@@ -8,6 +8,7 @@ use rayon::prelude::*;
 
 use crate::camera::Camera;
 use crate::film::Film;
+use crate::geometry::layout::{DefaultLayout, Layout, SphereStore, TriangleStore};
 use crate::geometry::packed::{Geometry, Hit, HitKind, Surface};
 use crate::geometry::ray::{Ray, gamma, spawn_origin};
 use crate::lights::LightSet;
@@ -18,11 +19,12 @@ use crate::shading::rng::Rng;
 /// Rows per parallel work item. Small enough to balance two cores and to cancel promptly.
 const BAND_ROWS: usize = 4;
 
-/// Everything a render reads: a snapshot of the scene, independent of the ECS.
+/// Everything a render reads: a snapshot of the scene, independent of the ECS. Generic over the
+/// geometry's layout, so that the whole pass is monomorphised per layout (no dispatch per ray).
 #[derive(Clone, Copy)]
-pub struct SceneView<'a> {
+pub struct SceneView<'a, L: Layout = DefaultLayout> {
     /// Packed geometry and its BVHs.
-    pub geometry: &'a Geometry,
+    pub geometry: &'a Geometry<L>,
     /// Material table.
     pub materials: &'a [Material],
     /// Material index of every owner slot.
@@ -82,9 +84,10 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 
 /// Absolute error bound of the hit point `s.p` of `hit`, per component (pbrt-v4, Section 6.8.5):
 /// the point is recomputed from the primitive, so its error scales with the primitive's own
-/// coordinates, not with the ray's travel.
+/// coordinates, not with the ray's travel. Public so tests can spawn rays exactly as the
+/// integrator does.
 #[inline]
-fn point_error(geometry: &Geometry, hit: &Hit, p: Vec3) -> Vec3 {
+pub fn point_error<L: Layout>(geometry: &Geometry<L>, hit: &Hit, p: Vec3) -> Vec3 {
     let i = hit.index as usize;
     match hit.kind {
         HitKind::Sphere => {
@@ -101,9 +104,9 @@ fn point_error(geometry: &Geometry, hit: &Hit, p: Vec3) -> Vec3 {
 }
 
 /// A ray from surface point `p` (geometric normal `n`, error `err`) along `dir`, started on the
-/// side it leaves to.
+/// side it leaves to: the one way the integrator starts a bounce or a shadow ray.
 #[inline]
-fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
+pub fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
     let side = if dir.dot(n) > 0.0 { n } else { -n };
     Ray::new(spawn_origin(p, side, err), dir)
 }
@@ -117,7 +120,12 @@ fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
 /// Emission seen by the camera or after a glass/mirror bounce always counts in full. Russian
 /// roulette (after a few bounces, survival probability = the path's throughput) ends paths
 /// early without bias.
-pub fn trace_path(view: &SceneView, mut ray: Ray, rng: &mut Rng, stats: &mut TraceStats) -> Vec3 {
+pub fn trace_path<L: Layout>(
+    view: &SceneView<L>,
+    mut ray: Ray,
+    rng: &mut Rng,
+    stats: &mut TraceStats,
+) -> Vec3 {
     let mut radiance = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
     // Point and BSDF density of the previous vertex, if it was one that sampled lights.
@@ -181,8 +189,8 @@ pub fn trace_path(view: &SceneView, mut ray: Ray, rng: &mut Rng, stats: &mut Tra
 /// One light sample at surface `s` for a ray arriving along `d`: emitted radiance from a point
 /// sampled on an emitter, times the BSDF and cosine, over the light density, MIS-weighted
 /// against BSDF sampling under `Method::Mis`.
-fn direct_light(
-    view: &SceneView,
+fn direct_light<L: Layout>(
+    view: &SceneView<L>,
     s: &Surface,
     err: Vec3,
     d: Vec3,
@@ -249,8 +257,8 @@ fn direct_light(
 /// to its pixel's sum in sample order, so the film is bit-identical whatever the thread count
 /// and however the samples are split into passes. `progress(rows)` is called as bands finish.
 /// If `cancel` becomes true, remaining bands are skipped and `Err(Cancelled)` is returned.
-pub fn render_pass(
-    view: &SceneView,
+pub fn render_pass<L: Layout>(
+    view: &SceneView<L>,
     film: &mut Film,
     seed: u64,
     samples: Range<u32>,

@@ -3,7 +3,7 @@
 mod common;
 
 use common::{temp_dir, write_scene};
-use rondo::scene::load::{TextureCache, load_scene};
+use rondo::scene::load::{AssetCache, load_scene};
 
 const HEADER: &str = r#"Scene(
     camera: Camera(position: (0, 1, -5), look_at: (0, 1, 0)),
@@ -14,7 +14,7 @@ const HEADER: &str = r#"Scene(
 fn error_of(name: &str, source: &str) -> String {
     let dir = temp_dir(&format!("errors-{name}"));
     let path = write_scene(&dir, "scene.ron", source);
-    match load_scene(&path, &mut TextureCache::default()) {
+    match load_scene(&path, &mut AssetCache::default()) {
         Ok(_) => panic!("{name}: expected an error"),
         Err(e) => {
             let text = e.to_string();
@@ -147,7 +147,7 @@ fn integers_are_accepted_where_floats_are_expected() {
         "{HEADER}    materials: {{ \"w\": Metal(albedo: Constant((1, 1, 1)), roughness: 2) }},\n    entities: [ Entity(material: \"w\", shape: Sphere(center: (0, 0, 0), radius: 1)) ],\n)"
     );
     let path = write_scene(&dir, "scene.ron", &src);
-    let scene = load_scene(&path, &mut TextureCache::default()).expect("integers parse");
+    let scene = load_scene(&path, &mut AssetCache::default()).expect("integers parse");
     assert_eq!(scene.entities.len(), 1);
     assert_eq!(scene.entities[0].name, "#0");
     // Roughness is clamped to [0, 1].

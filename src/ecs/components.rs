@@ -4,10 +4,11 @@
 //! Entity(name: "ball", material: "glass",
 //!        shape: Sphere(center: (0, 1, 0), radius: 1),
 //!        transform: Transform(translate: (2, 0, 0), rotate: (0, 45, 0), scale: (1, 1, 1)))
+//! Entity(name: "bunny", material: "white", shape: Mesh(path: "meshes/bunny.obj"))
 //! ```
 
 use bevy_ecs::component::Component;
-use glam::{Affine3A, EulerRot, Mat3, Quat, Vec3};
+use glam::{Affine3A, Mat3, Vec3};
 
 /// The entity's name in the scene file; the key by which reloads match entities.
 #[derive(Component, Clone, Debug, PartialEq, Eq, Hash)]
@@ -57,97 +58,73 @@ pub enum Shape {
         /// Maximum corner.
         max: Vec3,
     },
+    /// A triangle mesh loaded from a Wavefront OBJ file.
+    Mesh(MeshRef),
 }
 
-/// Placement of an entity: `world = T · R · S · object`.
-#[derive(Component, Clone, Copy, Debug, PartialEq)]
-pub struct Transform {
-    /// Translation.
-    pub translate: Vec3,
-    /// Rotation in degrees about x, then y, then z (right-handed).
-    pub rotate: Vec3,
-    /// Scale per axis (non-zero).
-    pub scale: Vec3,
-}
-
-impl Default for Transform {
-    fn default() -> Self {
-        Self {
-            translate: Vec3::ZERO,
-            rotate: Vec3::ZERO,
-            scale: Vec3::ONE,
-        }
-    }
-}
+/// Placement of an entity: its composed `world_from_object` matrix (for an entity inside
+/// prefabs, the product of every placement's `T · R · S` down to it).
+#[derive(Component, Clone, Copy, Debug, PartialEq, Default)]
+pub struct Transform(pub Affine3A);
 
 impl Transform {
-    /// The rotation part, object to world.
+    /// Whether the linear part is a rotation (or reflection) times a uniform scale, so spheres
+    /// stay spheres.
+    pub fn is_similarity(&self) -> bool {
+        let m = self.0.matrix3;
+        let (x, y, z) = (m.x_axis, m.y_axis, m.z_axis);
+        let s2 = x.length_squared();
+        let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * s2.max(f32::MIN_POSITIVE);
+        close(y.length_squared(), s2)
+            && close(z.length_squared(), s2)
+            && close(x.dot(y), 0.0)
+            && close(y.dot(z), 0.0)
+            && close(x.dot(z), 0.0)
+    }
+
+    /// The uniform scale of a similarity transform (length of its first axis).
+    pub fn uniform_scale(&self) -> f32 {
+        Vec3::from(self.0.matrix3.x_axis).length()
+    }
+
+    /// The rotation part of a similarity transform, object to world.
     pub fn rotation(&self) -> Mat3 {
-        let r = self.rotate * (std::f32::consts::PI / 180.0);
-        // x first, then y, then z: R = Rz · Ry · Rx.
-        Mat3::from_quat(Quat::from_euler(EulerRot::ZYX, r.z, r.y, r.x))
+        Mat3::from(self.0.matrix3) * (1.0 / self.uniform_scale())
     }
+}
 
-    /// `world_from_object = T · R · S`.
-    pub fn world_from_object(&self) -> Affine3A {
-        Affine3A::from_mat3_translation(
-            self.rotation() * Mat3::from_diagonal(self.scale),
-            self.translate,
-        )
-    }
+/// The order of the entity in its scene after prefab expansion: geometry is packed in this
+/// order, so the image depends only on the scene file, never on the history of edits.
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub struct SceneOrder(pub u32);
 
-    /// Whether the scale is the same on all axes (up to sign), so spheres stay spheres.
-    pub fn is_uniform(&self) -> bool {
-        let s = self.scale.abs();
-        (s.x - s.y).abs() <= 1e-6 * s.x && (s.x - s.z).abs() <= 1e-6 * s.x
+/// Triangle mesh data, shared by every entity that uses the same file.
+#[derive(Debug, Default, PartialEq)]
+pub struct MeshData {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals, if the file has them.
+    pub normals: Option<Vec<Vec3>>,
+    /// Triangles as vertex indices (validated to be in range).
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// A mesh file's data and where it came from; equal when it is the same loaded data.
+#[derive(Clone, Debug)]
+pub struct MeshRef {
+    /// The file.
+    pub path: std::path::PathBuf,
+    /// The loaded data.
+    pub data: std::sync::Arc<MeshData>,
+}
+
+impl PartialEq for MeshRef {
+    /// Same file and same load: a re-read file is a new mesh, an unchanged one is not.
+    fn eq(&self, other: &Self) -> bool {
+        self.path == other.path && std::sync::Arc::ptr_eq(&self.data, &other.data)
     }
 }
 
 /// Name of the material in the scene's material table.
 #[derive(Component, Clone, Debug, PartialEq, Eq)]
 pub struct MaterialRef(pub String);
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn rotation_about_y_matches_rtiow() {
-        // +θ about y maps (x, z) to (x cosθ + z sinθ, −x sinθ + z cosθ).
-        let t = Transform {
-            rotate: Vec3::new(0.0, 30.0, 0.0),
-            ..Default::default()
-        };
-        let p = t
-            .world_from_object()
-            .transform_point3(Vec3::new(1.0, 0.0, 2.0));
-        let (s, c) = 30f32.to_radians().sin_cos();
-        assert!(
-            (p - Vec3::new(c + 2.0 * s, 0.0, -s + 2.0 * c)).length() < 1e-5,
-            "{p}"
-        );
-    }
-
-    #[test]
-    fn rotations_apply_x_then_y_then_z() {
-        let t = Transform {
-            rotate: Vec3::new(90.0, 90.0, 0.0),
-            ..Default::default()
-        };
-        // Rx(90): y → z; then Ry(90): z → x.
-        let p = t.world_from_object().transform_point3(Vec3::Y);
-        assert!((p - Vec3::X).length() < 1e-6, "{p}");
-    }
-
-    #[test]
-    fn translate_rotate_scale_compose_in_that_order() {
-        let t = Transform {
-            translate: Vec3::new(10.0, 0.0, 0.0),
-            rotate: Vec3::new(0.0, 0.0, 90.0),
-            scale: Vec3::new(2.0, 1.0, 1.0),
-        };
-        // S: (1,0,0) → (2,0,0); Rz(90): → (0,2,0); T: → (10,2,0).
-        let p = t.world_from_object().transform_point3(Vec3::X);
-        assert!((p - Vec3::new(10.0, 2.0, 0.0)).length() < 1e-5, "{p}");
-    }
-}

@@ -11,7 +11,7 @@ use bevy_ecs::entity::Entity;
 use bevy_ecs::resource::Resource;
 
 use crate::film::Film;
-use crate::geometry::packed::Geometry;
+use crate::geometry::packed::{Geometry, LayoutKind};
 use crate::lights::LightSet;
 use crate::render::TraceStats;
 use crate::scene::format::{CameraDesc, SettingsDesc};
@@ -121,6 +121,8 @@ pub struct RenderControl {
     pub progress: Option<indicatif::ProgressBar>,
     /// Russian roulette on (the default; off only to test that it is unbiased).
     pub roulette: bool,
+    /// Layout of the geometry the render reads; images are bit-identical in every layout.
+    pub layout: LayoutKind,
 }
 
 /// The accumulating image and the statistics of the current render.

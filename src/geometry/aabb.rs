@@ -17,8 +17,9 @@ pub struct RayQuery {
     origin: Vec3A,
     /// `1 / direction` (±∞ where a component is ±0).
     inv_dir: Vec3A,
-    /// Whether a direction component is zero: then `0 · ∞` can occur and the slab test takes
-    /// its NaN-aware path.
+    /// Whether `1 / direction` is infinite on some axis (a zero component, or a subnormal one
+    /// whose reciprocal overflows): then `0 · ∞` can occur and the slab test takes its NaN-aware
+    /// path.
     axis_parallel: bool,
     /// The watertight test's permute-and-shear transform as three vectors: a vertex `p` relative
     /// to the origin maps to `(x_axis·p, y_axis·p, z_axis·p)`.
@@ -49,11 +50,12 @@ impl RayQuery {
             axis(ky) + sy * axis(kz),
             sz * axis(kz),
         );
+        let inv_dir = Vec3A::ONE / Vec3A::from(d);
         Self {
             ray,
             origin: ray.origin.into(),
-            inv_dir: Vec3A::ONE / Vec3A::from(d),
-            axis_parallel: d.cmpeq(Vec3::ZERO).any(),
+            inv_dir,
+            axis_parallel: !inv_dir.is_finite(),
             shear,
         }
     }
@@ -68,6 +70,13 @@ impl RayQuery {
             self.shear.y_axis.dot(rel),
             rel.dot(self.shear.z_axis),
         )
+    }
+
+    /// The watertight test's shear as three rows (see [`RayQuery::to_ray_frame`]), for kernels
+    /// that move several vertices into the ray frame at once with the same operations.
+    #[inline(always)]
+    pub fn shear(&self) -> Mat3 {
+        self.shear
     }
 
     /// Entry distance of the ray into the box `[min, max]` if it enters before `t_max`.
@@ -90,6 +99,11 @@ impl RayQuery {
     /// The slab test for rays with a zero direction component. A ray lying in a slab plane makes
     /// `0 · ∞ = NaN`; the comparisons are written so a NaN bound is ignored (the ray is inside
     /// that slab), as pbrt does.
+    ///
+    /// Near and far planes are chosen by the sign of `1 / d`, not by comparing the two
+    /// distances as pbrt does: for `d = −0.0` and an origin in the `min` plane the distances are
+    /// `NaN` and `−∞`, the comparison never swaps them, and the box was missed (a ray along
+    /// `(1, −0, 0)` from `(−1, 0, 0)` missed the unit box; `tests/stability.rs`).
     #[cold]
     fn enter_box_axis_parallel(&self, min: Vec3A, max: Vec3A, t_max: f32) -> Option<f32> {
         let mut t0 = 0.0f32;
@@ -97,12 +111,13 @@ impl RayQuery {
         for axis in 0..3 {
             let o = self.origin[axis];
             let inv = self.inv_dir[axis];
-            let mut near = (min[axis] - o) * inv;
-            let mut far = (max[axis] - o) * inv;
-            if near > far {
-                std::mem::swap(&mut near, &mut far);
-            }
-            far *= 1.0 + 2.0 * GAMMA3;
+            let (lo, hi) = if inv.is_sign_negative() {
+                (max[axis], min[axis])
+            } else {
+                (min[axis], max[axis])
+            };
+            let near = (lo - o) * inv;
+            let far = (hi - o) * inv * (1.0 + 2.0 * GAMMA3);
             t0 = if near > t0 { near } else { t0 };
             t1 = if far < t1 { far } else { t1 };
             if t0 > t1 {

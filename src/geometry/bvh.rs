@@ -53,6 +53,14 @@ impl Bvh {
         self.bvh.nodes.len()
     }
 
+    /// The slot range of every leaf, in node order (for benchmarks and statistics).
+    pub fn leaves(&self) -> impl Iterator<Item = Range<usize>> + '_ {
+        self.bvh.nodes.iter().filter(|n| n.is_leaf()).map(|n| {
+            let first = n.first_index as usize;
+            first..first + n.prim_count as usize
+        })
+    }
+
     /// Calls `leaf(slots, t_max)` for every leaf the ray of `q` enters before `*t_max`, nearest
     /// child first. The closure shrinks `*t_max` when it finds a closer hit and returns `false` to
     /// stop the traversal (any-hit queries).

@@ -2,8 +2,11 @@
 
 pub mod aabb;
 pub mod bvh;
+pub mod instance;
+pub mod layout;
 pub mod packed;
 pub mod plane;
 pub mod ray;
+pub mod simd;
 pub mod sphere;
 pub mod triangle;

@@ -1,14 +1,21 @@
-//! Render-side geometry: world-space primitives packed as structure-of-arrays in BVH order.
+//! Render-side geometry: world-space primitives packed in BVH order, in a choice of layouts.
 //!
 //! Spheres and triangles each get their own BVH and their own arrays, so a scene pays only for the
-//! primitive kinds it uses; infinite planes are tested linearly outside any BVH. Everything the
-//! intersection loops read is in one `Vec<f32>` per field (SoA); what only shading needs (owner,
-//! texture coordinates, frames) sits beside it and is touched once per closest hit.
+//! primitive kinds it uses; infinite planes are tested linearly outside any BVH. What the
+//! intersection loops read is stored as the layout `L` says (see [`super::layout`]: one
+//! `Vec<f32>` per field, or one struct per primitive); what only shading needs (owner, texture
+//! coordinates, frames) sits beside it and is touched once per closest hit.
+
+use std::any::Any;
 
 use glam::{Mat3, Vec2, Vec3};
 
 use super::aabb::RayQuery;
-use super::bvh::{Bounds, Bvh};
+use super::bvh::Bvh;
+pub use super::layout::{
+    Aos, DefaultLayout, Layout, LayoutKind, Soa, SoaSimd, Sphere, SphereAos, SphereSoa,
+    SphereStore, Triangle, TriangleAos, TriangleSoa, TriangleStore,
+};
 use super::plane::{intersect_plane, plane_uv};
 use super::ray::Ray;
 use super::sphere::{intersect_sphere, sphere_uv};
@@ -81,72 +88,6 @@ pub struct Surface {
     pub owner: u32,
 }
 
-/// Spheres in SoA form.
-#[derive(Clone, Debug, Default)]
-pub struct SphereSoa {
-    /// Centre x per sphere.
-    pub cx: Vec<f32>,
-    /// Centre y per sphere.
-    pub cy: Vec<f32>,
-    /// Centre z per sphere.
-    pub cz: Vec<f32>,
-    /// Radius per sphere.
-    pub r: Vec<f32>,
-}
-
-impl SphereSoa {
-    /// Centre and radius of sphere `i`.
-    #[inline(always)]
-    pub fn get(&self, i: usize) -> (Vec3, f32) {
-        (Vec3::new(self.cx[i], self.cy[i], self.cz[i]), self.r[i])
-    }
-
-    fn push(&mut self, c: Vec3, r: f32) {
-        self.cx.push(c.x);
-        self.cy.push(c.y);
-        self.cz.push(c.z);
-        self.r.push(r);
-    }
-}
-
-/// Triangles in SoA form: one array per vertex coordinate.
-#[derive(Clone, Debug, Default)]
-pub struct TriangleSoa {
-    /// `v[3 * k + axis]` holds coordinate `axis` of vertex `k` of every triangle.
-    pub v: [Vec<f32>; 9],
-}
-
-impl TriangleSoa {
-    /// Vertices of triangle `i`.
-    #[inline(always)]
-    pub fn get(&self, i: usize) -> [Vec3; 3] {
-        let v = &self.v;
-        [
-            Vec3::new(v[0][i], v[1][i], v[2][i]),
-            Vec3::new(v[3][i], v[4][i], v[5][i]),
-            Vec3::new(v[6][i], v[7][i], v[8][i]),
-        ]
-    }
-
-    fn push(&mut self, p: [Vec3; 3]) {
-        for (k, vertex) in p.iter().enumerate() {
-            for axis in 0..3 {
-                self.v[3 * k + axis].push(vertex[axis]);
-            }
-        }
-    }
-
-    /// Number of triangles.
-    pub fn len(&self) -> usize {
-        self.v[0].len()
-    }
-
-    /// Whether there are no triangles.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-}
-
 /// An infinite plane with a frame for planar texture coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlaneRecord {
@@ -162,19 +103,62 @@ pub struct PlaneRecord {
     pub owner: u32,
 }
 
-/// All geometry of a scene, packed for tracing. Built from [`Primitive`]s with their owners.
+/// The layout-independent half of packing: the BVH over each primitive kind and the slot order
+/// it imposes. [`Geometry::pack_with`] lays the arrays out from it in any layout.
 #[derive(Clone, Default)]
-pub struct Geometry {
-    /// Sphere data in BVH order.
-    pub spheres: SphereSoa,
+pub struct BvhPlan {
+    sphere_bvh: Bvh,
+    sphere_order: Vec<u32>,
+    triangle_bvh: Bvh,
+    triangle_order: Vec<u32>,
+}
+
+impl BvhPlan {
+    /// Builds the sphere and triangle BVHs of `primitives` (planes need none).
+    pub fn new(primitives: &[(u32, Primitive)]) -> Self {
+        let mut spheres = Vec::new();
+        let mut triangles = Vec::new();
+        for (_, prim) in primitives {
+            match *prim {
+                Primitive::Sphere { center, radius, .. } => {
+                    spheres.push((center - Vec3::splat(radius), center + Vec3::splat(radius)));
+                }
+                Primitive::Triangle { p, .. } => {
+                    triangles.push((p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2])));
+                }
+                Primitive::Plane { .. } => {}
+            }
+        }
+        let (sphere_bvh, sphere_order) = Bvh::build(&spheres);
+        let (triangle_bvh, triangle_order) = Bvh::build(&triangles);
+        Self {
+            sphere_bvh,
+            sphere_order,
+            triangle_bvh,
+            triangle_order,
+        }
+    }
+}
+
+/// All geometry of a scene, packed for tracing in layout `L` (see [`super::layout`]). Built from
+/// [`Primitive`]s with their owners.
+///
+/// Slots are BVH order: a leaf's primitives are a contiguous slot range. Every layout holds the
+/// same values in the same slots, so a slot, a [`Hit`] or an owner index means the same thing
+/// whatever `L`. Read positions by slot with [`Geometry::sphere`] and [`Geometry::triangle`]
+/// (any layout), or through the store fields.
+#[derive(Clone, Default)]
+pub struct Geometry<L: Layout = DefaultLayout> {
+    /// Sphere centres and radii in BVH order.
+    pub spheres: L::Spheres,
     /// Owner slot per sphere.
     pub sphere_owner: Vec<u32>,
     /// Object-to-world rotation per sphere (for texture coordinates).
     pub sphere_frame: Vec<Mat3>,
     /// BVH over the spheres.
     pub sphere_bvh: Bvh,
-    /// Triangle data in BVH order.
-    pub triangles: TriangleSoa,
+    /// Triangle vertices in BVH order.
+    pub triangles: L::Triangles,
     /// Owner slot per triangle.
     pub triangle_owner: Vec<u32>,
     /// Texture coordinates per triangle vertex.
@@ -186,22 +170,31 @@ pub struct Geometry {
 }
 
 impl Geometry {
-    /// Packs `(owner, primitive)` pairs: builds the BVHs and lays out the arrays in BVH order.
+    /// Packs `(owner, primitive)` pairs in the default layout: builds the BVHs and lays out the
+    /// arrays in BVH order. [`Geometry::pack`] does the same in any layout.
     pub fn build(primitives: &[(u32, Primitive)]) -> Self {
-        let mut spheres = Vec::new();
-        let mut triangles = Vec::new();
+        Self::pack(primitives)
+    }
+}
+
+impl<L: Layout> Geometry<L> {
+    /// Packs `(owner, primitive)` pairs in layout `L`: builds the BVHs and lays out the arrays in
+    /// BVH order.
+    pub fn pack(primitives: &[(u32, Primitive)]) -> Self {
+        Self::pack_with(primitives, BvhPlan::new(primitives))
+    }
+
+    /// Lays out `primitives` in the slot order of `plan`, which must have been built from the
+    /// same primitives.
+    pub fn pack_with(primitives: &[(u32, Primitive)], plan: BvhPlan) -> Self {
+        let mut spheres = Vec::with_capacity(plan.sphere_order.len());
+        let mut triangles = Vec::with_capacity(plan.triangle_order.len());
         let mut planes = Vec::new();
         for (owner, prim) in primitives {
-            match *prim {
-                Primitive::Sphere {
-                    center,
-                    radius,
-                    frame,
-                } => {
-                    spheres.push((*owner, center, radius, frame));
-                }
-                Primitive::Triangle { p, uv } => triangles.push((*owner, p, uv)),
-                Primitive::Plane { point, normal } => {
+            match prim {
+                Primitive::Sphere { .. } => spheres.push((*owner, prim)),
+                Primitive::Triangle { .. } => triangles.push((*owner, prim)),
+                &Primitive::Plane { point, normal } => {
                     let (tangent, bitangent) = normal.any_orthonormal_pair();
                     planes.push(PlaneRecord {
                         point,
@@ -213,42 +206,90 @@ impl Geometry {
                 }
             }
         }
+        assert_eq!(
+            (spheres.len(), triangles.len()),
+            (plan.sphere_order.len(), plan.triangle_order.len()),
+            "BvhPlan built from other primitives"
+        );
 
-        let bounds: Vec<Bounds> = spheres
-            .iter()
-            .map(|&(_, c, r, _)| (c - Vec3::splat(r), c + Vec3::splat(r)))
-            .collect();
-        let (sphere_bvh, order) = Bvh::build(&bounds);
-        let mut geometry = Geometry {
-            sphere_bvh,
+        let mut g = Geometry::<L> {
+            sphere_bvh: plan.sphere_bvh,
+            triangle_bvh: plan.triangle_bvh,
             planes,
             ..Default::default()
         };
-        for &i in &order {
-            let (owner, c, r, frame) = spheres[i as usize];
-            geometry.spheres.push(c, r);
-            geometry.sphere_owner.push(owner);
-            geometry.sphere_frame.push(frame);
+        g.spheres.reserve(spheres.len());
+        g.sphere_owner.reserve(spheres.len());
+        g.sphere_frame.reserve(spheres.len());
+        for &i in &plan.sphere_order {
+            if let (
+                owner,
+                &Primitive::Sphere {
+                    center,
+                    radius,
+                    frame,
+                },
+            ) = spheres[i as usize]
+            {
+                g.spheres.push(center, radius);
+                g.sphere_owner.push(owner);
+                g.sphere_frame.push(frame);
+            }
         }
+        g.triangles.reserve(triangles.len());
+        g.triangle_owner.reserve(triangles.len());
+        g.triangle_uv.reserve(triangles.len());
+        for &i in &plan.triangle_order {
+            if let (owner, &Primitive::Triangle { p, uv }) = triangles[i as usize] {
+                g.triangles.push(p);
+                g.triangle_owner.push(owner);
+                g.triangle_uv.push(uv);
+            }
+        }
+        g
+    }
 
-        let bounds: Vec<Bounds> = triangles
-            .iter()
-            .map(|(_, p, _)| (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2])))
-            .collect();
-        let (triangle_bvh, order) = Bvh::build(&bounds);
-        geometry.triangle_bvh = triangle_bvh;
-        for &i in &order {
-            let (owner, p, uv) = triangles[i as usize];
-            geometry.triangles.push(p);
-            geometry.triangle_owner.push(owner);
-            geometry.triangle_uv.push(uv);
+    /// The same geometry in layout `M`: slot for slot the same values and the same BVHs, so
+    /// every hit and every image is bit-identical.
+    pub fn relayout<M: Layout>(&self) -> Geometry<M> {
+        let mut spheres = M::Spheres::default();
+        spheres.reserve(self.spheres.len());
+        for (c, r) in self.spheres.leaf(0..self.spheres.len()) {
+            spheres.push(c, r);
         }
-        geometry
+        let mut triangles = M::Triangles::default();
+        triangles.reserve(self.triangles.len());
+        for p in self.triangles.leaf(0..self.triangles.len()) {
+            triangles.push(p);
+        }
+        Geometry {
+            spheres,
+            sphere_owner: self.sphere_owner.clone(),
+            sphere_frame: self.sphere_frame.clone(),
+            sphere_bvh: self.sphere_bvh.clone(),
+            triangles,
+            triangle_owner: self.triangle_owner.clone(),
+            triangle_uv: self.triangle_uv.clone(),
+            triangle_bvh: self.triangle_bvh.clone(),
+            planes: self.planes.clone(),
+        }
     }
 
     /// Number of primitives of every kind.
     pub fn primitive_count(&self) -> usize {
         self.sphere_owner.len() + self.triangle_owner.len() + self.planes.len()
+    }
+
+    /// Centre and radius of the sphere in `slot`.
+    #[inline]
+    pub fn sphere(&self, slot: usize) -> (Vec3, f32) {
+        self.spheres.get(slot)
+    }
+
+    /// Vertices of the triangle in `slot`.
+    #[inline]
+    pub fn triangle(&self, slot: usize) -> [Vec3; 3] {
+        self.triangles.get(slot)
     }
 
     /// The closest hit along `ray` closer than `t_max`.
@@ -258,38 +299,30 @@ impl Geometry {
         let mut best: Option<Hit> = None;
         let mut t_best = t_max;
         if !self.sphere_owner.is_empty() {
-            self.sphere_bvh.traverse(&q, &mut t_best, |range, t_best| {
-                for i in range {
-                    let (c, r) = self.spheres.get(i);
-                    if let Some(t) = intersect_sphere(ray, c, r, *t_best) {
-                        *t_best = t;
-                        best = Some(Hit {
-                            t,
-                            kind: HitKind::Sphere,
-                            index: i as u32,
-                            b1: 0.0,
-                            b2: 0.0,
-                        });
-                    }
+            self.sphere_bvh.traverse(&q, &mut t_best, |slots, t_best| {
+                if let Some(i) = L::closest_sphere(&self.spheres, ray, slots, t_best) {
+                    best = Some(Hit {
+                        t: *t_best,
+                        kind: HitKind::Sphere,
+                        index: i as u32,
+                        b1: 0.0,
+                        b2: 0.0,
+                    });
                 }
                 true
             });
         }
-        if !self.triangles.is_empty() {
+        if !self.triangle_owner.is_empty() {
             self.triangle_bvh
-                .traverse(&q, &mut t_best, |range, t_best| {
-                    for i in range {
-                        let [p0, p1, p2] = self.triangles.get(i);
-                        if let Some(h) = intersect_triangle(&q, p0, p1, p2, *t_best) {
-                            *t_best = h.t;
-                            best = Some(Hit {
-                                t: h.t,
-                                kind: HitKind::Triangle,
-                                index: i as u32,
-                                b1: h.b1,
-                                b2: h.b2,
-                            });
-                        }
+                .traverse(&q, &mut t_best, |slots, t_best| {
+                    if let Some((i, h)) = L::closest_triangle(&self.triangles, &q, slots, t_best) {
+                        best = Some(Hit {
+                            t: h.t,
+                            kind: HitKind::Triangle,
+                            index: i as u32,
+                            b1: h.b1,
+                            b2: h.b2,
+                        });
                     }
                     true
                 });
@@ -315,21 +348,15 @@ impl Geometry {
         let q = RayQuery::new(*ray);
         let mut blocked = false;
         let mut t = t_max;
-        self.sphere_bvh.traverse(&q, &mut t, |range, t| {
-            blocked = range.into_iter().any(|i| {
-                let (c, r) = self.spheres.get(i);
-                intersect_sphere(ray, c, r, *t).is_some()
-            });
+        self.sphere_bvh.traverse(&q, &mut t, |slots, t| {
+            blocked = L::any_sphere(&self.spheres, ray, slots, *t);
             !blocked
         });
         if blocked {
             return true;
         }
-        self.triangle_bvh.traverse(&q, &mut t, |range, t| {
-            blocked = range.into_iter().any(|i| {
-                let [p0, p1, p2] = self.triangles.get(i);
-                intersect_triangle(&q, p0, p1, p2, *t).is_some()
-            });
+        self.triangle_bvh.traverse(&q, &mut t, |slots, t| {
+            blocked = L::any_triangle(&self.triangles, &q, slots, *t);
             !blocked
         });
         blocked
@@ -339,12 +366,13 @@ impl Geometry {
                 .any(|pl| intersect_plane(ray, pl.point, pl.normal, t_max).is_some())
     }
 
-    /// The closest hit by testing every primitive, without the BVHs: the oracle for tests.
+    /// The closest hit by testing every primitive with the scalar reference kernels, without
+    /// the BVHs and without the layout's leaf kernels: the oracle for tests.
     pub fn intersect_brute_force(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         let q = RayQuery::new(*ray);
         let mut best: Option<Hit> = None;
         let mut t_best = t_max;
-        for i in 0..self.sphere_owner.len() {
+        for i in 0..self.spheres.len() {
             let (c, r) = self.spheres.get(i);
             if let Some(t) = intersect_sphere(ray, c, r, t_best) {
                 t_best = t;
@@ -425,5 +453,64 @@ impl Geometry {
                 }
             }
         }
+    }
+}
+
+/// Geometry in the layouts other than the default, made on demand from the default-layout
+/// geometry and kept until that geometry is rebuilt. The render system holds one, so a
+/// `--layout` other than the default costs one [`Geometry::relayout`] per BVH build (a copy of
+/// the arrays and BVHs, linear in the primitives), not one per pass.
+#[derive(Default)]
+pub struct LayoutCache {
+    source: u64,
+    soa: Option<Geometry<Soa>>,
+    aos: Option<Geometry<Aos>>,
+    soa_simd: Option<Geometry<SoaSimd>>,
+}
+
+/// Layouts that have a slot in [`LayoutCache`].
+pub trait Cached: Layout {
+    /// This layout's slot.
+    fn slot(cache: &mut LayoutCache) -> &mut Option<Geometry<Self>>;
+}
+
+impl Cached for Soa {
+    fn slot(cache: &mut LayoutCache) -> &mut Option<Geometry<Self>> {
+        &mut cache.soa
+    }
+}
+
+impl Cached for Aos {
+    fn slot(cache: &mut LayoutCache) -> &mut Option<Geometry<Self>> {
+        &mut cache.aos
+    }
+}
+
+impl Cached for SoaSimd {
+    fn slot(cache: &mut LayoutCache) -> &mut Option<Geometry<Self>> {
+        &mut cache.soa_simd
+    }
+}
+
+impl LayoutCache {
+    /// `geometry` in layout `L`: itself if `L` is its layout, else a copy made now or kept from
+    /// an earlier call with the same `version` (any number that changes whenever `geometry` is
+    /// rebuilt; a new version drops every copy).
+    pub fn get<'a, L: Cached>(
+        &'a mut self,
+        geometry: &'a Geometry,
+        version: u64,
+    ) -> &'a Geometry<L> {
+        // A type check once per pass, never per ray.
+        if let Some(same) = (geometry as &dyn Any).downcast_ref::<Geometry<L>>() {
+            return same;
+        }
+        if self.source != version {
+            *self = Self {
+                source: version,
+                ..Self::default()
+            };
+        }
+        L::slot(self).get_or_insert_with(|| geometry.relayout())
     }
 }

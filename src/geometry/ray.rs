@@ -27,31 +27,6 @@ impl Ray {
     }
 }
 
-/// Moves a surface point `p` off its surface along `n`, so that a ray starting there cannot hit
-/// the surface it leaves.
-///
-/// `n` is the geometric normal, flipped to the side the new ray goes to. The step is a fixed number
-/// of ulps of each coordinate, so it scales with the floating-point error of `p` whatever its
-/// magnitude; near the origin, where ulps vanish, a small absolute step is used instead.
-/// Wächter & Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems,
-/// ch. 6 (2019).
-#[inline]
-pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
-    const ORIGIN: f32 = 1.0 / 32.0;
-    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
-    const INT_SCALE: f32 = 256.0;
-    let offset = |p: f32, n: f32| -> f32 {
-        if p.abs() < ORIGIN {
-            p + FLOAT_SCALE * n
-        } else {
-            let ulps = (INT_SCALE * n) as i32;
-            let ulps = if p < 0.0 { -ulps } else { ulps };
-            f32::from_bits((p.to_bits() as i32).wrapping_add(ulps) as u32)
-        }
-    };
-    Vec3::new(offset(p.x, n.x), offset(p.y, n.y), offset(p.z, n.z))
-}
-
 /// pbrt's `gamma(n)`: bound on the relative error of `n` floating-point operations.
 #[inline(always)]
 pub const fn gamma(n: f32) -> f32 {
@@ -59,17 +34,35 @@ pub const fn gamma(n: f32) -> f32 {
     n * u / (1.0 - n * u)
 }
 
-/// Where a ray leaving surface point `p` must start: first past the point's absolute error
-/// bound `err` along the normal (pbrt-v4's `OffsetRayOrigin`), then a few ulps further
-/// ([`offset_ray_origin`]). `n` is the geometric normal on the side the ray leaves to.
+/// Where a ray leaving surface point `p` must start: past the point's absolute error bound `err`
+/// along the normal, then one more ulp away on every axis the normal moves it along. `n` is the
+/// unit geometric normal on the side the ray leaves to.
 ///
-/// The error bound matters when `p` is small but was computed from large numbers (a point near
-/// the origin on a sphere of radius 1000 centred at (0, −1000, 0)): ulps of `p` alone are then
-/// far smaller than its real error, and the new ray would start inside the surface.
+/// pbrt-v4's `OffsetRayOrigin` (Pharr, Jakob & Humphreys, *Physically Based Rendering*, 4th ed.,
+/// Section 6.8.6): the offset `d = |n|·err` puts the origin outside the box of points the true
+/// hit point may be, so the new ray cannot re-hit the surface; the final ulp keeps the rounding of
+/// `p + d·n` from undoing part of the offset. The step is as small as the error bound allows,
+/// which matters for a second surface close behind the first (two quads 5·10⁻⁴ apart at
+/// |p| ≈ 555 stay separate: the step is ≈ 2.3·10⁻⁴).
+///
+/// Wächter & Binder's fixed integer offset (Ray Tracing Gems, ch. 6, 256 ulps) was used here
+/// before, on top of the error bound: 256 ulps are 9.8·10⁻⁴ at |p| ≈ 60 (a sphere of radius
+/// 10⁻³ was jumped over) and 0.016 at |p| ≈ 555 (rays leaked through a quad 5·10⁻⁴ away); see
+/// `tests/stability.rs`.
 #[inline]
 pub fn spawn_origin(p: Vec3, n: Vec3, err: Vec3) -> Vec3 {
     let d = n.abs().dot(err);
-    offset_ray_origin(p + d * n, n)
+    let po = p + d * n;
+    let away = |x: f32, n: f32| {
+        if n > 0.0 {
+            x.next_up()
+        } else if n < 0.0 {
+            x.next_down()
+        } else {
+            x
+        }
+    };
+    Vec3::new(away(po.x, n.x), away(po.y, n.y), away(po.z, n.z))
 }
 
 #[cfg(test)]
@@ -77,12 +70,22 @@ mod tests {
     use super::*;
 
     #[test]
-    fn offset_moves_point_to_the_normal_side() {
-        for &scale in &[1e-3f32, 1.0, 1e3, 1e6] {
+    fn spawn_origin_lies_past_the_error_bound_on_the_normal_side() {
+        let n = Vec3::new(0.3, -0.8, 0.52).normalize();
+        for &scale in &[0.0f32, 1e-3, 1.0, 1e3, 1e6] {
             let p = Vec3::new(scale, -scale, 0.5 * scale);
-            let n = Vec3::new(0.3, -0.8, 0.52).normalize();
-            let q = offset_ray_origin(p, n);
-            assert!((q - p).dot(n) > 0.0, "scale {scale}: {p} -> {q}");
+            let err = gamma(7.0) * p.abs();
+            let q = spawn_origin(p, n, err);
+            // Every component moved towards the normal's side, by at least its share of
+            // |n|·err (and by at least one ulp where the bound is zero).
+            let d = n.abs().dot(err);
+            for i in 0..3 {
+                let moved = (q[i] - p[i]) * n[i].signum();
+                assert!(
+                    moved > 0.0 && moved >= d * n[i].abs(),
+                    "{scale}: {p} -> {q}"
+                );
+            }
         }
     }
 }

@@ -4,11 +4,11 @@
 use std::collections::BTreeMap;
 use std::num::NonZeroU32;
 
-use glam::Vec3;
+use glam::{Affine3A, EulerRot, Mat3, Quat, Vec3};
 use serde::de::Error as _;
 use serde::{Deserialize, Deserializer};
 
-use crate::ecs::components::{Shape, Transform};
+use crate::ecs::components::Shape;
 
 /// A finite number (RON accepts `inf` and `NaN`; scenes may not).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -140,6 +140,12 @@ impl TryFrom<RawCamera> for CameraDesc {
         if direction.length_squared() == 0.0 || !direction.length_squared().is_normal() {
             return Err("camera: the view direction is zero (look_at equals position?)".into());
         }
+        if raw.position.0.abs().max_element() > MAX_COORDINATE {
+            return Err(format!(
+                "camera: position {} is beyond ±{MAX_COORDINATE:e}",
+                raw.position.0
+            ));
+        }
         let up = raw.up.0;
         if direction.normalize().cross(up).length_squared() < 1e-12 {
             return Err("camera: `up` is zero or parallel to the view direction".into());
@@ -165,6 +171,11 @@ pub const MAX_PIXELS: u64 = 1 << 26;
 pub const MAX_SPP: u32 = 1 << 20;
 /// Largest accepted path depth.
 pub const MAX_DEPTH: u32 = 1024;
+/// Largest accepted magnitude of any world-space coordinate (camera position, shape points and
+/// sphere extents, after every transform). The kernels square and cube coordinates in `f32`
+/// (triangle normals, the watertight test's `t`): beyond about 10⁹ the products overflow and
+/// normals become NaN, so larger scenes are refused at load time.
+pub const MAX_COORDINATE: f32 = 1e9;
 
 /// Light-transport method.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize)]
@@ -333,6 +344,14 @@ pub enum MaterialDesc {
         #[serde(default = "zero")]
         roughness: Real,
     },
+    /// `Glossy(albedo, roughness)`: GGX microfacet reflection; roughness is clamped to
+    /// [0.01, 1].
+    Glossy {
+        /// Reflectance at normal incidence.
+        albedo: TextureDesc,
+        /// Roughness; GGX α = roughness².
+        roughness: Real,
+    },
     /// `Dielectric(ior)`.
     Dielectric {
         /// Index of refraction.
@@ -359,24 +378,49 @@ fn one() -> NonNegative {
     NonNegative(1.0)
 }
 
-/// `Entity(name, material, shape, transform)`.
+/// A prefab file: `Prefab(materials, entities)`, placed by scenes and other prefabs.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Prefab")]
+pub struct PrefabDesc {
+    /// Default materials for the names the prefab uses; placements can map them to theirs.
+    #[serde(default)]
+    pub materials: BTreeMap<String, MaterialDesc>,
+    /// The prefab's entities.
+    #[serde(default)]
+    pub entities: Vec<EntityDesc>,
+}
+
+/// `Entity(name, material, shape, transform)`, or a prefab placement
+/// `Entity(name, prefab, transform, materials)`.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Entity")]
 pub struct EntityDesc {
-    /// Unique name; defaults to `#<index>`.
+    /// Unique name among its siblings; defaults to `#<index>`.
     pub name: Option<String>,
-    /// Name of a material in the scene's table.
-    pub material: String,
-    /// The shape.
-    pub shape: ShapeDesc,
+    /// Name of a material (with `shape`).
+    pub material: Option<String>,
+    /// The shape (or `prefab`).
+    pub shape: Option<ShapeDesc>,
+    /// Path of a prefab file to place (or `shape`), relative to this file.
+    pub prefab: Option<String>,
+    /// For a prefab: its material names mapped to names defined here.
+    pub materials: Option<BTreeMap<String, String>>,
     /// Placement.
     pub transform: Option<TransformDesc>,
 }
 
-/// A validated [`Shape`] as written in RON.
+/// A validated shape as written in RON.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(try_from = "RawShape")]
-pub struct ShapeDesc(pub Shape);
+pub enum ShapeDesc {
+    /// A shape defined by its numbers.
+    Analytic(Shape),
+    /// `Mesh(path)`: a Wavefront OBJ file, relative to the file that names it.
+    Mesh {
+        /// The path as written.
+        path: String,
+    },
+}
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -386,6 +430,7 @@ enum RawShape {
     Triangle { a: V3, b: V3, c: V3 },
     Quad { a: V3, b: V3, c: V3, d: V3 },
     Box { min: V3, max: V3 },
+    Mesh { path: String },
 }
 
 /// Twice the area of a triangle, relative to the square of its longest edge: 0 when degenerate.
@@ -451,15 +496,42 @@ impl TryFrom<RawShape> for ShapeDesc {
                     max: max.0,
                 }
             }
+            RawShape::Mesh { path } => return Ok(Self::Mesh { path }),
         };
-        Ok(Self(shape))
+        Ok(Self::Analytic(shape))
     }
 }
 
-/// A validated [`Transform`] as written in RON: `Transform(translate, rotate, scale)`.
+/// `Transform(translate, rotate, scale)`: `world = T · R · S · object`, every part optional.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(try_from = "RawTransform")]
-pub struct TransformDesc(pub Transform);
+pub struct TransformDesc {
+    /// Translation.
+    pub translate: Vec3,
+    /// Rotation in degrees about x, then y, then z (right-handed).
+    pub rotate: Vec3,
+    /// Scale per axis (non-zero).
+    pub scale: Vec3,
+}
+
+impl Default for TransformDesc {
+    fn default() -> Self {
+        Self {
+            translate: Vec3::ZERO,
+            rotate: Vec3::ZERO,
+            scale: Vec3::ONE,
+        }
+    }
+}
+
+impl TransformDesc {
+    /// `parent_from_object = T · R · S`, with `R = Rz · Ry · Rx` (x applied first).
+    pub fn matrix(&self) -> Affine3A {
+        let r = self.rotate * (std::f32::consts::PI / 180.0);
+        let rotation = Mat3::from_quat(Quat::from_euler(EulerRot::ZYX, r.z, r.y, r.x));
+        Affine3A::from_mat3_translation(rotation * Mat3::from_diagonal(self.scale), self.translate)
+    }
+}
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, rename = "Transform")]
@@ -472,8 +544,8 @@ struct RawTransform {
 impl TryFrom<RawTransform> for TransformDesc {
     type Error = String;
     fn try_from(raw: RawTransform) -> Result<Self, String> {
-        let d = Transform::default();
-        let t = Transform {
+        let d = Self::default();
+        let t = Self {
             translate: raw.translate.map_or(d.translate, |v| v.0),
             rotate: raw.rotate.map_or(d.rotate, |v| v.0),
             scale: raw.scale.map_or(d.scale, |v| v.0),
@@ -481,6 +553,52 @@ impl TryFrom<RawTransform> for TransformDesc {
         if t.scale.abs().min_element() < 1e-12 {
             return Err("transform: scale must not be zero on any axis".into());
         }
-        Ok(Self(t))
+        Ok(t)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn trs(translate: Vec3, rotate: Vec3, scale: Vec3) -> Affine3A {
+        TransformDesc {
+            translate,
+            rotate,
+            scale,
+        }
+        .matrix()
+    }
+
+    #[test]
+    fn rotation_about_y_matches_rtiow() {
+        // +θ about y maps (x, z) to (x cosθ + z sinθ, −x sinθ + z cosθ).
+        let m = trs(Vec3::ZERO, Vec3::new(0.0, 30.0, 0.0), Vec3::ONE);
+        let p = m.transform_point3(Vec3::new(1.0, 0.0, 2.0));
+        let (s, c) = 30f32.to_radians().sin_cos();
+        assert!(
+            (p - Vec3::new(c + 2.0 * s, 0.0, -s + 2.0 * c)).length() < 1e-5,
+            "{p}"
+        );
+    }
+
+    #[test]
+    fn rotations_apply_x_then_y_then_z() {
+        let m = trs(Vec3::ZERO, Vec3::new(90.0, 90.0, 0.0), Vec3::ONE);
+        // Rx(90): y → z; then Ry(90): z → x.
+        let p = m.transform_point3(Vec3::Y);
+        assert!((p - Vec3::X).length() < 1e-6, "{p}");
+    }
+
+    #[test]
+    fn translate_rotate_scale_compose_in_that_order() {
+        let m = trs(
+            Vec3::new(10.0, 0.0, 0.0),
+            Vec3::new(0.0, 0.0, 90.0),
+            Vec3::new(2.0, 1.0, 1.0),
+        );
+        // S: (1,0,0) → (2,0,0); Rz(90): → (0,2,0); T: → (10,2,0).
+        let p = m.transform_point3(Vec3::X);
+        assert!((p - Vec3::new(10.0, 2.0, 0.0)).length() < 1e-5, "{p}");
     }
 }

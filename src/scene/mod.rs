@@ -19,6 +19,8 @@
 //!
 //! The full format is documented in `scenes/README.md`.
 
+pub mod check;
 pub mod error;
 pub mod format;
 pub mod load;
+pub mod mesh;

@@ -6,6 +6,9 @@
 
 use glam::{Vec2, Vec3};
 
+use super::microfacet::{
+    alpha_from_roughness, cos2_sin2, distribution, lambda, sample_visible_normal, schlick_rgb,
+};
 use super::rng::Rng;
 use super::sampling::{Frame, cosine_hemisphere, uniform_ball};
 use super::texture::Texture;
@@ -24,6 +27,16 @@ pub enum Material {
         /// Reflectance.
         albedo: Texture,
         /// Fuzz radius in [0, 1].
+        roughness: f32,
+    },
+    /// Rough metal with an evaluable BSDF: GGX (Trowbridge–Reitz) microfacet reflection,
+    /// Schlick's Fresnel with `albedo` as the reflectance at normal incidence, height-correlated
+    /// Smith shadowing; directions are sampled from the visible normals (see
+    /// [`super::microfacet`]). Unlike `Metal`, next-event estimation and MIS apply to it.
+    Glossy {
+        /// Reflectance at normal incidence (Schlick's F0), per channel.
+        albedo: Texture,
+        /// Roughness in [`super::microfacet::MIN_ROUGHNESS`], 1]; GGX α = roughness².
         roughness: f32,
     },
     /// Smooth glass: Fresnel (Schlick) reflection, Snell refraction, total internal reflection.
@@ -91,6 +104,40 @@ pub fn schlick(cos_i: f32, n1: f32, n2: f32) -> f32 {
     r0 + (1.0 - r0) * (1.0 - cos).powi(5)
 }
 
+/// The GGX terms of a Glossy reflection from `wo` to `wi` about `facing`, shared by
+/// [`Material::eval`] and [`Material::scatter`].
+struct GlossyTerms {
+    /// D(h) of the half vector.
+    d: f32,
+    /// Smith Λ of `wo` and of `wi`.
+    lo: f32,
+    li: f32,
+    /// `wo · h`, for Fresnel.
+    cos_oh: f32,
+}
+
+impl GlossyTerms {
+    #[inline]
+    fn new(wo: Vec3, wi: Vec3, facing: Vec3, alpha: f32) -> Self {
+        let h = (wo + wi).normalize();
+        let (c2h, s2h) = cos2_sin2(h, facing);
+        let (c2o, s2o) = cos2_sin2(wo, facing);
+        let (c2i, s2i) = cos2_sin2(wi, facing);
+        Self {
+            d: distribution(c2h, s2h, alpha),
+            lo: lambda(c2o, s2o, alpha),
+            li: lambda(c2i, s2i, alpha),
+            cos_oh: wo.dot(h),
+        }
+    }
+
+    /// Density of `wi` under visible-normal sampling: G₁(wo) D(h) / (4 cos θo).
+    #[inline]
+    fn pdf(&self, cos_o: f32) -> f32 {
+        self.d / ((1.0 + self.lo) * 4.0 * cos_o)
+    }
+}
+
 impl Material {
     /// Whether the material emits light.
     pub fn is_emissive(&self) -> bool {
@@ -100,7 +147,7 @@ impl Material {
     /// Whether next-event estimation applies: the BSDF can be evaluated for any pair of
     /// directions (see [`Material::eval`]).
     pub fn samples_lights(&self) -> bool {
-        matches!(self, Self::Diffuse { .. })
+        matches!(self, Self::Diffuse { .. } | Self::Glossy { .. })
     }
 
     /// BSDF times the cosine at the surface, and the density [`Material::scatter`] would give,
@@ -117,6 +164,21 @@ impl Material {
                 }
                 let pdf = cos * std::f32::consts::FRAC_1_PI;
                 Some((albedo.eval(uv) * pdf, pdf))
+            }
+            Self::Glossy { albedo, roughness } => {
+                let facing = if d.dot(n) < 0.0 { n } else { -n };
+                let wo = -d;
+                let (cos_o, cos_i) = (wo.dot(facing), wi.dot(facing));
+                if cos_i <= 0.0 || cos_o <= 0.0 {
+                    return Some((Vec3::ZERO, 0.0));
+                }
+                let g = GlossyTerms::new(wo, wi, facing, alpha_from_roughness(*roughness));
+                // f·cos θi = F D G₂ / (4 cos θo cos θi) · cos θi.
+                let f = schlick_rgb(albedo.eval(uv), g.cos_oh);
+                Some((
+                    f * (g.d / ((1.0 + g.lo + g.li) * 4.0 * cos_o)),
+                    g.pdf(cos_o),
+                ))
             }
             _ => None,
         }
@@ -162,6 +224,30 @@ impl Material {
                     direction: r.normalize(),
                     attenuation: albedo.eval(uv),
                     pdf: None,
+                })
+            }
+            Self::Glossy { albedo, roughness } => {
+                let alpha = alpha_from_roughness(*roughness);
+                let frame = Frame::from_normal(facing);
+                let wo = -d;
+                let cos_o = wo.dot(facing);
+                let wo_local =
+                    Vec3::new(wo.dot(frame.s), wo.dot(frame.t), cos_o.max(1e-6)).normalize();
+                let u = Vec2::new(rng.next_f32(), rng.next_f32());
+                let h = frame.to_world(sample_visible_normal(wo_local, alpha, u));
+                let direction = reflect(d, h).normalize();
+                if direction.dot(facing) <= 0.0 || cos_o <= 0.0 {
+                    return None;
+                }
+                // The terms are recomputed from (wo, direction) exactly as `eval` computes
+                // them, so the two agree to rounding even for a near-mirror lobe.
+                let g = GlossyTerms::new(wo, direction, facing, alpha);
+                let f = schlick_rgb(albedo.eval(uv), g.cos_oh);
+                // f·cos/pdf = F G₂ / G₁(wo) ≤ F: never more energy than Fresnel allows.
+                Some(Scatter {
+                    direction,
+                    attenuation: f * ((1.0 + g.lo) / (1.0 + g.lo + g.li)),
+                    pdf: Some(g.pdf(cos_o)),
                 })
             }
             Self::Dielectric { ior } => {

@@ -4,10 +4,20 @@ use std::collections::HashMap;
 
 use bevy_ecs::prelude::*;
 
-use crate::ecs::components::{EntityName, MaterialRef, Shape, Transform};
+use crate::ecs::components::{EntityName, MaterialRef, SceneOrder, Shape, Transform};
 use crate::ecs::resources::{
     ActiveCamera, ChangeSummary, MaterialTable, PendingScene, RenderSettings, SceneVersion,
 };
+
+/// The components a reload compares and writes.
+type SceneEntity = (
+    Entity,
+    &'static EntityName,
+    &'static mut Shape,
+    &'static mut Transform,
+    &'static mut MaterialRef,
+    &'static mut SceneOrder,
+);
 
 /// Diffs the pending scene against the world by entity name: unchanged entities are not touched
 /// (`set_if_neq`, so change detection stays quiet), changed ones are updated in place, missing
@@ -19,13 +29,7 @@ use crate::ecs::resources::{
 pub fn apply_scene(
     mut commands: Commands,
     mut pending: ResMut<PendingScene>,
-    mut entities: Query<(
-        Entity,
-        &EntityName,
-        &mut Shape,
-        &mut Transform,
-        &mut MaterialRef,
-    )>,
+    mut entities: Query<SceneEntity>,
     mut camera: ResMut<ActiveCamera>,
     mut settings: ResMut<RenderSettings>,
     mut materials: ResMut<MaterialTable>,
@@ -43,7 +47,7 @@ pub fn apply_scene(
         .map(|(i, e)| (e.name.as_str(), i))
         .collect();
 
-    for (entity, name, mut shape, mut transform, mut material) in &mut entities {
+    for (entity, name, mut shape, mut transform, mut material, mut order) in &mut entities {
         let Some(i) = incoming.remove(name.0.as_str()) else {
             commands.entity(entity).despawn();
             report.removed += 1;
@@ -53,6 +57,7 @@ pub fn apply_scene(
         let a = shape.set_if_neq(new.shape.clone());
         let b = transform.set_if_neq(new.transform);
         let c = material.set_if_neq(MaterialRef(new.material.clone()));
+        order.set_if_neq(SceneOrder(i as u32));
         if a || b || c {
             report.changed += 1;
         }
@@ -66,6 +71,7 @@ pub fn apply_scene(
             e.shape.clone(),
             e.transform,
             MaterialRef(e.material.clone()),
+            SceneOrder(i as u32),
         ));
         report.added += 1;
     }

@@ -5,14 +5,14 @@ use std::time::Instant;
 use bevy_ecs::prelude::*;
 use glam::{Mat3, Vec2, Vec3};
 
-use crate::ecs::components::{EntityName, Shape, Transform};
+use crate::ecs::components::{SceneOrder, Shape, Transform};
 use crate::ecs::resources::{Counters, PackedGeometry, Timings};
 use crate::geometry::packed::{Geometry, Primitive};
 
 const QUAD_UV: [Vec2; 4] = [Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y];
 
-/// Entities whose shape or transform was added or changed.
-type GeometryChanged = Or<(Changed<Shape>, Changed<Transform>)>;
+/// Entities whose shape, transform or place in the scene was added or changed.
+type GeometryChanged = Or<(Changed<Shape>, Changed<Transform>, Changed<SceneOrder>)>;
 
 /// Run condition: a `Shape` or `Transform` was added, changed or removed since the last check.
 pub fn geometry_changed(
@@ -23,17 +23,17 @@ pub fn geometry_changed(
     removed_any || !changed.is_empty()
 }
 
-/// Rebuilds [`PackedGeometry`] from every entity, in name order (so the result does not depend on
-/// the history of spawns). Runs only under [`geometry_changed`].
+/// Rebuilds [`PackedGeometry`] from every entity, in scene order (so the result depends only on
+/// the scene file, not on the history of edits). Runs only under [`geometry_changed`].
 pub fn rebuild_geometry(
-    entities: Query<(Entity, &EntityName, &Shape, &Transform)>,
+    entities: Query<(Entity, &SceneOrder, &Shape, &Transform)>,
     mut packed: ResMut<PackedGeometry>,
     mut counters: ResMut<Counters>,
     mut timings: ResMut<Timings>,
 ) {
     let start = Instant::now();
     let mut sorted: Vec<_> = entities.iter().collect();
-    sorted.sort_by(|a, b| a.1.0.cmp(&b.1.0));
+    sorted.sort_by_key(|e| *e.1);
     let mut primitives = Vec::new();
     for (slot, (_, _, shape, transform)) in sorted.iter().enumerate() {
         for p in world_primitives(shape, transform) {
@@ -52,7 +52,7 @@ pub fn rebuild_geometry(
 /// normals are never transformed as points. A transform that mirrors (negative determinant)
 /// would flip every normal, so vertex order is swapped to keep the declared front side.
 pub fn world_primitives(shape: &Shape, transform: &Transform) -> Vec<Primitive> {
-    let m = transform.world_from_object();
+    let m = transform.0;
     let mirror = m.matrix3.determinant() < 0.0;
     let tri = |p: [Vec3; 3], uv: [Vec2; 3]| {
         let p = p.map(|v| m.transform_point3(v));
@@ -73,7 +73,7 @@ pub fn world_primitives(shape: &Shape, transform: &Transform) -> Vec<Primitive> 
     match *shape {
         Shape::Sphere { center, radius } => vec![Primitive::Sphere {
             center: m.transform_point3(center),
-            radius: radius * transform.scale.abs().max_element(),
+            radius: radius * transform.uniform_scale(),
             frame: transform.rotation(),
         }],
         Shape::Plane { point, normal } => {
@@ -86,6 +86,14 @@ pub fn world_primitives(shape: &Shape, transform: &Transform) -> Vec<Primitive> 
         Shape::Triangle { a, b, c } => vec![tri([a, b, c], [Vec2::ZERO, Vec2::X, Vec2::Y])],
         Shape::Quad { a, b, c, d } => quad([a, b, c, d]).to_vec(),
         Shape::Box { min, max } => box_quads(min, max).into_iter().flat_map(quad).collect(),
+        Shape::Mesh(ref mesh) => {
+            let p = &mesh.data.positions;
+            mesh.data
+                .triangles
+                .iter()
+                .map(|t| tri(t.map(|i| p[i as usize]), [Vec2::ZERO, Vec2::X, Vec2::Y]))
+                .collect()
+        }
     }
 }
 
@@ -122,6 +130,7 @@ fn box_quads(min: Vec3, max: Vec3) -> Vec<[Vec3; 4]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::format::TransformDesc;
 
     fn triangles(shape: &Shape, t: &Transform) -> Vec<[Vec3; 3]> {
         world_primitives(shape, t)
@@ -140,16 +149,17 @@ mod tests {
             max: Vec3::new(1.0, 2.0, 3.0),
         };
         for scale in [Vec3::ONE, Vec3::new(-1.0, 1.0, 1.0)] {
-            let t = Transform {
-                scale,
-                rotate: Vec3::new(10.0, 20.0, 30.0),
-                ..Default::default()
-            };
+            let t = Transform(
+                TransformDesc {
+                    scale,
+                    rotate: Vec3::new(10.0, 20.0, 30.0),
+                    ..Default::default()
+                }
+                .matrix(),
+            );
             let tris = triangles(&shape, &t);
             assert_eq!(tris.len(), 12);
-            let center = t
-                .world_from_object()
-                .transform_point3(Vec3::new(0.5, 1.0, 1.5));
+            let center = t.0.transform_point3(Vec3::new(0.5, 1.0, 1.5));
             for [a, b, c] in tris {
                 let n = (b - a).cross(c - a);
                 assert!(
@@ -186,10 +196,13 @@ mod tests {
             point: Vec3::ZERO,
             normal: Vec3::new(1.0, 1.0, 0.0).normalize(),
         };
-        let t = Transform {
-            scale: Vec3::new(2.0, 1.0, 1.0),
-            ..Default::default()
-        };
+        let t = Transform(
+            TransformDesc {
+                scale: Vec3::new(2.0, 1.0, 1.0),
+                ..Default::default()
+            }
+            .matrix(),
+        );
         let Primitive::Plane { normal, .. } = world_primitives(&shape, &t)[0] else {
             panic!()
         };

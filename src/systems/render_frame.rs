@@ -11,6 +11,7 @@ use crate::ecs::resources::{
     RenderSettings, SceneVersion, Timings,
 };
 use crate::film::Film;
+use crate::geometry::packed::{Aos, LayoutCache, LayoutKind, Soa, SoaSimd};
 use crate::render::{SceneView, TraceStats, render_pass};
 
 /// Renders one pass. A new scene version resets the film first. The samples of the pass follow
@@ -29,6 +30,7 @@ pub fn render_frame(
     mut acc: ResMut<Accumulation>,
     mut counters: ResMut<Counters>,
     mut timings: ResMut<Timings>,
+    mut relaid: Local<LayoutCache>,
 ) {
     let s = settings.0;
     if version.is_changed() || acc.film.width != s.width || acc.film.height != s.height {
@@ -48,17 +50,6 @@ pub fn render_frame(
     };
     let c = camera.0;
     let cam = Camera::new(c.position, c.direction, c.up, c.fov);
-    let view = SceneView {
-        geometry: &packed.geometry,
-        materials: &materials.materials,
-        owner_material: &materials.owner_material,
-        lights: &materials.lights,
-        camera: &cam,
-        background: s.background,
-        max_depth: s.max_depth,
-        method: s.method,
-        roulette: control.roulette,
-    };
     let start = Instant::now();
     let progress = |rows: u64| {
         if let Some(bar) = &control.progress {
@@ -66,14 +57,38 @@ pub fn render_frame(
         }
     };
     let acc = &mut *acc;
-    let result = render_pass(
-        &view,
-        &mut acc.film,
-        s.seed,
-        done..end,
-        &control.cancel,
-        &progress,
-    );
+    // The layout is matched once per pass: `render_pass` and everything below it is
+    // monomorphised per layout, so no ray pays for the choice. A layout other than the default
+    // renders a copy kept in `relaid` until the geometry is rebuilt.
+    let builds = counters.bvh_builds;
+    macro_rules! pass {
+        ($layout:ty) => {{
+            let view = SceneView {
+                geometry: relaid.get::<$layout>(&packed.geometry, builds),
+                materials: &materials.materials,
+                owner_material: &materials.owner_material,
+                lights: &materials.lights,
+                camera: &cam,
+                background: s.background,
+                max_depth: s.max_depth,
+                method: s.method,
+                roulette: control.roulette,
+            };
+            render_pass(
+                &view,
+                &mut acc.film,
+                s.seed,
+                done..end,
+                &control.cancel,
+                &progress,
+            )
+        }};
+    }
+    let result = match control.layout {
+        LayoutKind::Soa => pass!(Soa),
+        LayoutKind::Aos => pass!(Aos),
+        LayoutKind::SoaSimd => pass!(SoaSimd),
+    };
     let elapsed = start.elapsed();
     timings.pass = elapsed;
     match result {

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Mitsuba 3 anchor for the Cornell box: installs mitsuba into a virtual environment (never in
+# the tests), builds rondo, makes the reference if missing, and runs benches/mitsuba/cornell.py.
+#
+#   benches/mitsuba/run.sh [--spp-list 4,16,64,256] [--variant llvm_ad_rgb] ...
+#
+# Environment: MITSUBA_VENV (default ~/.cache/rondo-mitsuba-venv), REFERENCE (default
+# bench/mitsuba/reference.exr), REFERENCE_SPP (default 1024: a Mitsuba reference; see
+# BENCHMARKS.md for why), DRJIT_LIBLLVM_PATH.
+#
+# The llvm_* variants JIT-compile through the system's libLLVM. Dr.Jit 1.5 (mitsuba 3.9) emits
+# `llvm.minimum`, which LLVM 14 and 15 (Debian 12's default) cannot compile for x86 ("LLVM
+# ERROR: Cannot select ... fminimum"); LLVM 19 can (`apt-get install libllvm19`). This script
+# picks the newest libLLVM it finds unless DRJIT_LIBLLVM_PATH is set; without a usable one, pass
+# --variant scalar_rgb (much slower, and the comparison then says so).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+VENV="${MITSUBA_VENV:-$HOME/.cache/rondo-mitsuba-venv}"
+REFERENCE="${REFERENCE:-bench/mitsuba/reference.exr}"
+if [ ! -x "$VENV/bin/python" ]; then
+  python3 -m venv "$VENV"
+fi
+"$VENV/bin/pip" install --quiet mitsuba numpy
+if [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
+  newest="$(ls /usr/lib/x86_64-linux-gnu/libLLVM.so.* /usr/lib/llvm-*/lib/libLLVM.so.* 2>/dev/null \
+    | sort -V | tail -n 1 || true)"
+  if [ -n "$newest" ]; then export DRJIT_LIBLLVM_PATH="$newest"; fi
+fi
+echo "DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-<dr.jit's own search>}"
+cargo build --release --quiet
+mkdir -p "$(dirname "$REFERENCE")"
+if [ ! -f "$REFERENCE" ]; then
+  "$VENV/bin/python" benches/mitsuba/cornell.py --reference "$REFERENCE" \
+    --make-reference "${REFERENCE_SPP:-1024}"
+fi
+exec "$VENV/bin/python" benches/mitsuba/cornell.py --reference "$REFERENCE" --rondo target/release/rondo "$@"

@@ -1,0 +1,6 @@
+//! Macro benchmarks run by `rondo bench …`: deterministic inputs, interleaved repetitions,
+//! results written as CSV, a Markdown table and an SVG chart.
+
+pub mod chart;
+pub mod instances;
+pub mod layout;

@@ -1,0 +1,319 @@
+//! The Glossy (GGX) material: its sampling density integrates to one, `eval` and `scatter`
+//! agree, it never creates energy, sampled directions follow the density (χ²), the scene format
+//! reads it, and every light-transport method gives it the same radiance.
+
+mod common;
+
+use std::f64::consts::PI;
+
+use common::{temp_dir, write_scene};
+use glam::{Vec2, Vec3};
+use rondo::scene::format::Method;
+use rondo::shading::material::Material;
+use rondo::shading::rng::Rng;
+use rondo::shading::texture::Texture;
+use rondo::{Overrides, PassPlan, Renderer};
+
+fn glossy(albedo: f32, roughness: f32) -> Material {
+    Material::Glossy {
+        albedo: Texture::Constant(Vec3::splat(albedo)),
+        roughness,
+    }
+}
+
+/// An incoming ray direction making angle `theta` (radians) with the normal +z.
+fn incoming(theta: f64) -> Vec3 {
+    Vec3::new(theta.sin() as f32, 0.0, -(theta.cos() as f32))
+}
+
+/// Direction of cell-centre `(i, j)` of an `n × m` grid over (cos θ ∈ [0,1], φ ∈ [0, 2π)), and
+/// the solid angle of the cell.
+fn cell(i: usize, j: usize, n: usize, m: usize) -> (Vec3, f64) {
+    let c = (i as f64 + 0.5) / n as f64;
+    let phi = (j as f64 + 0.5) / m as f64 * 2.0 * PI;
+    let s = (1.0 - c * c).sqrt();
+    let w = Vec3::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, c as f32);
+    (w, 2.0 * PI / (n * m) as f64)
+}
+
+/// ∫ over the hemisphere of `eval`'s (f·cos, pdf), by the midpoint rule on an n × m grid.
+fn integrate(m: &Material, d: Vec3, n: usize, k: usize) -> (f64, f64) {
+    let (mut f, mut p) = (0.0, 0.0);
+    for i in 0..n {
+        for j in 0..k {
+            let (wi, dw) = cell(i, j, n, k);
+            let (f_cos, pdf) = m.eval(d, wi, Vec3::Z, Vec2::ZERO).expect("evaluable");
+            f += f64::from(f_cos.x) * dw;
+            p += f64::from(pdf) * dw;
+        }
+    }
+    (f, p)
+}
+
+/// Mean attenuation of `count` sampled scatters (absorbed = 0), and the fraction absorbed.
+fn sampled_albedo(m: &Material, d: Vec3, count: usize, seed: u64) -> (f64, f64) {
+    let mut rng = Rng::new(seed, 1);
+    let (mut sum, mut absorbed) = (0.0, 0usize);
+    for _ in 0..count {
+        match m.scatter(d, Vec3::Z, Vec2::ZERO, &mut rng) {
+            Some(s) => sum += f64::from(s.attenuation.x),
+            None => absorbed += 1,
+        }
+    }
+    (sum / count as f64, absorbed as f64 / count as f64)
+}
+
+#[test]
+fn sampling_density_integrates_to_one_minus_what_is_absorbed() {
+    // VNDF sampling reflects some directions below the surface (they are absorbed); the
+    // density over the upper hemisphere must integrate to exactly the rest.
+    for (roughness, theta) in [(0.4f32, 0.0f64), (0.6, 0.5), (0.8, 1.0), (1.0, 1.3)] {
+        let m = glossy(1.0, roughness);
+        let d = incoming(theta);
+        let (_, pdf_integral) = integrate(&m, d, 800, 400);
+        let (_, absorbed) = sampled_albedo(&m, d, 400_000, 3);
+        assert!(
+            (pdf_integral + absorbed - 1.0).abs() < 0.01,
+            "roughness {roughness}, θ {theta}: ∫pdf {pdf_integral} + absorbed {absorbed}"
+        );
+    }
+}
+
+#[test]
+fn eval_and_scatter_agree_on_density_and_weight() {
+    let mut rng = Rng::new(17, 4);
+    for roughness in [0.01f32, 0.05, 0.2, 0.5, 1.0] {
+        let m = Material::Glossy {
+            albedo: Texture::Constant(Vec3::new(0.9, 0.5, 0.2)),
+            roughness,
+        };
+        for k in 0..2000 {
+            let theta = 1.5 * (k as f64 + 0.5) / 2000.0;
+            let phi = 0.37 * k as f64;
+            let d = Vec3::new(
+                (theta.sin() * phi.cos()) as f32,
+                (theta.sin() * phi.sin()) as f32,
+                -(theta.cos() as f32),
+            );
+            // Either side of the surface: Glossy is two-sided, like every material.
+            let n = if k % 2 == 0 { Vec3::Z } else { -Vec3::Z };
+            let d = if k % 2 == 0 { d } else { -d };
+            let Some(s) = m.scatter(d, n, Vec2::ZERO, &mut rng) else {
+                continue;
+            };
+            let pdf = s.pdf.expect("Glossy has a density");
+            let (f_cos, eval_pdf) = m.eval(d, s.direction, n, Vec2::ZERO).expect("evaluable");
+            let rel = (eval_pdf - pdf).abs() / pdf;
+            assert!(
+                rel < 2e-3,
+                "roughness {roughness}, θ {theta}: eval pdf {eval_pdf}, sampled {pdf}"
+            );
+            let weight = f_cos / eval_pdf;
+            assert!(
+                (weight - s.attenuation).abs().max_element()
+                    < 2e-3 * s.attenuation.max_element().max(1e-3),
+                "roughness {roughness}, θ {theta}: f·cos/pdf {weight}, attenuation {}",
+                s.attenuation
+            );
+            assert!(s.attenuation.max_element() <= 1.0 + 1e-5);
+        }
+    }
+}
+
+#[test]
+fn white_furnace_never_creates_energy() {
+    // Albedo 1 makes Fresnel 1: ∫ f cos dω = the share of light not lost to masking, ≤ 1.
+    // Two independent estimates (a grid over eval, and the mean of sampled weights) agree.
+    for (roughness, theta) in [
+        (0.1f32, 0.0f64),
+        (0.3, 0.6),
+        (0.6, 1.0),
+        (1.0, 0.0),
+        (1.0, 1.4),
+    ] {
+        let m = glossy(1.0, roughness);
+        let d = incoming(theta);
+        let (sampled, _) = sampled_albedo(&m, d, 400_000, 9);
+        assert!(
+            sampled <= 1.0 + 1e-6,
+            "roughness {roughness}, θ {theta}: {sampled}"
+        );
+        if roughness >= 0.3 {
+            let (grid, _) = integrate(&m, d, 1000, 500);
+            assert!(
+                grid <= 1.0 + 2e-3 && (grid - sampled).abs() < 0.01,
+                "roughness {roughness}, θ {theta}: grid {grid}, sampled {sampled}"
+            );
+        }
+        // Smooth at normal incidence: almost nothing is lost.
+        if theta == 0.0 && roughness <= 0.1 {
+            assert!(sampled > 0.99, "{sampled}");
+        }
+    }
+}
+
+/// Upper χ² quantile for `k` degrees of freedom at the standard normal quantile `z`
+/// (Wilson–Hilferty).
+fn chi2_quantile(k: f64, z: f64) -> f64 {
+    let a = 2.0 / (9.0 * k);
+    k * (1.0 - a + z * a.sqrt()).powi(3)
+}
+
+#[test]
+fn sampled_directions_pass_a_chi_square_test_against_the_density() {
+    let (nc, nphi, count) = (20usize, 20usize, 500_000usize);
+    for (roughness, theta) in [(0.5f32, 0.7f64), (0.9, 0.2)] {
+        let m = glossy(0.7, roughness);
+        let d = incoming(theta);
+        // Expected probability of each (cos θ, φ) bin: the density integrated over it on a
+        // 6 × 6 sub-grid; one extra bin for absorbed samples.
+        let mut expected = vec![0.0f64; nc * nphi + 1];
+        let sub = 6;
+        for i in 0..nc * sub {
+            for j in 0..nphi * sub {
+                let (wi, dw) = cell(i, j, nc * sub, nphi * sub);
+                let (_, pdf) = m.eval(d, wi, Vec3::Z, Vec2::ZERO).expect("evaluable");
+                expected[(i / sub) * nphi + j / sub] += f64::from(pdf) * dw;
+            }
+        }
+        let upper: f64 = expected.iter().sum();
+        expected[nc * nphi] = (1.0 - upper).max(0.0);
+        let mut observed = vec![0usize; nc * nphi + 1];
+        let mut rng = Rng::new(5, 8);
+        for _ in 0..count {
+            let bin = match m.scatter(d, Vec3::Z, Vec2::ZERO, &mut rng) {
+                None => nc * nphi,
+                Some(s) => {
+                    let w = s.direction;
+                    let i = ((w.z as f64) * nc as f64).clamp(0.0, nc as f64 - 1.0) as usize;
+                    let phi = f64::from(w.y.atan2(w.x)).rem_euclid(2.0 * PI);
+                    let j = (phi / (2.0 * PI) * nphi as f64).min(nphi as f64 - 1.0) as usize;
+                    i * nphi + j
+                }
+            };
+            observed[bin] += 1;
+        }
+        // Pool bins expecting fewer than 5 samples into one.
+        let (mut chi2, mut dof, mut pool_e, mut pool_o) = (0.0, 0usize, 0.0, 0.0);
+        for (e, &o) in expected.iter().zip(&observed) {
+            let e = e * count as f64;
+            if e < 5.0 {
+                pool_e += e;
+                pool_o += o as f64;
+            } else {
+                chi2 += (o as f64 - e).powi(2) / e;
+                dof += 1;
+            }
+        }
+        if pool_e > 0.0 {
+            chi2 += (pool_o - pool_e).powi(2) / pool_e.max(1.0);
+            dof += 1;
+        }
+        let limit = chi2_quantile((dof - 1) as f64, 3.09);
+        assert!(
+            chi2 < limit,
+            "roughness {roughness}, θ {theta}: χ² {chi2:.1} over {dof} bins (limit {limit:.1})"
+        );
+    }
+}
+
+#[test]
+fn the_scene_format_reads_glossy_and_clamps_its_roughness() {
+    let dir = temp_dir("glossy-format");
+    let path = write_scene(
+        &dir,
+        "g.ron",
+        r#"Scene(
+    camera: Camera(position: (0, 0, 5), look_at: (0, 0, 0)),
+    materials: {
+        "a": Glossy(albedo: Constant((0.9, 0.6, 0.3)), roughness: 0.3),
+        "b": Glossy(albedo: Constant((1, 1, 1)), roughness: 0),
+        "c": Glossy(albedo: Constant((1, 1, 1)), roughness: 7),
+    },
+)"#,
+    );
+    let mut cache = rondo::scene::load::AssetCache::default();
+    let scene = rondo::scene::load::load_scene(&path, &mut cache).unwrap_or_else(|e| panic!("{e}"));
+    let roughness = |name: &str| match scene.materials.get(name) {
+        Some(Material::Glossy { roughness, .. }) => *roughness,
+        other => panic!("{name}: {other:?}"),
+    };
+    assert_eq!(roughness("a"), 0.3);
+    assert_eq!(roughness("b"), rondo::shading::microfacet::MIN_ROUGHNESS);
+    assert_eq!(roughness("c"), 1.0);
+    // Roughness is required: a plate without it is an error at its line.
+    let bad = write_scene(
+        &dir,
+        "bad.ron",
+        "Scene(\n    camera: Camera(position: (0, 0, 5), look_at: (0, 0, 0)),\n    materials: { \"a\": Glossy(albedo: Constant((1, 1, 1))) },\n)",
+    );
+    let err = rondo::scene::load::load_scene(&bad, &mut cache)
+        .expect_err("missing roughness")
+        .to_string();
+    assert!(
+        err.contains("bad.ron:3:") && err.contains("roughness"),
+        "{err}"
+    );
+}
+
+/// Mean and standard error of the red channel over all pixels.
+fn point_estimate(r: &Renderer) -> (f64, f64) {
+    let px: Vec<f64> = r.film().mean().iter().map(|p| f64::from(p.x)).collect();
+    let n = px.len() as f64;
+    let mean = px.iter().sum::<f64>() / n;
+    let var = px.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+#[test]
+fn every_method_gives_a_glossy_floor_the_same_radiance() {
+    // A Glossy floor under a square lamp, seen at one point (a camera with a vanishing field of
+    // view makes every pixel an independent estimate of the same radiance). NEE and MIS use
+    // eval() and the density; naive uses only scatter(). All must agree.
+    let dir = temp_dir("glossy-methods");
+    for (k, roughness) in [0.15f32, 0.5].into_iter().enumerate() {
+        let path = write_scene(
+            &dir,
+            &format!("g{k}.ron"),
+            &format!(
+                r#"Scene(
+    camera: Camera(position: (-1.2, 1.0, 0), look_at: (0.1, 0, 0), fov: 0.00001),
+    settings: Settings(width: 16, height: 16, max_depth: 3),
+    materials: {{
+        "floor": Glossy(albedo: Constant((0.9, 0.9, 0.9)), roughness: {roughness}),
+        "lamp": Light(emit: Constant((1, 1, 1)), intensity: 4),
+    }},
+    entities: [
+        Entity(name: "floor", material: "floor", shape: Quad(a: (-5, 0, -5), b: (-5, 0, 5), c: (5, 0, 5), d: (5, 0, -5))),
+        Entity(name: "lamp", material: "lamp", shape: Quad(a: (0.5, 1, -0.6), b: (1.7, 1, -0.6), c: (1.7, 1, 0.6), d: (0.5, 1, 0.6))),
+    ],
+)"#
+            ),
+        );
+        let estimate = |method: Method, spp: u32, seed: u64| {
+            let mut r = Renderer::new(None, PassPlan::Single).expect("pool");
+            r.set_overrides(Overrides {
+                method: Some(method),
+                spp: Some(spp),
+                seed: Some(seed),
+                ..Default::default()
+            });
+            r.load(&path).unwrap_or_else(|e| panic!("{e}"));
+            r.render_to_completion();
+            assert_eq!(r.stats().nonfinite, 0);
+            point_estimate(&r)
+        };
+        let reference = estimate(Method::Mis, 256, 1);
+        assert!(reference.0 > 0.05, "the lamp is reflected: {reference:?}");
+        for (method, spp) in [(Method::Naive, 512), (Method::Nee, 256), (Method::Mis, 128)] {
+            let (mean, se) = estimate(method, spp, 50 + spp as u64);
+            let z = (mean - reference.0) / (se * se + reference.1 * reference.1).sqrt();
+            assert!(
+                z.abs() < 4.0,
+                "roughness {roughness}, {method}: {mean} ± {se} vs MIS {} ± {} (z = {z:.2})",
+                reference.0,
+                reference.1
+            );
+        }
+    }
+}

@@ -1,0 +1,225 @@
+//! Prefabs: composition, material overrides, qualified names, errors, meshes.
+
+mod common;
+
+use common::{render, scenes_dir, temp_dir, write_scene};
+use glam::Vec3;
+use rondo::Overrides;
+use rondo::geometry::packed::Primitive;
+use rondo::scene::load::{AssetCache, LoadedScene, load_scene};
+use rondo::systems::world_primitives;
+
+const CAMERA: &str = "camera: Camera(position: (0, 0, -10), look_at: (0, 0, 0)),";
+
+fn load(path: &std::path::Path) -> Result<LoadedScene, String> {
+    load_scene(path, &mut AssetCache::default()).map_err(|e| e.to_string())
+}
+
+#[test]
+fn a_sphere_placed_through_three_levels_lands_where_the_composed_matrix_says() {
+    let dir = temp_dir("prefab-nesting");
+    std::fs::create_dir_all(dir.join("parts")).expect("dir");
+    write_scene(
+        &dir,
+        "parts/c.ron",
+        r#"Prefab(
+        materials: { "m": Diffuse(albedo: Constant((1, 1, 1))) },
+        entities: [ Entity(name: "ball", material: "m", shape: Sphere(center: (1, 0, 0), radius: 1),
+                           transform: Transform(scale: (2, 2, 2))) ])"#,
+    );
+    // Paths are relative to the file that names them: b.ron is in parts/ and names c.ron.
+    write_scene(
+        &dir,
+        "parts/b.ron",
+        r#"Prefab(entities: [
+        Entity(name: "c", prefab: "c.ron", transform: Transform(rotate: (0, 90, 0))) ])"#,
+    );
+    let scene = write_scene(
+        &dir,
+        "a.ron",
+        &format!(
+            r#"Scene({CAMERA}
+        entities: [ Entity(name: "b", prefab: "parts/b.ron", transform: Transform(translate: (10, 0, 0))) ])"#
+        ),
+    );
+    let loaded = load(&scene).expect("loads");
+    assert_eq!(loaded.entities.len(), 1);
+    let e = &loaded.entities[0];
+    assert_eq!(e.name, "b/c/ball");
+    // By hand: scale 2 → centre (2,0,0), radius 2; +90° about y maps (x, z) to (z, −x) →
+    // (0, 0, −2); translate → (10, 0, −2).
+    let Primitive::Sphere { center, radius, .. } = world_primitives(&e.shape, &e.transform)[0]
+    else {
+        panic!("a sphere")
+    };
+    assert!(
+        (center - Vec3::new(10.0, 0.0, -2.0)).length() < 1e-5,
+        "{center}"
+    );
+    assert!((radius - 2.0).abs() < 1e-6);
+    assert_eq!(loaded.dependencies.len(), 3, "{:?}", loaded.dependencies);
+}
+
+#[test]
+fn placement_maps_override_prefab_defaults_and_names_are_qualified() {
+    let dir = temp_dir("prefab-override");
+    write_scene(
+        &dir,
+        "p.ron",
+        r#"Prefab(
+        materials: { "surface": Diffuse(albedo: Constant((0.1, 0.1, 0.1))), "trim": Diffuse(albedo: Constant((0.2, 0.2, 0.2))) },
+        entities: [
+            Entity(name: "top", material: "surface", shape: Quad(a: (0, 0, 0), b: (1, 0, 0), c: (1, 1, 0), d: (0, 1, 0))),
+            Entity(name: "edge", material: "trim", shape: Triangle(a: (0, 0, 0), b: (1, 0, 0), c: (0, 1, 0))),
+        ])"#,
+    );
+    let scene = write_scene(
+        &dir,
+        "s.ron",
+        &format!(
+            r#"Scene({CAMERA}
+        materials: {{ "white": Diffuse(albedo: Constant((0.9, 0.9, 0.9))) }},
+        entities: [
+            Entity(name: "one", prefab: "p.ron", materials: {{ "surface": "white" }}),
+            Entity(name: "two", prefab: "p.ron"),
+        ])"#
+        ),
+    );
+    let loaded = load(&scene).expect("loads");
+    let names: Vec<&str> = loaded.entities.iter().map(|e| e.name.as_str()).collect();
+    assert_eq!(names, ["one/top", "one/edge", "two/top", "two/edge"]);
+    let albedo = |i: usize| match &loaded.materials[&loaded.entities[i].material] {
+        rondo::shading::material::Material::Diffuse { albedo } => albedo.eval(glam::Vec2::ZERO).x,
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(
+        [albedo(0), albedo(1), albedo(2), albedo(3)],
+        [0.9, 0.2, 0.1, 0.2]
+    );
+    // Both placements share the prefab's default materials: one table entry each.
+    assert_eq!(loaded.materials.len(), 3);
+}
+
+#[test]
+fn a_prefab_cycle_is_an_error_that_prints_the_chain() {
+    let dir = temp_dir("prefab-cycle");
+    write_scene(
+        &dir,
+        "a.ron",
+        r#"Prefab(entities: [ Entity(name: "to-b", prefab: "b.ron") ])"#,
+    );
+    write_scene(
+        &dir,
+        "b.ron",
+        r#"Prefab(entities: [ Entity(name: "to-a", prefab: "a.ron") ])"#,
+    );
+    let scene = write_scene(
+        &dir,
+        "s.ron",
+        &format!("Scene({CAMERA}\n    entities: [ Entity(name: \"x\", prefab: \"a.ron\") ])"),
+    );
+    let e = load(&scene).expect_err("cycle");
+    assert!(
+        e.contains("prefab cycle") && e.contains("a.ron → ") && e.contains("b.ron → "),
+        "{e}"
+    );
+    assert!(
+        e.contains("b.ron:1:"),
+        "the error points at the placement that closes the cycle: {e}"
+    );
+}
+
+#[test]
+fn a_missing_prefab_names_the_placing_file_line_and_column() {
+    let dir = temp_dir("prefab-missing");
+    let scene = write_scene(
+        &dir,
+        "s.ron",
+        &format!(
+            "Scene({CAMERA}\n    entities: [\n        Entity(name: \"x\", prefab: \"nope.ron\"),\n    ])"
+        ),
+    );
+    let e = load(&scene).expect_err("missing");
+    assert!(e.contains("s.ron:3:35") && e.contains("nope.ron"), "{e}");
+}
+
+#[test]
+fn a_material_nobody_defines_is_an_error_naming_both_files() {
+    let dir = temp_dir("prefab-undefined");
+    write_scene(
+        &dir,
+        "p.ron",
+        "Prefab(entities: [\n  Entity(name: \"t\", material: \"paint\", shape: Sphere(center: (0, 0, 0), radius: 1)) ])",
+    );
+    let scene = write_scene(
+        &dir,
+        "s.ron",
+        &format!("Scene({CAMERA}\n    entities: [ Entity(name: \"x\", prefab: \"p.ron\") ])"),
+    );
+    let e = load(&scene).expect_err("undefined");
+    assert!(
+        e.contains("p.ron:2:") && e.contains("\"paint\"") && e.contains("s.ron:2:"),
+        "{e}"
+    );
+    // A placement mapping to a name the placing file does not define is its own error.
+    let scene = write_scene(
+        &dir,
+        "s2.ron",
+        &format!(
+            "Scene({CAMERA}\n    entities: [ Entity(name: \"x\", prefab: \"p.ron\", materials: {{ \"paint\": \"blue\" }}) ])"
+        ),
+    );
+    let e = load(&scene).expect_err("unknown mapping");
+    assert!(e.contains("s2.ron:2:") && e.contains("\"blue\""), "{e}");
+}
+
+#[test]
+fn cornell_from_prefabs_renders_identically_to_the_flat_cornell_box() {
+    let o = Overrides {
+        width: Some(40),
+        height: Some(40),
+        spp: Some(4),
+        ..Default::default()
+    };
+    let flat = render(&scenes_dir().join("cornell.ron"), o, None);
+    let composed = render(&scenes_dir().join("cornell_prefab.ron"), o, None);
+    assert_eq!(flat.film().sum, composed.film().sum);
+}
+
+#[test]
+fn the_bunny_obj_has_the_vertex_and_face_counts_of_its_file() {
+    let path = scenes_dir().join("meshes/bunny.obj");
+    let text = std::fs::read_to_string(&path).expect("bunny");
+    let vertices = text.lines().filter(|l| l.starts_with("v ")).count();
+    let faces = text.lines().filter(|l| l.starts_with("f ")).count();
+    let mesh = AssetCache::default().mesh(&path).expect("loads");
+    assert_eq!(
+        (mesh.positions.len(), mesh.triangles.len()),
+        (vertices, faces)
+    );
+    assert_eq!((vertices, faces), (1839, 3674), "the npm package's counts");
+    assert!(mesh.normals.is_none());
+}
+
+#[test]
+fn malformed_obj_files_are_errors_not_panics() {
+    let dir = temp_dir("bad-obj");
+    for (name, text) in [
+        ("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"),
+        ("garbage.obj", "v 0 zero 0\nf 1 2 3\n"),
+        ("empty.obj", "# nothing\n"),
+        ("nan.obj", "v 0 0 0\nv NaN 0 0\nv 0 1 0\nf 1 2 3\n"),
+    ] {
+        let path = write_scene(&dir, name, text);
+        assert!(AssetCache::default().mesh(&path).is_err(), "{name} loaded");
+    }
+    let scene = write_scene(
+        &dir,
+        "s.ron",
+        &format!(
+            "Scene({CAMERA}\n    materials: {{ \"m\": Diffuse(albedo: Constant((1, 1, 1))) }},\n    entities: [ Entity(name: \"x\", material: \"m\", shape: Mesh(path: \"range.obj\")) ])"
+        ),
+    );
+    let e = load(&scene).expect_err("bad mesh");
+    assert!(e.contains("s.ron:3:") && e.contains("range.obj"), "{e}");
+}

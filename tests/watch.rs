@@ -1,0 +1,409 @@
+//! Live editing, end to end: a [`WatchSession`] on a scene in a temporary directory, edited the
+//! ways editors save, observed through its reports and the image it writes. Waits are bounded
+//! (a report or a timeout), never sleeps.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use rondo::watch::{ReloadReport, Report, WatchOptions, WatchSession};
+
+/// Upper bound of every wait; a passing run takes a small fraction of it.
+const WAIT: Duration = Duration::from_secs(20);
+
+const RED: &str = "Constant((1.0, 0.0, 0.0))";
+const BLUE: &str = "Constant((0.0, 0.0, 1.0))";
+const GREY: &str = "Constant((0.5, 0.5, 0.5))";
+
+/// A scene whose centre pixel sees only the `wall` emitter (so its colour is exactly the wall's
+/// emission whatever the sample count) and a small `ball` near the top edge. Line 5 holds the
+/// wall material and line 9 the wall entity, for the error-location tests.
+fn scene(wall: &str, ball: &str, ball_x: f32, spp: u32) -> String {
+    format!(
+        r#"Scene(
+    camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0), fov: 40.0),
+    settings: Settings(width: 32, height: 32, spp: {spp}, max_depth: 3),
+    materials: {{
+        "wall": Light(emit: {wall}, intensity: 1.0, two_sided: true),
+        "ball": Diffuse(albedo: {ball}),
+    }},
+    entities: [
+        Entity(name: "wall", material: "wall", shape: Quad(a: (-10, -10, 5), b: (10, -10, 5), c: (10, 10, 5), d: (-10, 10, 5))),
+        Entity(name: "ball", material: "ball", shape: Sphere(center: ({ball_x:.1}, 1.4, 0), radius: 0.3)),
+    ],
+)
+"#
+    )
+}
+
+fn simple(wall: &str) -> String {
+    scene(wall, GREY, 0.0, 4)
+}
+
+/// A temporary directory with a scene and a running session, removed on drop.
+struct Fixture {
+    dir: PathBuf,
+    scene: PathBuf,
+    out: PathBuf,
+    session: Option<WatchSession>,
+}
+
+impl Fixture {
+    /// [`Fixture::open`], then waits for the first complete render.
+    fn start(name: &str, text: &str, files: &[(&str, [u8; 3])]) -> (Self, ReloadReport) {
+        let f = Self::open(name, text, files);
+        let first = f.rendered();
+        (f, first)
+    }
+
+    /// Writes `files` (solid-colour PNGs) and `scene.ron`, and starts watching.
+    fn open(name: &str, text: &str, files: &[(&str, [u8; 3])]) -> Self {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos());
+        let dir =
+            std::env::temp_dir().join(format!("rondo-watch-{name}-{}-{nanos}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("create temp dir");
+        for (file, rgb) in files {
+            write_png(&dir.join(file), *rgb);
+        }
+        let scene = dir.join("scene.ron");
+        std::fs::write(&scene, text).expect("write scene");
+        let out = dir.join("out.png");
+        let mut options = WatchOptions::new(&scene, &out);
+        options.threads = Some(2);
+        let session = WatchSession::start(options).expect("start watching");
+        Self {
+            dir,
+            scene,
+            out,
+            session: Some(session),
+        }
+    }
+
+    fn session(&self) -> &WatchSession {
+        self.session.as_ref().expect("session running")
+    }
+
+    /// Waits for a report matching `predicate`.
+    fn wait(&self, what: &str, predicate: impl FnMut(&Report) -> bool) -> Report {
+        match self.session().wait_for(WAIT, predicate) {
+            Ok(r) => r,
+            Err(seen) => panic!("timed out waiting for {what}; reports meanwhile: {seen:#?}"),
+        }
+    }
+
+    /// Waits for the next render to reach full quality.
+    fn rendered(&self) -> ReloadReport {
+        match self.wait(
+            "a complete render",
+            |r| matches!(r, Report::Rendered(r) if r.completed()),
+        ) {
+            Report::Rendered(r) => r,
+            _ => unreachable!(),
+        }
+    }
+
+    fn centre(&self) -> [u8; 3] {
+        let image = image::open(&self.out).expect("output image").to_rgb8();
+        image.get_pixel(16, 16).0
+    }
+
+    fn write_scene(&self, text: &str) {
+        std::fs::write(&self.scene, text).expect("write scene");
+    }
+}
+
+impl Drop for Fixture {
+    fn drop(&mut self) {
+        if let Some(session) = self.session.take() {
+            let stopped = session.stop();
+            if !std::thread::panicking() {
+                stopped.expect("watch thread ends cleanly");
+            }
+        }
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+fn write_png(path: &Path, rgb: [u8; 3]) {
+    image::RgbImage::from_pixel(4, 4, image::Rgb(rgb))
+        .save(path)
+        .expect("write png");
+}
+
+#[test]
+fn in_place_edit_rerenders_with_the_new_colour() {
+    let (f, first) = Fixture::start("in-place", &simple(RED), &[]);
+    assert_eq!(first.number, 0);
+    assert_eq!(f.centre(), [255, 0, 0]);
+
+    f.write_scene(&simple(BLUE));
+    let r = f.rendered();
+    assert_eq!(r.number, 1);
+    assert!(r.changes.materials, "{r}");
+    assert_eq!(f.centre(), [0, 0, 255]);
+}
+
+#[test]
+fn rename_style_save_rerenders() {
+    let (f, _) = Fixture::start("rename", &simple(RED), &[]);
+    let tmp = f.dir.join(".scene.ron.swp-like");
+    std::fs::write(&tmp, simple(BLUE)).expect("write temp");
+    std::fs::rename(&tmp, &f.scene).expect("rename over the scene");
+    f.rendered();
+    assert_eq!(f.centre(), [0, 0, 255]);
+
+    // And again: the directory watch survives the replaced file.
+    std::fs::write(&tmp, simple(RED)).expect("write temp");
+    std::fs::rename(&tmp, &f.scene).expect("rename over the scene");
+    f.rendered();
+    assert_eq!(f.centre(), [255, 0, 0]);
+}
+
+#[test]
+fn delete_and_recreate_rerenders_and_keeps_the_image_meanwhile() {
+    let (f, _) = Fixture::start("recreate", &simple(RED), &[]);
+    let before = std::fs::read(&f.out).expect("image");
+
+    std::fs::remove_file(&f.scene).expect("delete scene");
+    f.wait("the scene reported missing", |r| {
+        assert!(!matches!(r, Report::Wrote { .. }), "wrote while missing");
+        matches!(r, Report::SceneMissing { .. })
+    });
+    assert_eq!(std::fs::read(&f.out).expect("image"), before);
+
+    f.write_scene(&simple(BLUE));
+    f.rendered();
+    assert_eq!(f.centre(), [0, 0, 255]);
+}
+
+#[test]
+fn broken_saves_report_line_and_column_and_keep_the_image() {
+    let (f, _) = Fixture::start("broken", &simple(RED), &[]);
+    let before = std::fs::read(&f.out).expect("image");
+    let cases = [
+        ("syntax error", simple("Constant((1.0, 0.0 0.0))"), 5),
+        ("invalid value", simple("Constant((-1.0, 0.0, 0.0))"), 5),
+        (
+            "missing texture",
+            simple(r#"Image(path: "missing.png")"#),
+            5,
+        ),
+        (
+            "unknown material",
+            simple(RED).replace(
+                r#"Entity(name: "wall", material: "wall""#,
+                r#"Entity(name: "wall", material: "nope""#,
+            ),
+            9,
+        ),
+    ];
+    for (what, text, line) in cases {
+        f.write_scene(&text);
+        let Report::Failed { message } = f.wait(what, |r| {
+            assert!(
+                !matches!(r, Report::Wrote { .. } | Report::Rendered(_)),
+                "{what}: rendered a broken scene: {r:?}"
+            );
+            matches!(r, Report::Failed { .. })
+        }) else {
+            unreachable!()
+        };
+        let located = format!("scene.ron:{line}:");
+        assert!(
+            message.contains(&located),
+            "{what}: `{message}` lacks {located}"
+        );
+        assert_eq!(
+            std::fs::read(&f.out).expect("image"),
+            before,
+            "{what}: the image changed"
+        );
+    }
+
+    f.write_scene(&simple(BLUE));
+    f.rendered();
+    assert_eq!(f.centre(), [0, 0, 255]);
+}
+
+#[test]
+fn a_save_split_by_a_pause_is_not_reported_as_an_error() {
+    use std::io::Write;
+    let (f, _) = Fixture::start("split-save", &simple(RED), &[]);
+    let text = simple(BLUE);
+    let (head, tail) = text.split_at(text.len() / 2);
+    let mut file = std::fs::File::create(&f.scene).expect("truncate scene");
+    file.write_all(head.as_bytes()).expect("write");
+    file.flush().expect("flush");
+    // A slow writer: the pause is longer than the debounce window, so the watcher sees the
+    // half-written file before the rest arrives.
+    std::thread::sleep(Duration::from_millis(70));
+    file.write_all(tail.as_bytes()).expect("write");
+    drop(file);
+    match f.wait("the complete save to render", |r| {
+        matches!(r, Report::Failed { .. } | Report::Rendered(_))
+    }) {
+        Report::Rendered(r) => assert!(r.completed(), "{r}"),
+        other => panic!("a half-written save was reported: {other:?}"),
+    }
+    assert_eq!(f.centre(), [0, 0, 255]);
+}
+
+#[test]
+fn a_bad_save_during_a_render_resumes_the_old_scene_without_worse_images() {
+    let (f, _) = Fixture::start("resume", &simple(RED), &[]);
+    f.write_scene(&scene(RED, GREY, 0.0, 1 << 20));
+    let track = |best: &mut u32, r: &Report| {
+        if let Report::Wrote {
+            reload: 1, samples, ..
+        } = r
+        {
+            *best = (*best).max(*samples);
+        }
+    };
+    let mut best = 0;
+    f.wait("the long render under way", |r| {
+        track(&mut best, r);
+        best >= 16
+    });
+    f.write_scene(&simple("Constant((1.0, 0.0 0.0))"));
+    f.wait("the error", |r| {
+        track(&mut best, r);
+        matches!(r, Report::Failed { .. })
+    });
+    let Report::Wrote { samples, .. } = f.wait("the old scene's next image", |r| {
+        matches!(r, Report::Wrote { reload: 1, .. })
+    }) else {
+        unreachable!()
+    };
+    assert!(samples > best, "rewrote {samples} spp over {best} spp");
+    assert_eq!(f.centre(), [255, 0, 0]);
+}
+
+#[test]
+fn a_scene_broken_from_the_start_is_reported_then_rendered_once_fixed() {
+    let f = Fixture::open("broken-start", &simple("Constant((1.0, 0.0 0.0))"), &[]);
+    let Report::Failed { message } = f.wait("the error", |r| matches!(r, Report::Failed { .. }))
+    else {
+        unreachable!()
+    };
+    assert!(message.contains("scene.ron:5:"), "{message}");
+    assert!(!f.out.exists(), "no image from a broken scene");
+    f.write_scene(&simple(BLUE));
+    assert_eq!(f.rendered().number, 0);
+    assert_eq!(f.centre(), [0, 0, 255]);
+}
+
+#[test]
+fn a_missing_texture_renders_once_the_file_appears() {
+    let (f, _) = Fixture::start("late-texture", &simple(RED), &[]);
+    f.write_scene(&simple(r#"Image(path: "late.png")"#));
+    f.wait("the missing texture error", |r| {
+        matches!(r, Report::Failed { .. })
+    });
+    write_png(&f.dir.join("late.png"), [0, 255, 0]);
+    f.rendered();
+    assert_eq!(f.centre(), [0, 255, 0]);
+}
+
+#[test]
+fn material_edit_skips_the_bvh_rebuild_and_moving_the_sphere_does_not() {
+    let (f, first) = Fixture::start("bvh", &simple(RED), &[]);
+    assert!(first.bvh_rebuilt);
+    let builds = first.counters.bvh_builds;
+
+    f.write_scene(&simple(BLUE));
+    let r = f.rendered();
+    assert!(!r.bvh_rebuilt, "{r}");
+    assert_eq!(r.counters.bvh_builds, builds, "{r}");
+    assert!(r.materials_synced, "{r}");
+    assert_eq!(f.centre(), [0, 0, 255]);
+
+    f.write_scene(&scene(BLUE, GREY, 0.5, 4));
+    let r = f.rendered();
+    assert!(r.bvh_rebuilt, "{r}");
+    assert_eq!(r.counters.bvh_builds, builds + 1, "{r}");
+    assert_eq!((r.changes.changed, r.changes.materials), (1, false), "{r}");
+}
+
+#[test]
+fn texture_edit_rerenders_and_decodes_only_that_texture() {
+    let text = scene(
+        r#"Image(path: "wall.png")"#,
+        r#"Image(path: "ball.png")"#,
+        0.0,
+        4,
+    );
+    let files = [("wall.png", [255, 0, 0]), ("ball.png", [128, 128, 128])];
+    let (f, first) = Fixture::start("texture", &text, &files);
+    assert_eq!(first.textures_decoded, 2);
+    assert_eq!(f.centre(), [255, 0, 0]);
+
+    write_png(&f.dir.join("wall.png"), [0, 0, 255]);
+    let r = f.rendered();
+    assert_eq!(r.textures_decoded, 1, "{r}");
+    assert!(!r.bvh_rebuilt, "{r}");
+    assert!(r.trigger.iter().any(|p| p.ends_with("wall.png")), "{r:?}");
+    assert_eq!(f.centre(), [0, 0, 255]);
+}
+
+#[test]
+fn save_during_a_long_render_cancels_it_promptly() {
+    let (f, _) = Fixture::start("cancel", &simple(RED), &[]);
+    // About a billion samples: this render never finishes within the test.
+    f.write_scene(&scene(RED, GREY, 0.0, 1 << 20));
+    f.wait(
+        "a first pass of the long render",
+        |r| matches!(r, Report::Wrote { reload: 1, samples, .. } if *samples >= 4),
+    );
+
+    f.write_scene(&simple(BLUE));
+    let saved = Instant::now();
+    let Report::Rendered(old) = f.wait("the long render to be superseded", |r| {
+        matches!(r, Report::Rendered(_))
+    }) else {
+        unreachable!()
+    };
+    assert_eq!(old.number, 1);
+    assert!(!old.completed(), "{old}");
+    assert!(
+        saved.elapsed() < Duration::from_secs(5),
+        "cancelling took {:?}",
+        saved.elapsed()
+    );
+    let new = f.rendered();
+    assert_eq!(new.number, 2);
+    assert_eq!(f.centre(), [0, 0, 255]);
+}
+
+#[test]
+fn stop_returns_promptly_during_a_long_render() {
+    let (mut f, _) = Fixture::start("stop", &simple(RED), &[]);
+    f.write_scene(&scene(RED, GREY, 0.0, 1 << 20));
+    f.wait(
+        "the long render under way",
+        |r| matches!(r, Report::Wrote { reload: 1, samples, .. } if *samples >= 64),
+    );
+    let start = Instant::now();
+    f.session
+        .take()
+        .expect("session running")
+        .stop()
+        .expect("stops cleanly");
+    assert!(
+        start.elapsed() < Duration::from_secs(5),
+        "stopping took {:?}",
+        start.elapsed()
+    );
+    let image = std::fs::read(&f.out).expect("image");
+    assert!(
+        image::load_from_memory(&image).is_ok(),
+        "a complete image is left behind"
+    );
+    let leftovers: Vec<_> = std::fs::read_dir(&f.dir)
+        .expect("dir")
+        .filter_map(Result::ok)
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+}
