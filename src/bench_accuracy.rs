@@ -407,11 +407,16 @@ fn draw_chart(
             .map(|r| (r.seconds, metric.of(&r.metrics), r.spp))
             .collect();
         points.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let label = match f.slope {
+        let all = report.rows.iter().filter(|r| r.method == f.method).count();
+        let exact = all - points.len();
+        let mut label = match f.slope {
             _ if f.at_one_second == 0.0 => format!("{}: exact (error 0, not drawn)", f.method),
             Some(s) => format!("{}: slope {s:.2}", f.method),
             None => format!("{}", f.method),
         };
+        if exact > 0 && f.at_one_second > 0.0 {
+            label += &format!(" ({exact} of {all} renders exact, not drawn)");
+        }
         chart
             .draw_series(LineSeries::new(
                 points.iter().map(|p| (p.0.log10(), p.1.log10())),

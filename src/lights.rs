@@ -70,7 +70,11 @@ fn mean_colour(t: &Texture) -> f32 {
 
 impl LightSet {
     /// Collects the emitters of `geometry` given each owner's material.
-    pub fn build(geometry: &Geometry, materials: &[Material], owner_material: &[u32]) -> Self {
+    pub fn build<L: Layout>(
+        geometry: &Geometry<L>,
+        materials: &[Material],
+        owner_material: &[u32],
+    ) -> Self {
         let power_of = |owner: u32| -> Option<(u32, f32)> {
             let m = *owner_material.get(owner as usize)?;
             match materials.get(m as usize)? {
@@ -188,7 +192,7 @@ impl LightSet {
                     err,
                 )
             }
-            HitKind::Plane => return None,
+            HitKind::Plane | HitKind::Instance { .. } => return None,
         };
         Some(LightSample {
             p,
@@ -207,7 +211,8 @@ impl LightSet {
         let k = match kind {
             HitKind::Sphere => self.sphere_emitter.get(index as usize),
             HitKind::Triangle => self.triangle_emitter.get(index as usize),
-            HitKind::Plane => None,
+            // Planes are infinite; instanced meshes are found by BSDF sampling only.
+            HitKind::Plane | HitKind::Instance { .. } => None,
         };
         match k {
             Some(&k) if k != NONE => self.pmf[k as usize] / self.emitters[k as usize].area,

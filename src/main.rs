@@ -79,6 +79,21 @@ enum Command {
 
 #[derive(Subcommand)]
 enum BenchCommand {
+    /// Build time and peak memory of N placements of one mesh (each count in its own process).
+    Instances {
+        /// The mesh to place.
+        #[arg(long, default_value = "scenes/meshes/bunny.obj")]
+        mesh: PathBuf,
+        /// Placement counts.
+        #[arg(long, value_delimiter = ',', default_value = "1,10,100,1000")]
+        counts: Vec<usize>,
+        /// Copy every placement's triangles into the scene BVH instead of instancing (to compare).
+        #[arg(long)]
+        flatten: bool,
+        /// Run one count in this process and print its CSV line (used by the parent run).
+        #[arg(long, hide = true)]
+        single: Option<usize>,
+    },
     /// Render a scene several times and report samples/s and rays/s (median of the runs).
     Render {
         /// Scene file (.ron).
@@ -217,6 +232,15 @@ fn run(cli: Cli) -> Result<()> {
             output,
             options,
         } => render(&scene, &output, &options),
+        Command::Bench {
+            what:
+                BenchCommand::Instances {
+                    mesh,
+                    counts,
+                    flatten,
+                    single,
+                },
+        } => bench_instances(&mesh, &counts, flatten, single),
         Command::Bench {
             what:
                 BenchCommand::Render {
@@ -367,6 +391,46 @@ fn summary(r: &Renderer, wall: Duration) -> String {
     )
 }
 
+/// `rondo bench instances`: one child process per count, so each reports its own peak memory.
+fn bench_instances(
+    mesh: &Path,
+    counts: &[usize],
+    flatten: bool,
+    single: Option<usize>,
+) -> Result<()> {
+    use rondo::bench::instances;
+    if let Some(count) = single {
+        let run = instances::measure(mesh, count, !flatten).map_err(anyhow::Error::msg)?;
+        println!("{}", instances::csv_line(&run));
+        return Ok(());
+    }
+    let exe = std::env::current_exe().context("locating the rondo binary")?;
+    println!("{}", instances::CSV_HEADER);
+    for &count in counts {
+        let mut cmd = std::process::Command::new(&exe);
+        cmd.args(["bench", "instances", "--mesh"])
+            .arg(mesh)
+            .arg("--single")
+            .arg(count.to_string());
+        if flatten {
+            cmd.arg("--flatten");
+        }
+        let out = cmd.output().context("running a benchmark child")?;
+        if !out.status.success() {
+            bail!(
+                "{count} instances: {}",
+                String::from_utf8_lossy(&out.stderr).trim()
+            );
+        }
+        let text = String::from_utf8_lossy(&out.stdout);
+        let line = text.lines().last().unwrap_or_default();
+        instances::parse_csv_line(line)
+            .with_context(|| format!("unexpected child output {line:?}"))?;
+        println!("{line}");
+    }
+    Ok(())
+}
+
 fn bench_render(scene: &Path, runs: usize, options: &RenderArgs) -> Result<()> {
     let mut times = Vec::new();
     let mut r = options.renderer()?;
@@ -408,6 +472,7 @@ impl RenderArgs {
         let mut options = WatchOptions::new(scene, output);
         options.threads = self.threads;
         options.first_pass = first_spp;
+        options.layout = self.layout;
         options.overrides = Overrides {
             width: self.width,
             height: self.height,

@@ -12,7 +12,7 @@
 
 use std::path::{Path, PathBuf};
 
-use image::{Rgb32FImage, RgbImage};
+use image::RgbImage;
 
 use crate::film::Film;
 
@@ -123,21 +123,6 @@ impl Image {
             height: film.height,
             data: film.mean().iter().flat_map(|c| c.to_array()).collect(),
         }
-    }
-
-    /// An image filled with one colour.
-    pub fn filled(width: u32, height: u32, rgb: [f32; 3]) -> Self {
-        Self {
-            width,
-            height,
-            data: rgb.repeat(width as usize * height as usize),
-        }
-    }
-
-    /// The image as an `image` crate buffer.
-    pub fn to_rgb32f(&self) -> Rgb32FImage {
-        Rgb32FImage::from_raw(self.width, self.height, self.data.clone())
-            .expect("an Image holds 3 · width · height values")
     }
 }
 

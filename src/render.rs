@@ -100,6 +100,9 @@ pub fn point_error<L: Layout>(geometry: &Geometry<L>, hit: &Hit, p: Vec3) -> Vec
             gamma(7.0) * ((b0 * p0).abs() + (hit.b1 * p1).abs() + (hit.b2 * p2).abs())
         }
         HitKind::Plane => gamma(8.0) * (p.abs() + geometry.planes[i].point.abs()),
+        HitKind::Instance { triangle } => geometry
+            .instances
+            .point_error(hit.index, triangle, hit.b1, hit.b2),
     }
 }
 
@@ -302,6 +305,59 @@ pub fn render_pass<L: Layout>(
         return Err(Cancelled);
     }
     film.samples = samples.end;
+    Ok(stats)
+}
+
+/// A quick preview for live editing: one sample per `block`×`block` block of pixels, written to
+/// every pixel of the block (so it costs 1/`block`² of a 1-spp pass). The film then holds one
+/// "sample" per pixel that is *not* part of the converging image: the caller discards it before
+/// the real passes. Cancellation works as in [`render_pass`].
+pub fn render_preview<L: Layout>(
+    view: &SceneView<L>,
+    film: &mut Film,
+    seed: u64,
+    block: usize,
+    cancel: &AtomicBool,
+) -> Result<TraceStats, Cancelled> {
+    let (width, height) = (film.width as usize, film.height as usize);
+    let block = block.max(1);
+    let stats = film
+        .sum
+        .par_chunks_mut(width * block)
+        .enumerate()
+        .map(|(band, rows)| {
+            let mut stats = TraceStats::default();
+            if cancel.load(Ordering::Relaxed) {
+                return stats;
+            }
+            let lines = rows.len() / width;
+            let cy = band * block + lines / 2;
+            for bx in (0..width).step_by(block) {
+                let cols = block.min(width - bx);
+                let cx = bx + cols / 2;
+                let mut rng = Rng::for_sample(seed, (cy * width + cx) as u64, 0);
+                let (jx, jy) = (rng.next_f32(), rng.next_f32());
+                let ray =
+                    view.camera
+                        .ray(cx as f32 + jx, cy as f32 + jy, width as u32, height as u32);
+                let l = trace_path(view, ray, &mut rng, &mut stats);
+                let value = if l.is_finite() {
+                    l.as_dvec3()
+                } else {
+                    stats.nonfinite += 1;
+                    DVec3::ZERO
+                };
+                for line in 0..lines {
+                    rows[line * width + bx..line * width + bx + cols].fill(value);
+                }
+            }
+            stats
+        })
+        .reduce(TraceStats::default, |a, b| a + b);
+    if cancel.load(Ordering::Relaxed) {
+        return Err(Cancelled);
+    }
+    film.samples = 1;
     Ok(stats)
 }
 

@@ -45,6 +45,7 @@ use notify_debouncer_full::{DebounceEventResult, Debouncer, RecommendedCache, ne
 use crate::app::{Overrides, Renderer};
 use crate::ecs::resources::{ChangeSummary, Counters, PassPlan};
 use crate::film::OutputKind;
+use crate::geometry::layout::LayoutKind;
 
 /// How long the debouncer holds a file event before passing it on.
 ///
@@ -103,7 +104,7 @@ pub enum WatchError {
 /// What the file watcher tells the loop.
 #[derive(Clone, Debug)]
 pub enum FileEvent {
-    /// Files the scene depends on (or, after a failed load, images it may come to depend on)
+    /// Files the scene depends on (or, after a failed load, asset files it may come to depend on)
     /// were created, written, renamed or removed.
     Changed {
         /// The files, as watched (parent directory canonicalised); empty after an event overflow.
@@ -124,26 +125,36 @@ pub enum FileEvent {
 struct Filter {
     /// Dependencies, as [`watch_key`]s.
     files: HashSet<PathBuf>,
-    /// Also accept image files in the watched directories (after a failed load, when a missing
-    /// texture may be about to appear).
-    images: bool,
+    /// Also accept asset files (see [`is_asset`]) in the watched directories: after a failed
+    /// load, when a missing texture, prefab or mesh may be about to appear.
+    assets: bool,
     /// Never relevant (the output image, which we write ourselves).
     ignore: HashSet<PathBuf>,
 }
 
 impl Filter {
-    /// `Some(true)` for a dependency, `Some(false)` for an accepted image, `None` to ignore.
+    /// `Some(true)` for a dependency, `Some(false)` for an accepted asset, `None` to ignore.
     fn classify(&self, path: &Path) -> Option<bool> {
         if self.ignore.contains(path) {
             None
         } else if self.files.contains(path) {
             Some(true)
-        } else if self.images && image::ImageFormat::from_path(path).is_ok() {
+        } else if self.assets && is_asset(path) {
             Some(false)
         } else {
             None
         }
     }
+}
+
+/// Whether `path` looks like a file a scene can load: a scene or prefab (`.ron`), a mesh
+/// (`.obj`) or an image. Editors' swap and backup files (`.swp`, `~`, `4913`) are not.
+fn is_asset(path: &Path) -> bool {
+    let ron_or_obj = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("ron") || e.eq_ignore_ascii_case("obj"));
+    ron_or_obj || image::ImageFormat::from_path(path).is_ok()
 }
 
 /// Whether an event kind can mean new file contents. Opening and reading are not (the loader's
@@ -285,9 +296,10 @@ impl FileWatcher {
         warnings
     }
 
-    /// Also accept any image file in the watched directories (see [`FileEvent::Changed`]).
-    pub fn set_accept_images(&self, on: bool) {
-        self.filter().images = on;
+    /// Also accept any asset file (scene, prefab, mesh or image) in the watched directories,
+    /// not only the dependencies (see [`FileEvent::Changed`]).
+    pub fn set_accept_assets(&self, on: bool) {
+        self.filter().assets = on;
     }
 
     /// Never report `path` (for the output image, which the loop writes itself).
@@ -317,6 +329,8 @@ pub struct WatchOptions {
     pub threads: Option<usize>,
     /// Settings overrides applied to every load.
     pub overrides: Overrides,
+    /// Geometry layout (speed only; images are identical).
+    pub layout: LayoutKind,
     /// Samples of the first pass; later passes double the total up to the scene's spp.
     pub first_pass: u32,
     /// The debounce window.
@@ -324,13 +338,15 @@ pub struct WatchOptions {
 }
 
 impl WatchOptions {
-    /// Defaults: all cores, no overrides, a first pass of 1 sample, the [`DEBOUNCE`] window.
+    /// Defaults: all cores, no overrides, the default layout, a first pass of 1 sample, the
+    /// [`DEBOUNCE`] window.
     pub fn new(scene: impl Into<PathBuf>, output: impl Into<PathBuf>) -> Self {
         Self {
             scene: scene.into(),
             output: output.into(),
             threads: None,
             overrides: Overrides::default(),
+            layout: LayoutKind::default(),
             first_pass: 1,
             debounce: DEBOUNCE,
         }
@@ -629,6 +645,8 @@ pub struct Watch {
     reloads: u64,
     last_error: Option<String>,
     missing: bool,
+    /// Whether the user was told that the output is also one of the scene's textures.
+    warned_output: bool,
 }
 
 impl Watch {
@@ -642,6 +660,7 @@ impl Watch {
         };
         let mut renderer = Renderer::new(options.threads, plan)?;
         renderer.set_overrides(options.overrides);
+        renderer.set_layout(options.layout);
         // The loop writes the image itself: it knows which writes are worth making (see
         // `Job::written`) and times them apart from the ECS update.
         renderer.set_output(None, false);
@@ -677,6 +696,7 @@ impl Watch {
             reloads: 0,
             last_error: None,
             missing: false,
+            warned_output: false,
         })
     }
 
@@ -815,7 +835,7 @@ impl Watch {
             Ok(info) => info,
             Err(e) => {
                 let message = e.to_string();
-                // A non-dependency image appearing while the scene is broken retries the load;
+                // A non-dependency asset appearing while the scene is broken retries the load;
                 // the same error again is not news.
                 let repeat = !trigger.dependency && self.last_error.as_ref() == Some(&message);
                 if !repeat {
@@ -824,25 +844,27 @@ impl Watch {
                     });
                 }
                 self.last_error = Some(message);
-                self.watcher.set_accept_images(true);
+                self.watcher.set_accept_assets(true);
                 return;
             }
         };
         let parse = start.elapsed();
         self.last_error = None;
-        self.watcher.set_accept_images(false);
+        self.watcher.set_accept_assets(false);
 
         let mut files = Vec::with_capacity(info.dependencies.len());
         for dep in info.dependencies {
             let is_output = self.output_key.is_some()
                 && watch_key(&dep).ok().map(|(_, k)| k) == self.output_key;
             if is_output {
-                report(Report::Warning {
-                    message: format!(
-                        "{}: the output image is also a texture of the scene; its writes do not trigger reloads",
-                        dep.display()
-                    ),
-                });
+                if !std::mem::replace(&mut self.warned_output, true) {
+                    report(Report::Warning {
+                        message: format!(
+                            "{}: the output image is also a texture of the scene; its writes do not trigger reloads",
+                            dep.display()
+                        ),
+                    });
+                }
             } else {
                 files.push(dep);
             }
@@ -1056,14 +1078,18 @@ mod tests {
     }
 
     #[test]
-    fn filter_ignores_the_output_and_accepts_images_only_when_asked() {
+    fn filter_ignores_the_output_and_accepts_other_assets_only_when_asked() {
         let mut f = Filter::default();
         f.files.insert(PathBuf::from("/d/scene.ron"));
         f.ignore.insert(PathBuf::from("/d/out.png"));
         assert_eq!(f.classify(Path::new("/d/scene.ron")), Some(true));
         assert_eq!(f.classify(Path::new("/d/tex.png")), None);
-        f.images = true;
+        f.assets = true;
         assert_eq!(f.classify(Path::new("/d/tex.png")), Some(false));
+        assert_eq!(f.classify(Path::new("/d/bunny.OBJ")), Some(false));
+        assert_eq!(f.classify(Path::new("/d/prefab.ron")), Some(false));
+        assert_eq!(f.classify(Path::new("/d/4913")), None);
+        assert_eq!(f.classify(Path::new("/d/scene.ron~")), None);
         assert_eq!(f.classify(Path::new("/d/out.png")), None);
         assert_eq!(f.classify(Path::new("/d/.scene.ron.swp")), None);
     }

@@ -544,8 +544,9 @@ fn broken_meshes_are_errors_located_at_their_path() {
 
 #[test]
 fn prefab_paths_that_are_not_prefab_files_are_errors() {
-    // A prefab that is a directory, a device, missing, or the scene itself.
-    // Expected: an error at the placement's path (line 3, column 32); no hang on the device.
+    // A prefab that is a directory, a device, missing, or the scene itself. Expected: an error
+    // at the placement's path (line 3, column 32); the device is not read (reading /dev/zero to
+    // the end never ends: no allocation above the cap).
     let dir = temp_dir("fuzz-prefab");
     std::fs::create_dir_all(dir.join("folder.ron")).expect("mkdir");
     for prefab in ["folder.ron", "/dev/zero", "missing.ron", "scene.ron"] {
@@ -555,4 +556,6 @@ fn prefab_paths_that_are_not_prefab_files_are_errors() {
         let e = load_error(&dir, &scene).unwrap_or_else(|| panic!("{prefab} loaded"));
         assert!(e.contains("scene.ron:3:32:"), "{prefab}: {e}");
     }
+    let largest = LARGEST.load(Ordering::Relaxed);
+    assert!(largest <= ALLOCATION_CAP, "a {largest}-byte allocation");
 }

@@ -10,8 +10,8 @@ use std::process::Command;
 use glam::{Mat3, Vec2, Vec3};
 use rondo::geometry::aabb::RayQuery;
 use rondo::geometry::layout::{
-    Aos, Layout, LayoutKind, Soa, SoaSimd, SphereStore, TriangleStore, closest_sphere_scalar,
-    closest_triangle_scalar,
+    Aos, Hybrid, Layout, LayoutKind, Soa, SoaSimd, SphereStore, TriangleStore,
+    closest_sphere_scalar, closest_triangle_scalar,
 };
 use rondo::geometry::packed::{Geometry, Hit, Primitive};
 use rondo::geometry::ray::Ray;
@@ -184,6 +184,10 @@ fn every_leaf_kernel_matches_the_scalar_reference_bit_for_bit() {
                 expected,
                 "SIMD spheres, slots {slots:?}, {ray:?}"
             );
+            assert_eq!(
+                sphere_kernel::<Hybrid>(&soa_s, ray, slots.clone(), *t_max),
+                expected
+            );
 
             let mut t = *t_max;
             let reference = closest_triangle_scalar(&soa_t, &q, slots.clone(), &mut t);
@@ -205,6 +209,10 @@ fn every_leaf_kernel_matches_the_scalar_reference_bit_for_bit() {
                 triangle_kernel::<SoaSimd>(&soa_t, &q, slots.clone(), *t_max),
                 expected,
                 "SIMD triangles, slots {slots:?}, {ray:?}"
+            );
+            assert_eq!(
+                triangle_kernel::<Hybrid>(&aos_t, &q, slots.clone(), *t_max),
+                expected
             );
         }
     }
@@ -379,6 +387,7 @@ fn every_layout_finds_the_same_closest_hit_through_the_bvh() {
         check_layout::<Soa>(&reference, &rays),
         check_layout::<Aos>(&reference, &rays),
         check_layout::<SoaSimd>(&reference, &rays),
+        check_layout::<Hybrid>(&reference, &rays),
     ];
     assert!(hits.iter().all(|&h| h > 1000), "{hits:?}");
 }
@@ -414,7 +423,7 @@ fn renders_are_bit_identical_in_every_layout_for_every_shipped_scene() {
     for scene in &scenes {
         let reference = render_film(scene, LayoutKind::Soa);
         assert!(reference.iter().any(|p| p.iter().any(|&b| b != 0)));
-        for layout in [LayoutKind::Aos, LayoutKind::SoaSimd] {
+        for layout in [LayoutKind::Aos, LayoutKind::SoaSimd, LayoutKind::Hybrid] {
             assert!(
                 render_film(scene, layout) == reference,
                 "{}: {layout} differs from soa",
@@ -436,7 +445,12 @@ fn switching_layout_between_renders_keeps_the_image() {
         ..Default::default()
     });
     let mut films = Vec::new();
-    for layout in [LayoutKind::Aos, LayoutKind::Soa, LayoutKind::SoaSimd] {
+    for layout in [
+        LayoutKind::Aos,
+        LayoutKind::Soa,
+        LayoutKind::SoaSimd,
+        LayoutKind::Hybrid,
+    ] {
         r.set_layout(layout);
         r.load(&scene).unwrap_or_else(|e| panic!("{e}"));
         r.render_to_completion();
@@ -444,6 +458,7 @@ fn switching_layout_between_renders_keeps_the_image() {
     }
     assert_eq!(films[0], films[1]);
     assert_eq!(films[0], films[2]);
+    assert_eq!(films[0], films[3]);
     assert_eq!(r.counters().bvh_builds, 1);
 }
 
@@ -456,7 +471,7 @@ fn cli_layout_flag_gives_byte_identical_images() {
     let dir = temp_dir("layout-cli");
     let scene = scenes_dir().join("cornell.ron");
     let mut images = Vec::new();
-    for layout in ["soa", "aos", "soa-simd"] {
+    for layout in ["soa", "aos", "soa-simd", "hybrid"] {
         let out = dir.join(format!("{layout}.png"));
         let status = rondo()
             .args(["render", "--spp", "2", "--width", "20", "--height", "20"])
@@ -470,6 +485,7 @@ fn cli_layout_flag_gives_byte_identical_images() {
     }
     assert_eq!(images[0], images[1]);
     assert_eq!(images[0], images[2]);
+    assert_eq!(images[0], images[3]);
     let bad = rondo()
         .args(["render", "--layout", "soaa", "-o"])
         .arg(dir.join("x.png"))
@@ -508,7 +524,7 @@ fn bench_layout_smoke_run_writes_a_consistent_csv_and_a_chart() {
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     for w in ["kernel", "traverse", "render", "extract"] {
         for k in ["sphere", "triangle"] {
-            for l in ["soa", "aos", "soa-simd"] {
+            for l in ["soa", "aos", "soa-simd", "hybrid"] {
                 let n = rows
                     .iter()
                     .filter(|r| r[workload] == w && r[kind] == k && r[layout] == l)

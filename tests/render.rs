@@ -191,3 +191,42 @@ fn cli_writes_clamped_srgb_png_and_linear_unclamped_exr() {
         }
     }
 }
+
+#[test]
+fn live_preview_and_progressive_passes_end_in_the_batch_image() {
+    // The watcher's plan: a 2×2-block preview, then passes of 1, 2, 4… samples. The preview is
+    // discarded and the passes add samples in order, so the final film equals a batch render.
+    let cornell = scenes_dir().join("cornell.ron");
+    let o = Overrides {
+        width: Some(30),
+        height: Some(20),
+        spp: Some(8),
+        ..Default::default()
+    };
+    let batch = render(&cornell, o, Some(2));
+    let mut live =
+        rondo::Renderer::new(Some(2), rondo::PassPlan::Progressive { first: 1 }).expect("pool");
+    live.set_overrides(o);
+    live.load(&cornell).expect("loads");
+    live.run_once();
+    // The preview: one sample per pixel, equal within each 2×2 block.
+    let preview = live.film().mean();
+    assert_eq!(live.film().samples, 1);
+    for y in (0..20).step_by(2) {
+        for x in (0..30).step_by(2) {
+            let p = preview[y * 30 + x];
+            assert!(
+                [(1, 0), (0, 1), (1, 1)]
+                    .iter()
+                    .all(|(dx, dy)| preview[(y + dy) * 30 + x + dx] == p)
+            );
+        }
+    }
+    live.render_to_completion();
+    assert_eq!(live.film().sum, batch.film().sum);
+    assert_eq!(
+        live.counters().passes,
+        4,
+        "passes of 1, 2, 4 and 8 samples in total"
+    );
+}

@@ -5,10 +5,14 @@
 
 mod common;
 
+use std::sync::Arc;
+
 use common::{render, temp_dir, write_scene};
 use glam::{Affine3A, EulerRot, Quat, Vec2, Vec3};
 use rondo::Overrides;
+use rondo::ecs::components::MeshData;
 use rondo::geometry::aabb::RayQuery;
+use rondo::geometry::instance::MeshBlas;
 use rondo::geometry::packed::{Aos, Geometry, Hit, HitKind, Layout, Primitive, SoaSimd};
 use rondo::geometry::ray::Ray;
 use rondo::geometry::triangle::intersect_triangle;
@@ -106,11 +110,7 @@ fn geometry_of(shapes: &[(Shape, Transform)]) -> Geometry {
 
 /// Owner (shape index) of the primitive a hit refers to.
 fn owner_of<L: Layout>(g: &Geometry<L>, hit: &Hit) -> u32 {
-    match hit.kind {
-        HitKind::Sphere => g.sphere_owner[hit.index as usize],
-        HitKind::Triangle => g.triangle_owner[hit.index as usize],
-        HitKind::Plane => g.planes[hit.index as usize].owner,
-    }
+    g.owner(hit)
 }
 
 /// A ray leaving the hit of `ray` along `dir`, started exactly as the integrator starts bounce
@@ -163,12 +163,35 @@ impl Placement {
 // Self-intersection (2): the kernels, spawning exactly as the integrator does.
 // ---------------------------------------------------------------------------------------------
 
-/// The three kinds of surface a ray can leave.
+/// The kinds of surface a ray can leave.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Kind {
     Sphere,
     Quad,
+    /// The same square as a two-triangle mesh placed by instancing: intersected in object space,
+    /// its hit point and error bound carried to world space by the placement.
+    MeshQuad,
     Plane,
+}
+
+/// The packed geometry of one sweep shape, as the ECS packs it: meshes by instance.
+fn sweep_geometry(kind: Kind, shape: &Shape, t: &Placement) -> Geometry {
+    if kind != Kind::MeshQuad {
+        return geometry_of(&[(shape.clone(), t.transform())]);
+    }
+    let Shape::Quad { a, b, c, d } = *shape else {
+        unreachable!("a mesh quad is built from a quad")
+    };
+    let mesh = MeshData {
+        positions: vec![a, b, c, d],
+        normals: None,
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+    };
+    let instance = Primitive::Instance {
+        blas: Arc::new(MeshBlas::build(&mesh)),
+        world_from_object: t.transform().0,
+    };
+    Geometry::build(&[(0, instance)])
 }
 
 /// Object sizes and distances from the origin of the self-intersection sweep.
@@ -195,7 +218,7 @@ fn sweep_shape(kind: Kind, size: f32, distance: f32, rng: &mut Rng) -> (Shape, P
             center: Vec3::ZERO,
             radius: 1.0,
         },
-        Kind::Quad => Shape::Quad {
+        Kind::Quad | Kind::MeshQuad => Shape::Quad {
             a: Vec3::new(-0.5, -0.5, 0.0),
             b: Vec3::new(0.5, -0.5, 0.0),
             c: Vec3::new(0.5, 0.5, 0.0),
@@ -215,7 +238,7 @@ fn incoming_ray(kind: Kind, t: &Placement, rng: &mut Rng) -> Ray {
     let (center, frame, size) = (t.center, t.rotation, t.size);
     let target = match kind {
         Kind::Sphere => center + 0.9 * size * random_unit(rng),
-        Kind::Quad | Kind::Plane => {
+        Kind::Quad | Kind::MeshQuad | Kind::Plane => {
             let (x, y) = (rng.next_f32() - 0.5, rng.next_f32() - 0.5);
             center + frame * Vec3::new(0.9 * x * size, 0.9 * y * size, 0.0)
         }
@@ -254,8 +277,8 @@ fn self_hits(
             let ok = match (kind, again) {
                 // A flat surface cannot be seen again from either side; neither can a sphere
                 // from outside (it is convex).
-                (Kind::Quad | Kind::Plane, None) => true,
-                (Kind::Quad | Kind::Plane, Some(_)) => false,
+                (Kind::Quad | Kind::MeshQuad | Kind::Plane, None) => true,
+                (Kind::Quad | Kind::MeshQuad | Kind::Plane, Some(_)) => false,
                 (Kind::Sphere, None) => cos >= 0.0 || -2.0 * size * cos < 1e-3 * size,
                 (Kind::Sphere, Some(h)) => {
                     // Only a ray going in may hit, and then on the far side: the chord along
@@ -274,22 +297,22 @@ fn self_hits(
 
 #[test]
 fn spawned_rays_never_reintersect_at_any_scale_or_distance() {
-    // Spheres, quads (two triangles) and planes of size 1e-3 … 1e5 placed up to 1e6 from the
-    // origin. From 120 hits on each, 12 rays leave in uniformly random directions (both sides),
+    // Spheres, quads (two triangles, packed flat and as an instanced mesh) and planes of size
+    // 1e-3 … 1e5 placed up to 1e6 from the origin. From 120 hits on each, 12 rays leave in uniformly random directions (both sides),
     // started exactly as the integrator starts them. Expected: no ray sees the surface it left
     // (a sphere entered is hit on its far side only). The textbook fixed 1e-4 offset from
     // o + t·d is measured on the same rays and must fail where 1e-4 is below the float spacing.
     let mut rng = Rng::new(17, 3);
     let mut naive_total = 0;
     let mut report = String::new();
-    for kind in [Kind::Sphere, Kind::Quad, Kind::Plane] {
+    for kind in [Kind::Sphere, Kind::Quad, Kind::MeshQuad, Kind::Plane] {
         for size in SIZES {
             for distance in DISTANCES {
                 if !representable(size, distance) {
                     continue;
                 }
                 let (shape, t) = sweep_shape(kind, size, distance, &mut rng);
-                let g = geometry_of(&[(shape, t.transform())]);
+                let g = sweep_geometry(kind, &shape, &t);
                 let seed = rng.next_u32();
                 let (tried, ours) =
                     self_hits(&g, kind, &t, &mut Rng::new(seed.into(), 1), our_spawn);
@@ -437,6 +460,37 @@ fn glass_continuations_start_on_the_side_they_leave_to() {
     }
     eprintln!("{report}");
     assert!(naive_total > 0);
+}
+
+#[test]
+fn instanced_triangles_are_hit_wherever_the_same_flat_triangles_are() {
+    // A square placed by a transform of scale 1 … 10⁵, tilted at random: once as two flat
+    // triangles, once as a two-triangle mesh instance. 400 rays from either side aimed at it.
+    // Expected: the instance is hit by exactly the rays that hit the flat triangles, at the same
+    // distance within 10⁻⁵ relative.
+    let mut rng = Rng::new(43, 8);
+    for size in [1.0f32, 1e2, 1e4, 3e4, 1e5] {
+        let t = Placement {
+            center: Vec3::ZERO,
+            rotation: random_rotation(&mut rng),
+            size,
+        };
+        let (shape, _) = sweep_shape(Kind::Quad, size, 0.0, &mut rng);
+        let flat = sweep_geometry(Kind::Quad, &shape, &t);
+        let instanced = sweep_geometry(Kind::MeshQuad, &shape, &t);
+        let mut missed = 0;
+        for _ in 0..400 {
+            let ray = incoming_ray(Kind::Quad, &t, &mut rng);
+            let a = flat.intersect(&ray, f32::INFINITY).map(|h| h.t);
+            let b = instanced.intersect(&ray, f32::INFINITY).map(|h| h.t);
+            match (a, b) {
+                (Some(a), Some(b)) => assert!((a - b).abs() <= 1e-5 * a, "{a} vs {b}"),
+                (None, None) => {}
+                _ => missed += 1,
+            }
+        }
+        assert_eq!(missed, 0, "scale {size}: {missed} of 400 rays disagree");
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1175,9 +1229,102 @@ fn degenerate_input_is_rejected_at_load_time_with_a_located_message() {
     }
 }
 
+#[test]
+fn check_command_lists_warnings_with_status_0_and_refuses_broken_scenes_with_status_1() {
+    // `rondo check` on the stress scene: its two deliberate z-fighting pairs, status 0. On a
+    // clean scene: no warnings, status 0. On a degenerate quad: the located load error, status 1.
+    let run = |scene: &std::path::Path| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_rondo"))
+            .arg("check")
+            .arg(scene)
+            .output()
+            .expect("run rondo");
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let stress = common::scenes_dir().join("stress.ron");
+    let (code, stdout, _) = run(&stress);
+    assert_eq!(code, Some(0), "{stdout}");
+    let warnings: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.starts_with("warning:"))
+        .collect();
+    assert_eq!(warnings.len(), 2, "{stdout}");
+    assert!(
+        warnings[0].contains("\"ground\" and \"case\" overlap in one plane"),
+        "{stdout}"
+    );
+    assert!(
+        warnings[1].contains("\"ground\" and \"diamond\""),
+        "{stdout}"
+    );
+    assert!(stdout.ends_with("stress.ron: 2 warnings\n"), "{stdout}");
+
+    let (code, stdout, _) = run(&common::scenes_dir().join("sphere.ron"));
+    assert_eq!((code, stdout.lines().count()), (Some(0), 1), "{stdout}");
+    assert!(stdout.contains("no warnings"), "{stdout}");
+
+    let dir = temp_dir("check-cli");
+    let bad = write_scene(
+        &dir,
+        "bad.ron",
+        "Scene(\n    camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0)),\n    materials: { \"w\": Diffuse(albedo: Constant((1, 1, 1))) },\n    entities: [ Entity(material: \"w\", shape: Quad(a: (0, 0, 0), b: (1, 0, 0), c: (2, 0, 0), d: (0, 1, 0))) ],\n)",
+    );
+    let (code, stdout, stderr) = run(&bad);
+    assert_eq!(code, Some(1), "{stdout}{stderr}");
+    assert!(
+        stderr.contains("bad.ron:4:") && stderr.contains("quad: zero area"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
 // ---------------------------------------------------------------------------------------------
 // No NaN or infinite sample, ever.
 // ---------------------------------------------------------------------------------------------
+
+#[test]
+fn camera_vectors_of_any_finite_length_give_the_same_image() {
+    // `direction` and `up` only give directions. Tiny (1e-30) and huge (3e38) versions of
+    // (1, 0, 1) and (0, 1, 0) must load and render exactly the image of the plain vectors: no
+    // NaN ray from squaring 3e38 (the render panicked), no refusal of 1e-30 as "zero".
+    let dir = temp_dir("camera-vectors");
+    let scene = |direction: &str, up: &str| {
+        format!(
+            r#"Scene(
+    camera: Camera(position: (0, 1, -5), direction: {direction}, up: {up}, fov: 50),
+    settings: Settings(width: 16, height: 16, spp: 2, background: (0.5, 0.6, 0.7)),
+    materials: {{ "w": Diffuse(albedo: Constant((0.5, 0.5, 0.5))) }},
+    entities: [ Entity(material: "w", shape: Sphere(center: (3, 1, -2), radius: 1.5)) ],
+)"#
+        )
+    };
+    let reference = render(
+        &write_scene(&dir, "plain.ron", &scene("(1, 0, 1)", "(0, 1, 0)")),
+        Overrides::default(),
+        None,
+    );
+    let variants = [
+        ("(1e-30, 0, 1e-30)", "(0, 1, 0)"),
+        ("(3e38, 0, 3e38)", "(0, 1, 0)"),
+        ("(1, 0, 1)", "(0, 3e38, 0)"),
+        ("(1, 0, 1)", "(0, 1e-30, 0)"),
+        ("(3e38, 0, 3e38)", "(0, 1e-30, 0)"),
+    ];
+    for (k, (direction, up)) in variants.into_iter().enumerate() {
+        let path = write_scene(&dir, &format!("v{k}.ron"), &scene(direction, up));
+        let r = render(&path, Overrides::default(), None);
+        assert_eq!(r.stats().nonfinite, 0, "direction {direction}, up {up}");
+        assert_eq!(
+            r.film().sum,
+            reference.film().sum,
+            "direction {direction}, up {up}"
+        );
+    }
+}
 
 #[test]
 fn no_shipped_or_stress_scene_produces_a_nonfinite_sample() {

@@ -26,7 +26,7 @@ if [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
     | sort -V | tail -n 1 || true)"
   if [ -n "$newest" ]; then export DRJIT_LIBLLVM_PATH="$newest"; fi
 fi
-echo "DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-<dr.jit's own search>}"
+echo "DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-(unset: Dr.Jit searches itself)}"
 cargo build --release --quiet
 mkdir -p "$(dirname "$REFERENCE")"
 if [ ! -f "$REFERENCE" ]; then

@@ -17,6 +17,7 @@ fn colour(layout: LayoutKind) -> RGBColor {
         LayoutKind::Soa => RGBColor(31, 119, 180),
         LayoutKind::Aos => RGBColor(214, 39, 40),
         LayoutKind::SoaSimd => RGBColor(44, 160, 44),
+        LayoutKind::Hybrid => RGBColor(148, 103, 189),
     }
 }
 
@@ -106,7 +107,7 @@ pub fn layout_chart(path: &Path, rows: &[Row]) -> Result<(), Box<dyn Error>> {
     root.fill(&WHITE)?;
     let (title, body) = root.split_vertically(50);
     title.titled(
-        "rondo bench layout: SoA vs AoS (and SoA with SIMD lanes), one thread",
+        "rondo bench layout: SoA vs AoS (and SoA with SIMD lanes, and the hybrid), one thread, CPU time",
         ("sans-serif", 24),
     )?;
     let panels = body.split_evenly((WORKLOADS.len(), 2));
@@ -197,7 +198,7 @@ pub fn layout_chart(path: &Path, rows: &[Row]) -> Result<(), Box<dyn Error>> {
                 )
             });
         for kind in KINDS {
-            for layout in [LayoutKind::Soa, LayoutKind::SoaSimd] {
+            for layout in [LayoutKind::Soa, LayoutKind::SoaSimd, LayoutKind::Hybrid] {
                 let s = series(rows, workload, kind, layout, |r| &r.ratios);
                 let points: Vec<(f64, f64)> = s.iter().map(|p| (p.0, p.1)).collect();
                 draw_series(&mut chart, &points, kind, layout)?;

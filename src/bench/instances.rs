@@ -59,8 +59,9 @@ pub fn scene_text(mesh: &str, count: usize) -> String {
     )
 }
 
-/// Loads and renders a scene of `count` placements of the mesh at `mesh_path` in this process.
-pub fn measure(mesh_path: &Path, count: usize) -> Result<InstanceRun, String> {
+/// Loads and renders a scene of `count` placements of the mesh at `mesh_path` in this process,
+/// with meshes instanced (`true`) or copied into the scene BVH (`false`).
+pub fn measure(mesh_path: &Path, count: usize, instancing: bool) -> Result<InstanceRun, String> {
     let dir = std::env::temp_dir().join(format!("rondo-bench-instances-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let mesh =
@@ -71,6 +72,7 @@ pub fn measure(mesh_path: &Path, count: usize) -> Result<InstanceRun, String> {
 
     let mut r = Renderer::new(None, PassPlan::Single).map_err(|e| e.to_string())?;
     r.set_overrides(Overrides::default());
+    r.set_instancing(instancing);
     let start = Instant::now();
     r.load(&scene).map_err(|e| e.to_string())?;
     let load_ms = start.elapsed().as_secs_f64() * 1e3;

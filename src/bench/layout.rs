@@ -1,5 +1,5 @@
-//! `rondo bench layout`: the packed geometry in SoA, AoS and SoA with SIMD lanes, measured on the
-//! same generated scenes.
+//! `rondo bench layout`: the packed geometry in SoA, AoS, SoA with SIMD lanes and the hybrid
+//! (SIMD spheres, AoS triangles), measured on the same generated scenes.
 //!
 //! For each primitive kind (spheres, triangles) and count (10² … 10⁶ by default), a scene is
 //! generated from a fixed seed: primitives scattered uniformly in a cube whose side grows as
@@ -10,15 +10,17 @@
 //!   Unit: primitive tests/s.
 //! - `traverse`: closest-hit BVH traversal of incoherent rays (origins uniform in the cube,
 //!   directions uniform on the sphere), one thread. Unit: rays/s.
-//! - `render`: a whole render through [`Renderer`] (ECS schedule, `render_frame`, path tracing
-//!   with a diffuse material under a white sky, 4 bounces), one thread. Unit: rays/s.
+//! - `render`: a whole render pass (`render_pass`, what `render_frame` runs: camera rays, path
+//!   tracing with a diffuse material under a white sky, 4 rays per path, shading), one
+//!   thread. Unit: rays/s.
 //! - `extract`: ECS components → packed arrays, as `rebuild_geometry` does it (query, sort by
 //!   name, world-space primitives, lay out in BVH order), minus the BVH build, which is the same
 //!   for every layout (its time is reported beside the table). Unit: primitives/s.
 //! - `pack`: the layout-dependent part of `extract` alone: primitives → arrays in BVH order.
 //!
 //! Each point runs the layouts in turn, rotating which goes first, for `reps` rounds; a run lasts
-//! at least ~50 ms (work is repeated to get there). A layout's throughput is the median of its
+//! at least ~50 ms of CPU time (work is repeated to get there). Times are the CPU time of the
+//! process, not wall time: on a shared machine, time spent descheduled would otherwise count. A layout's throughput is the median of its
 //! runs, with min and max as the spread; its ratio to AoS is the median (min, max) of the
 //! per-round ratios, so slow drifts of the machine cancel within a round.
 
@@ -26,20 +28,23 @@ use std::fmt::Write as _;
 use std::hint::black_box;
 use std::ops::Range;
 use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use bevy_ecs::prelude::*;
+use cpu_time::ProcessTime;
 use glam::Vec3;
 
-use crate::app::Renderer;
+use crate::camera::Camera;
 use crate::ecs::components::{EntityName, Shape, Transform};
-use crate::ecs::resources::PassPlan;
+use crate::film::Film;
 use crate::geometry::aabb::RayQuery;
-use crate::geometry::layout::{Aos, Layout, LayoutKind, Soa, SoaSimd};
+use crate::geometry::layout::{Aos, Hybrid, Layout, LayoutKind, Soa, SoaSimd};
 use crate::geometry::packed::{BvhPlan, Geometry, Primitive};
 use crate::geometry::ray::Ray;
-use crate::scene::format::{CameraDesc, SettingsDesc};
-use crate::scene::load::{LoadedEntity, LoadedScene};
+use crate::lights::LightSet;
+use crate::render::{SceneView, render_pass};
+use crate::scene::format::Method;
 use crate::shading::material::Material;
 use crate::shading::rng::Rng;
 use crate::shading::texture::Texture;
@@ -191,6 +196,26 @@ pub fn spread(values: &[f64]) -> (f64, f64, f64) {
     (median, v[0], v[n - 1])
 }
 
+/// Measures the CPU time of this process (all its threads), so that time spent descheduled
+/// while other jobs share the machine does not count; wall time where there is no CPU clock.
+enum Stopwatch {
+    Cpu(ProcessTime),
+    Wall(Instant),
+}
+
+impl Stopwatch {
+    fn start() -> Self {
+        ProcessTime::try_now().map_or_else(|_| Self::Wall(Instant::now()), Self::Cpu)
+    }
+
+    fn elapsed(&self) -> Duration {
+        match self {
+            Self::Cpu(t) => t.try_elapsed().unwrap_or_default(),
+            Self::Wall(t) => t.elapsed(),
+        }
+    }
+}
+
 /// What a point measured besides the rows.
 #[derive(Clone, Copy, Debug)]
 struct Note {
@@ -265,6 +290,7 @@ fn measure_point(options: &Options, kind: Kind, count: usize) -> (Vec<Row>, Note
     let soa: Geometry<Soa> = Geometry::pack_with(&primitives, plan.clone());
     let aos: Geometry<Aos> = soa.relayout();
     let simd: Geometry<SoaSimd> = soa.relayout();
+    let hybrid: Geometry<Hybrid> = soa.relayout();
     let reps = options.reps_at(count);
     let mut rows = Vec::new();
 
@@ -285,11 +311,12 @@ fn measure_point(options: &Options, kind: Kind, count: usize) -> (Vec<Row>, Note
         count,
         reps,
         |layout, passes| {
-            let t = Instant::now();
+            let t = Stopwatch::start();
             match layout {
                 LayoutKind::Soa => leaves.run(&soa, passes),
                 LayoutKind::Aos => leaves.run(&aos, passes),
                 LayoutKind::SoaSimd => leaves.run(&simd, passes),
+                LayoutKind::Hybrid => leaves.run(&hybrid, passes),
             }
             (t.elapsed(), per_pass * passes as f64)
         },
@@ -303,33 +330,35 @@ fn measure_point(options: &Options, kind: Kind, count: usize) -> (Vec<Row>, Note
         count,
         reps,
         |layout, passes| {
-            let t = Instant::now();
+            let t = Stopwatch::start();
             match layout {
                 LayoutKind::Soa => traverse(&soa, &rays, passes),
                 LayoutKind::Aos => traverse(&aos, &rays, passes),
                 LayoutKind::SoaSimd => traverse(&simd, &rays, passes),
+                LayoutKind::Hybrid => traverse(&hybrid, &rays, passes),
             }
             (t.elapsed(), (rays.len() * passes) as f64)
         },
     ));
-    drop((aos, simd));
 
     // render
     if options.runs("render") {
-        let mut bench = RenderBench::new(&shapes, options.render_size);
-        for layout in LayoutKind::ALL {
-            // Builds the BVH, then each layout's copy, outside the timed runs.
-            bench.run(layout, 1);
-        }
+        let bench = RenderBench::new(&soa, shapes.len(), options.render_size);
         rows.extend(interleave(
             options,
             "render",
             kind,
             count,
             reps,
-            |layout, passes| bench.run(layout, passes),
+            |layout, spp| match layout {
+                LayoutKind::Soa => bench.run(&soa, spp),
+                LayoutKind::Aos => bench.run(&aos, spp),
+                LayoutKind::SoaSimd => bench.run(&simd, spp),
+                LayoutKind::Hybrid => bench.run(&hybrid, spp),
+            },
         ));
     }
+    drop((aos, simd, hybrid));
 
     // extract
     let mut world = World::new();
@@ -351,11 +380,12 @@ fn measure_point(options: &Options, kind: Kind, count: usize) -> (Vec<Row>, Note
             let mut total = Duration::ZERO;
             for _ in 0..passes {
                 let plan = plan.clone();
-                let t = Instant::now();
+                let t = Stopwatch::start();
                 match layout {
                     LayoutKind::Soa => drop(black_box(extract::<Soa>(&mut world, plan))),
                     LayoutKind::Aos => drop(black_box(extract::<Aos>(&mut world, plan))),
                     LayoutKind::SoaSimd => drop(black_box(extract::<SoaSimd>(&mut world, plan))),
+                    LayoutKind::Hybrid => drop(black_box(extract::<Hybrid>(&mut world, plan))),
                 }
                 total += t.elapsed();
             }
@@ -374,7 +404,7 @@ fn measure_point(options: &Options, kind: Kind, count: usize) -> (Vec<Row>, Note
             let mut total = Duration::ZERO;
             for _ in 0..passes {
                 let plan = plan.clone();
-                let t = Instant::now();
+                let t = Stopwatch::start();
                 match layout {
                     LayoutKind::Soa => {
                         drop(black_box(Geometry::<Soa>::pack_with(&primitives, plan)))
@@ -384,6 +414,9 @@ fn measure_point(options: &Options, kind: Kind, count: usize) -> (Vec<Row>, Note
                     }
                     LayoutKind::SoaSimd => {
                         drop(black_box(Geometry::<SoaSimd>::pack_with(&primitives, plan)))
+                    }
+                    LayoutKind::Hybrid => {
+                        drop(black_box(Geometry::<Hybrid>::pack_with(&primitives, plan)))
                     }
                 }
                 total += t.elapsed();
@@ -425,7 +458,7 @@ fn interleave(
             .ceil()
             .clamp(1.0, 1e6) as usize
     };
-    let mut runs = [Vec::new(), Vec::new(), Vec::new()];
+    let mut runs = LayoutKind::ALL.map(|_| Vec::new());
     let index = |l: LayoutKind| LayoutKind::ALL.iter().position(|&k| k == l).unwrap_or(0);
     for round in 0..reps {
         for j in 0..LayoutKind::ALL.len() {
@@ -577,70 +610,66 @@ fn traverse<L: Layout>(g: &Geometry<L>, rays: &[Ray], passes: usize) {
     black_box(hits);
 }
 
-/// A generated scene rendered through the whole application, one thread.
+/// A generated scene rendered by `render_pass` (what `render_frame` calls for each pass), on a
+/// one-thread pool: a diffuse material under a white sky, 4 rays per path.
 struct RenderBench {
-    renderer: Renderer,
-    scene: LoadedScene,
+    pool: rayon::ThreadPool,
+    camera: Camera,
+    materials: Vec<Material>,
+    owner_material: Vec<u32>,
+    lights: LightSet,
+    size: u32,
 }
 
 impl RenderBench {
-    fn new(shapes: &[Shape], size: u32) -> Self {
-        let side = cube_side(shapes.len());
-        let material = "white".to_string();
-        let entities = shapes
-            .iter()
-            .enumerate()
-            .map(|(i, s)| LoadedEntity {
-                name: format!("e{i:08}"),
-                shape: s.clone(),
-                transform: Transform::default(),
-                material: material.clone(),
-            })
-            .collect();
-        let scene = LoadedScene {
-            path: PathBuf::from("generated.ron"),
-            camera: CameraDesc {
-                position: Vec3::new(0.3, 0.4, -1.6) * side,
-                direction: Vec3::new(-0.3, -0.4, 1.6),
-                up: Vec3::Y,
-                fov: 40.0,
-            },
-            settings: SettingsDesc {
-                width: size,
-                height: size,
-                spp: 1,
-                max_depth: 4,
-                background: Vec3::ONE,
-                seed: 1,
-                ..SettingsDesc::default()
-            },
-            materials: [(
-                material,
-                Material::Diffuse {
-                    albedo: Texture::Constant(Vec3::splat(0.7)),
-                },
-            )]
-            .into(),
-            entities,
-            dependencies: Vec::new(),
-        };
-        let renderer = match Renderer::new(Some(1), PassPlan::Single) {
-            Ok(r) => r,
+    fn new(g: &Geometry<Soa>, owners: usize, size: u32) -> Self {
+        let side = cube_side(owners);
+        let materials = vec![Material::Diffuse {
+            albedo: Texture::Constant(Vec3::splat(0.7)),
+        }];
+        let owner_material = vec![0; owners];
+        let lights = LightSet::build(g, &materials, &owner_material);
+        let pool = match rayon::ThreadPoolBuilder::new().num_threads(1).build() {
+            Ok(p) => p,
             Err(e) => panic!("one-thread pool: {e}"),
         };
-        Self { renderer, scene }
+        Self {
+            pool,
+            camera: Camera::new(
+                Vec3::new(0.3, 0.4, -1.6) * side,
+                Vec3::new(-0.3, -0.4, 1.6),
+                Vec3::Y,
+                40.0,
+            ),
+            materials,
+            owner_material,
+            lights,
+            size,
+        }
     }
 
-    /// Renders `passes` samples per pixel in `layout`: returns the render time (the pass only,
-    /// not the scene diff before it) and the rays traced.
-    fn run(&mut self, layout: LayoutKind, passes: usize) -> (Duration, f64) {
-        let r = &mut self.renderer;
-        r.set_layout(layout);
-        let mut scene = self.scene.clone();
-        scene.settings.spp = passes as u32;
-        r.submit(scene);
-        r.render_to_completion();
-        (r.timings().render, r.stats().rays as f64)
+    /// Renders `spp` samples per pixel of the scene in `geometry`: returns the time and the rays
+    /// traced.
+    fn run<L: Layout>(&self, geometry: &Geometry<L>, spp: usize) -> (Duration, f64) {
+        let view = SceneView {
+            geometry,
+            materials: &self.materials,
+            owner_material: &self.owner_material,
+            lights: &self.lights,
+            camera: &self.camera,
+            background: Vec3::ONE,
+            max_depth: 4,
+            method: Method::default(),
+            roulette: true,
+        };
+        let mut film = Film::new(self.size, self.size);
+        let cancel = AtomicBool::new(false);
+        let t = Stopwatch::start();
+        let stats = self
+            .pool
+            .install(|| render_pass(&view, &mut film, 1, 0..spp as u32, &cancel, &|_| {}));
+        let time = t.elapsed();
+        (time, stats.map_or(0.0, |s| s.rays as f64))
     }
 }
 
@@ -732,7 +761,7 @@ fn markdown(options: &Options, rows: &[Row], notes: &[Note], elapsed: Duration) 
     md.push('\n');
     for (workload, _) in WORKLOADS {
         for kind in [Kind::Sphere, Kind::Triangle] {
-            for layout in [LayoutKind::Soa, LayoutKind::SoaSimd] {
+            for layout in [LayoutKind::Soa, LayoutKind::SoaSimd, LayoutKind::Hybrid] {
                 let _ = write!(
                     md,
                     "| {workload} | {} | {}/aos |",

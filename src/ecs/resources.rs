@@ -11,6 +11,7 @@ use bevy_ecs::entity::Entity;
 use bevy_ecs::resource::Resource;
 
 use crate::film::Film;
+use crate::geometry::instance::BlasCache;
 use crate::geometry::packed::{Geometry, LayoutKind};
 use crate::lights::LightSet;
 use crate::render::TraceStats;
@@ -39,12 +40,28 @@ pub struct MaterialTable(pub BTreeMap<String, Material>);
 pub struct SceneVersion(pub u64);
 
 /// Packed geometry with its BVHs, rebuilt only when shapes or transforms change.
-#[derive(Resource, Default)]
+#[derive(Resource)]
 pub struct PackedGeometry {
     /// Primitives and BVHs.
     pub geometry: Geometry,
     /// The entity behind each owner slot of the geometry.
     pub owners: Vec<Entity>,
+    /// Mesh BVHs kept across rebuilds (an unchanged mesh is not rebuilt).
+    pub blas_cache: BlasCache,
+    /// Place meshes as instances of one shared BVH (the default) instead of copying their
+    /// triangles into the scene BVH.
+    pub instancing: bool,
+}
+
+impl Default for PackedGeometry {
+    fn default() -> Self {
+        Self {
+            geometry: Geometry::default(),
+            owners: Vec::new(),
+            blas_cache: BlasCache::default(),
+            instancing: true,
+        }
+    }
 }
 
 /// Material table in the order the renderer indexes it, the material of each owner slot, and
@@ -85,6 +102,8 @@ pub struct Counters {
     pub material_syncs: u64,
     /// Render passes completed so far.
     pub passes: u64,
+    /// Mesh (bottom-level) BVH builds so far.
+    pub mesh_bvh_builds: u64,
 }
 
 /// Durations of the last runs of each step.
@@ -121,8 +140,23 @@ pub struct RenderControl {
     pub progress: Option<indicatif::ProgressBar>,
     /// Russian roulette on (the default; off only to test that it is unbiased).
     pub roulette: bool,
+    /// Progressive renders start with a preview of one sample per `preview_block`² pixels
+    /// (1 = no preview).
+    pub preview_block: u32,
     /// Layout of the geometry the render reads; images are bit-identical in every layout.
     pub layout: LayoutKind,
+}
+
+/// Where the live-preview image of the current scene stands.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Preview {
+    /// No preview for this render (batch renders, or already replaced by real passes).
+    #[default]
+    Done,
+    /// A reduced-resolution preview is to be rendered first.
+    Due,
+    /// The film holds the preview; it is cleared before the first real pass.
+    InFilm,
 }
 
 /// The accumulating image and the statistics of the current render.
@@ -134,6 +168,22 @@ pub struct Accumulation {
     pub stats: TraceStats,
     /// Whether `film` holds every sample the settings ask for.
     pub complete: bool,
+    /// Live-preview state.
+    pub preview: Preview,
+}
+
+impl Accumulation {
+    /// Clears the film for a `width` × `height` image, reusing its memory when the size holds.
+    pub fn reset(&mut self, width: u32, height: u32) {
+        if self.film.width == width && self.film.height == height {
+            self.film.sum.fill(glam::DVec3::ZERO);
+            self.film.samples = 0;
+        } else {
+            self.film = Film::new(width, height);
+        }
+        self.stats = TraceStats::default();
+        self.complete = false;
+    }
 }
 
 /// Where and whether [`crate::systems::write_image`] writes the film.

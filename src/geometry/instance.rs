@@ -14,12 +14,25 @@ use super::ray::{Ray, gamma};
 use super::triangle::intersect_triangle;
 use crate::ecs::components::MeshData;
 
-/// A mesh's triangles in object space, in BVH order, with their BVH.
+/// A mesh's triangles in object space, in BVH order, with their BVH. Compared by identity: two
+/// placements are of the same mesh when they share one `MeshBlas`.
 #[derive(Clone, Default)]
 pub struct MeshBlas {
     triangles: Vec<[Vec3; 3]>,
     bvh: Bvh,
     bounds: Bounds,
+}
+
+impl PartialEq for MeshBlas {
+    fn eq(&self, other: &Self) -> bool {
+        std::ptr::eq(self, other)
+    }
+}
+
+impl std::fmt::Debug for MeshBlas {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "MeshBlas({} triangles)", self.triangles.len())
+    }
 }
 
 impl MeshBlas {
@@ -190,15 +203,19 @@ impl InstanceSet {
         &self.instances[i]
     }
 
-    /// The world ray in an instance's object space. The direction is not renormalised, so `t`
-    /// means the same distance in both spaces.
+    /// The world ray in an instance's object space, with a unit direction (the triangle test's
+    /// error bound assumes one), and the factor `s` that turns world distances into object
+    /// distances: `t_object = s · t_world`.
     #[inline]
-    fn object_query(inst: &Instance, ray: &Ray) -> RayQuery {
+    fn object_query(inst: &Instance, ray: &Ray) -> (RayQuery, f32) {
         let m = &inst.object_from_world;
-        RayQuery::new(Ray {
+        let d = m.transform_vector3(ray.direction);
+        let s = d.length();
+        let q = RayQuery::new(Ray {
             origin: m.transform_point3(ray.origin),
-            direction: m.transform_vector3(ray.direction),
-        })
+            direction: d / s,
+        });
+        (q, s)
     }
 
     /// The closest instanced triangle hit before `t_max`.
@@ -213,19 +230,24 @@ impl InstanceSet {
         self.tlas.traverse(&world, &mut t_best, |range, t_best| {
             for i in range {
                 let inst = &self.instances[i];
-                let q = Self::object_query(inst, ray);
-                inst.blas.bvh.traverse(&q, t_best, |tris, t_best| {
+                let (q, s) = Self::object_query(inst, ray);
+                let mut t_object = *t_best * s;
+                inst.blas.bvh.traverse(&q, &mut t_object, |tris, t_object| {
                     for k in tris {
                         let [a, b, c] = inst.blas.triangles[k];
-                        if let Some(h) = intersect_triangle(&q, a, b, c, *t_best) {
-                            *t_best = h.t;
-                            best = Some(InstanceHit {
-                                t: h.t,
-                                instance: i as u32,
-                                triangle: k as u32,
-                                b1: h.b1,
-                                b2: h.b2,
-                            });
+                        if let Some(h) = intersect_triangle(&q, a, b, c, *t_object) {
+                            *t_object = h.t;
+                            let t = h.t / s;
+                            if t < *t_best {
+                                *t_best = t;
+                                best = Some(InstanceHit {
+                                    t,
+                                    instance: i as u32,
+                                    triangle: k as u32,
+                                    b1: h.b1,
+                                    b2: h.b2,
+                                });
+                            }
                         }
                     }
                     true
@@ -248,11 +270,12 @@ impl InstanceSet {
         self.tlas.traverse(&world, &mut t, |range, t| {
             for i in range {
                 let inst = &self.instances[i];
-                let q = Self::object_query(inst, ray);
-                inst.blas.bvh.traverse(&q, t, |tris, t| {
+                let (q, s) = Self::object_query(inst, ray);
+                let mut t_object = *t * s;
+                inst.blas.bvh.traverse(&q, &mut t_object, |tris, t_object| {
                     blocked = tris.into_iter().any(|k| {
                         let [a, b, c] = inst.blas.triangles[k];
-                        intersect_triangle(&q, a, b, c, *t).is_some()
+                        intersect_triangle(&q, a, b, c, *t_object).is_some()
                     });
                     !blocked
                 });
@@ -265,30 +288,40 @@ impl InstanceSet {
         blocked
     }
 
-    /// World-space point, unit geometric normal and absolute point error of a hit.
-    ///
-    /// The point is interpolated in object space and transformed; the normal is the object
-    /// normal transformed by the inverse transpose; the error bound adds the transform's rounding
-    /// to the interpolation's (pbrt-v4, Section 6.8.6).
+    /// World-space point, unit geometric normal and owner of a hit on `triangle` of instance
+    /// `instance` with barycentrics `(b1, b2)`. The point is interpolated in object space and
+    /// transformed; the normal is the object normal transformed by the inverse transpose.
     #[inline]
-    pub fn surface(&self, hit: &InstanceHit) -> (Vec3, Vec3, Vec3, u32) {
-        let inst = &self.instances[hit.instance as usize];
-        let [a, b, c] = inst.blas.triangles[hit.triangle as usize];
-        let b0 = 1.0 - hit.b1 - hit.b2;
-        let p_obj = b0 * a + hit.b1 * b + hit.b2 * c;
-        let err_obj = gamma(7.0) * ((b0 * a).abs() + (hit.b1 * b).abs() + (hit.b2 * c).abs());
+    pub fn surface(&self, instance: u32, triangle: u32, b1: f32, b2: f32) -> (Vec3, Vec3, u32) {
+        let inst = &self.instances[instance as usize];
+        let [a, b, c] = inst.blas.triangles[triangle as usize];
+        let p_obj = (1.0 - b1 - b2) * a + b1 * b + b2 * c;
+        let n_obj = glam::Vec3A::from((b - a).cross(c - a));
+        let n = (inst.object_from_world.matrix3.transpose() * n_obj).normalize();
+        (
+            inst.world_from_object.transform_point3(p_obj),
+            n.into(),
+            inst.owner,
+        )
+    }
+
+    /// Absolute error bound of the world-space point [`InstanceSet::surface`] returns: the
+    /// interpolation's bound carried through the transform, plus the transform's own rounding
+    /// (pbrt-v4, Section 6.8.6).
+    #[inline]
+    pub fn point_error(&self, instance: u32, triangle: u32, b1: f32, b2: f32) -> Vec3 {
+        let inst = &self.instances[instance as usize];
+        let [a, b, c] = inst.blas.triangles[triangle as usize];
+        let b0 = 1.0 - b1 - b2;
+        let p_obj = b0 * a + b1 * b + b2 * c;
+        let err_obj = gamma(7.0) * ((b0 * a).abs() + (b1 * b).abs() + (b2 * c).abs());
         let m = &inst.world_from_object;
-        let p = m.transform_point3(p_obj);
         let abs_m = glam::Mat3::from_cols(
             m.matrix3.x_axis.abs().into(),
             m.matrix3.y_axis.abs().into(),
             m.matrix3.z_axis.abs().into(),
         );
-        let err = abs_m * (err_obj + gamma(3.0) * p_obj.abs())
-            + gamma(3.0) * Vec3::from(m.translation).abs();
-        let n_obj = (b - a).cross(c - a);
-        let n = (inst.object_from_world.matrix3.transpose() * glam::Vec3A::from(n_obj)).normalize();
-        (p, n.into(), err, inst.owner)
+        abs_m * (err_obj + gamma(3.0) * p_obj.abs()) + gamma(3.0) * Vec3::from(m.translation).abs()
     }
 }
 
@@ -378,10 +411,14 @@ mod tests {
                 (Some((t, owner)), Some(h)) => {
                     hits += 1;
                     assert!((t - h.t).abs() <= 1e-4 * t, "{t} vs {}", h.t);
-                    let (p, _, err, o2) = set.surface(&h);
+                    let (p, _, o2) = set.surface(h.instance, h.triangle, h.b1, h.b2);
                     assert_eq!(owner, o2);
                     assert!((p - ray.at(t)).length() < 1e-3);
-                    assert!(err.max_element() > 0.0);
+                    assert!(
+                        set.point_error(h.instance, h.triangle, h.b1, h.b2)
+                            .max_element()
+                            > 0.0
+                    );
                     assert!(set.occluded(&ray, f32::INFINITY));
                 }
                 // A ray grazing an edge may round differently in object space; allow a few.

@@ -6,7 +6,8 @@
 //! |--------------|--------------------------------|-----------------------------------|-------------|
 //! | [`Soa`]      | [`SphereSoa`]: `cx cy cz r`    | [`TriangleSoa`]: 9 × `Vec<f32>`   | scalar      |
 //! | [`Aos`]      | [`SphereAos`]: `Vec<Sphere>`   | [`TriangleAos`]: `Vec<Triangle>`  | scalar      |
-//! | [`SoaSimd`]  | [`SphereSoa`]                  | [`TriangleSoa`]                   | 8 lanes     |
+//! | [`SoaSimd`]  | [`SphereSoa`]                  | [`TriangleSoa`]                   | 4 lanes     |
+//! | [`Hybrid`]   | [`SphereSoa`]                  | [`TriangleAos`]                   | 4 lanes / scalar |
 //!
 //! Every layout stores the same `f32` values in the same slots (BVH order), and every kernel
 //! performs the same IEEE operations in the same order as the scalar reference kernels
@@ -36,8 +37,10 @@ use super::simd;
 use super::sphere::intersect_sphere;
 use super::triangle::{TriangleHit, intersect_triangle};
 
-/// The layout `Geometry` uses when none is named, and `render` uses without `--layout`.
-pub type DefaultLayout = Soa;
+/// The layout `Geometry` uses when none is named, and `render` uses without `--layout`: the one
+/// that rendered fastest for each primitive kind in `rondo bench layout` (BENCHMARKS.md,
+/// "SoA vs AoS"). [`LayoutKind::default`] must name the same layout.
+pub type DefaultLayout = Hybrid;
 
 /// Primitives stored one array per field (structure of arrays), tested one at a time.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -52,21 +55,36 @@ pub struct Aos;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SoaSimd;
 
+/// Spheres as in [`SoaSimd`] (field arrays, tested 4 at a time), triangles as in [`Aos`]
+/// (structs, tested one at a time): for each kind the layout that renders it fastest in
+/// `rondo bench layout`. A triangle is 9 floats, so its nine SoA arrays cost about nine cache
+/// lines per leaf visit where 36-byte structs cost about three; a sphere is 4 floats, and there
+/// the lanes win.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Hybrid;
+
 /// A layout chosen at run time: what `--layout` parses into. Matched once per render pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum LayoutKind {
     /// [`Soa`].
-    #[default]
     Soa,
     /// [`Aos`].
     Aos,
     /// [`SoaSimd`].
     SoaSimd,
+    /// [`Hybrid`], the default.
+    #[default]
+    Hybrid,
 }
 
 impl LayoutKind {
     /// Every layout, in the order reports list them.
-    pub const ALL: [LayoutKind; 3] = [LayoutKind::Soa, LayoutKind::Aos, LayoutKind::SoaSimd];
+    pub const ALL: [LayoutKind; 4] = [
+        LayoutKind::Soa,
+        LayoutKind::Aos,
+        LayoutKind::SoaSimd,
+        LayoutKind::Hybrid,
+    ];
 
     /// The name `--layout` accepts and reports print.
     pub const fn name(self) -> &'static str {
@@ -74,6 +92,7 @@ impl LayoutKind {
             LayoutKind::Soa => "soa",
             LayoutKind::Aos => "aos",
             LayoutKind::SoaSimd => "soa-simd",
+            LayoutKind::Hybrid => "hybrid",
         }
     }
 }
@@ -91,7 +110,7 @@ impl FromStr for LayoutKind {
         Self::ALL
             .into_iter()
             .find(|k| k.name() == s)
-            .ok_or_else(|| format!("unknown layout {s:?} (expected soa, aos or soa-simd)"))
+            .ok_or_else(|| format!("unknown layout {s:?} (expected soa, aos, soa-simd or hybrid)"))
     }
 }
 
@@ -278,6 +297,27 @@ impl Layout for SoaSimd {
         t_max: f32,
     ) -> bool {
         simd::any_triangle(triangles, q, slots, t_max)
+    }
+}
+
+impl Layout for Hybrid {
+    type Spheres = SphereSoa;
+    type Triangles = TriangleAos;
+    const KIND: LayoutKind = LayoutKind::Hybrid;
+
+    #[inline(always)]
+    fn closest_sphere(
+        spheres: &SphereSoa,
+        ray: &Ray,
+        slots: Range<usize>,
+        t_max: &mut f32,
+    ) -> Option<usize> {
+        simd::closest_sphere(spheres, ray, slots, t_max)
+    }
+
+    #[inline(always)]
+    fn any_sphere(spheres: &SphereSoa, ray: &Ray, slots: Range<usize>, t_max: f32) -> bool {
+        simd::any_sphere(spheres, ray, slots, t_max)
     }
 }
 
@@ -537,6 +577,11 @@ impl TriangleStore for TriangleAos {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_default_layout_type_and_kind_agree() {
+        assert_eq!(DefaultLayout::KIND, LayoutKind::default());
+    }
 
     #[test]
     fn layout_names_round_trip() {

@@ -8,12 +8,15 @@
 
 use std::any::Any;
 
-use glam::{Mat3, Vec2, Vec3};
+use std::sync::Arc;
+
+use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use super::aabb::RayQuery;
 use super::bvh::Bvh;
+use super::instance::{InstanceSet, MeshBlas};
 pub use super::layout::{
-    Aos, DefaultLayout, Layout, LayoutKind, Soa, SoaSimd, Sphere, SphereAos, SphereSoa,
+    Aos, DefaultLayout, Hybrid, Layout, LayoutKind, Soa, SoaSimd, Sphere, SphereAos, SphereSoa,
     SphereStore, Triangle, TriangleAos, TriangleSoa, TriangleStore,
 };
 use super::plane::{intersect_plane, plane_uv};
@@ -47,6 +50,13 @@ pub enum Primitive {
         /// Unit normal.
         normal: Vec3,
     },
+    /// A placement of a mesh: its shared bottom-level BVH and `world_from_object`.
+    Instance {
+        /// The mesh's BVH in object space, shared by all its placements.
+        blas: Arc<MeshBlas>,
+        /// Object to world.
+        world_from_object: Affine3A,
+    },
 }
 
 /// Which kind of primitive a [`Hit`] refers to.
@@ -58,6 +68,11 @@ pub enum HitKind {
     Triangle,
     /// An index into the planes.
     Plane,
+    /// An index into the instances, and the triangle within the instance's mesh.
+    Instance {
+        /// Triangle slot in the mesh's BVH order.
+        triangle: u32,
+    },
 }
 
 /// The closest intersection found along a ray.
@@ -126,7 +141,7 @@ impl BvhPlan {
                 Primitive::Triangle { p, .. } => {
                     triangles.push((p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2])));
                 }
-                Primitive::Plane { .. } => {}
+                Primitive::Plane { .. } | Primitive::Instance { .. } => {}
             }
         }
         let (sphere_bvh, sphere_order) = Bvh::build(&spheres);
@@ -167,6 +182,8 @@ pub struct Geometry<L: Layout = DefaultLayout> {
     pub triangle_bvh: Bvh,
     /// Infinite planes.
     pub planes: Vec<PlaneRecord>,
+    /// Mesh placements with their top-level BVH.
+    pub instances: InstanceSet,
 }
 
 impl Geometry {
@@ -190,8 +207,15 @@ impl<L: Layout> Geometry<L> {
         let mut spheres = Vec::with_capacity(plan.sphere_order.len());
         let mut triangles = Vec::with_capacity(plan.triangle_order.len());
         let mut planes = Vec::new();
+        let mut placements = Vec::new();
         for (owner, prim) in primitives {
             match prim {
+                Primitive::Instance {
+                    blas,
+                    world_from_object,
+                } => {
+                    placements.push((*owner, blas.clone(), *world_from_object));
+                }
                 Primitive::Sphere { .. } => spheres.push((*owner, prim)),
                 Primitive::Triangle { .. } => triangles.push((*owner, prim)),
                 &Primitive::Plane { point, normal } => {
@@ -216,6 +240,7 @@ impl<L: Layout> Geometry<L> {
             sphere_bvh: plan.sphere_bvh,
             triangle_bvh: plan.triangle_bvh,
             planes,
+            instances: InstanceSet::build(placements),
             ..Default::default()
         };
         g.spheres.reserve(spheres.len());
@@ -272,12 +297,28 @@ impl<L: Layout> Geometry<L> {
             triangle_uv: self.triangle_uv.clone(),
             triangle_bvh: self.triangle_bvh.clone(),
             planes: self.planes.clone(),
+            instances: self.instances.clone(),
         }
     }
 
     /// Number of primitives of every kind.
     pub fn primitive_count(&self) -> usize {
-        self.sphere_owner.len() + self.triangle_owner.len() + self.planes.len()
+        self.sphere_owner.len()
+            + self.triangle_owner.len()
+            + self.planes.len()
+            + self.instances.len()
+    }
+
+    /// Owner slot (scene entity) of the primitive `hit` refers to.
+    #[inline]
+    pub fn owner(&self, hit: &Hit) -> u32 {
+        let i = hit.index as usize;
+        match hit.kind {
+            HitKind::Sphere => self.sphere_owner[i],
+            HitKind::Triangle => self.triangle_owner[i],
+            HitKind::Plane => self.planes[i].owner,
+            HitKind::Instance { .. } => self.instances.get(i).owner,
+        }
     }
 
     /// Centre and radius of the sphere in `slot`.
@@ -339,6 +380,17 @@ impl<L: Layout> Geometry<L> {
                 });
             }
         }
+        if let Some(h) = self.instances.intersect(ray, t_best) {
+            best = Some(Hit {
+                t: h.t,
+                kind: HitKind::Instance {
+                    triangle: h.triangle,
+                },
+                index: h.instance,
+                b1: h.b1,
+                b2: h.b2,
+            });
+        }
         best
     }
 
@@ -364,6 +416,7 @@ impl<L: Layout> Geometry<L> {
                 .planes
                 .iter()
                 .any(|pl| intersect_plane(ray, pl.point, pl.normal, t_max).is_some())
+            || self.instances.occluded(ray, t_max)
     }
 
     /// The closest hit by testing every primitive with the scalar reference kernels, without
@@ -410,6 +463,17 @@ impl<L: Layout> Geometry<L> {
                 });
             }
         }
+        if let Some(h) = self.instances.intersect(ray, t_best) {
+            best = Some(Hit {
+                t: h.t,
+                kind: HitKind::Instance {
+                    triangle: h.triangle,
+                },
+                index: h.instance,
+                b1: h.b1,
+                b2: h.b2,
+            });
+        }
         best
     }
 
@@ -420,8 +484,9 @@ impl<L: Layout> Geometry<L> {
         match hit.kind {
             HitKind::Sphere => {
                 let (c, r) = self.spheres.get(i);
-                // Re-project onto the sphere: removes most of the error of o + t·d.
-                let n = (ray.at(hit.t) - c).normalize();
+                // (o − c) + t·d keeps the digits o + t·d − c would cancel far from the origin;
+                // the point is then re-projected onto the sphere.
+                let n = ((ray.origin - c) + hit.t * ray.direction).normalize();
                 let uv = sphere_uv(self.sphere_frame[i].transpose() * n);
                 Surface {
                     p: c + r * n,
@@ -452,6 +517,15 @@ impl<L: Layout> Geometry<L> {
                     owner: pl.owner,
                 }
             }
+            HitKind::Instance { triangle } => {
+                let (p, n, owner) = self.instances.surface(hit.index, triangle, hit.b1, hit.b2);
+                Surface {
+                    p,
+                    n,
+                    uv: Vec2::ZERO,
+                    owner,
+                }
+            }
         }
     }
 }
@@ -466,6 +540,7 @@ pub struct LayoutCache {
     soa: Option<Geometry<Soa>>,
     aos: Option<Geometry<Aos>>,
     soa_simd: Option<Geometry<SoaSimd>>,
+    hybrid: Option<Geometry<Hybrid>>,
 }
 
 /// Layouts that have a slot in [`LayoutCache`].
@@ -489,6 +564,12 @@ impl Cached for Aos {
 impl Cached for SoaSimd {
     fn slot(cache: &mut LayoutCache) -> &mut Option<Geometry<Self>> {
         &mut cache.soa_simd
+    }
+}
+
+impl Cached for Hybrid {
+    fn slot(cache: &mut LayoutCache) -> &mut Option<Geometry<Self>> {
+        &mut cache.hybrid
     }
 }
 

@@ -18,7 +18,7 @@ use std::fmt;
 use glam::{Vec2, Vec3};
 
 use crate::ecs::components::Shape;
-use crate::geometry::packed::{Geometry, HitKind, Primitive};
+use crate::geometry::packed::{Geometry, Primitive};
 use crate::geometry::ray::{Ray, gamma, spawn_origin};
 use crate::shading::material::Material;
 use crate::shading::rng::Rng;
@@ -182,7 +182,7 @@ fn coplanar_overlaps(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut V
                         vertices: None,
                     });
                 }
-                Primitive::Sphere { .. } => {}
+                Primitive::Sphere { .. } | Primitive::Instance { .. } => {}
             }
         }
     }
@@ -274,11 +274,6 @@ fn lights_facing_away(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut 
         .flat_map(|(i, p)| p.iter().map(move |p| (i as u32, p.clone())))
         .collect();
     let geometry = Geometry::build(&prims);
-    let owner = |kind: HitKind, index: u32| match kind {
-        HitKind::Sphere => geometry.sphere_owner[index as usize],
-        HitKind::Triangle => geometry.triangle_owner[index as usize],
-        HitKind::Plane => geometry.planes[index as usize].owner,
-    };
     let mut rng = Rng::new(0x5eed, 7);
     for (i, e) in scene.entities.iter().enumerate() {
         if !one_sided(&e.material) {
@@ -301,6 +296,8 @@ fn lights_facing_away(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut 
                     }
                 }
                 Primitive::Plane { point, normal } => points.push((point, normal)),
+                // `world_primitives` flattens meshes, so no instance reaches this check.
+                Primitive::Instance { .. } => {}
             }
         }
         let sees_something = points.iter().any(|&(p, n)| {
@@ -314,7 +311,7 @@ fn lights_facing_away(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut 
                 let ray = Ray::new(origin, frame.to_world(local).normalize());
                 geometry
                     .intersect(&ray, f32::INFINITY)
-                    .is_some_and(|h| owner(h.kind, h.index) as usize != i)
+                    .is_some_and(|h| geometry.owner(&h) as usize != i)
             })
         });
         if !sees_something {
@@ -393,6 +390,7 @@ fn outside_view(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut Vec<Wa
                     points.extend([center - Vec3::splat(radius), center + Vec3::splat(radius)]);
                 }
                 Primitive::Plane { .. } => infinite = true,
+                Primitive::Instance { .. } => {}
             }
         }
         if infinite || points.is_empty() {

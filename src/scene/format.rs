@@ -137,7 +137,15 @@ impl TryFrom<RawCamera> for CameraDesc {
             }
             (None, None) => return Err("camera: `look_at` or `direction` is required".into()),
         };
-        if direction.length_squared() == 0.0 || !direction.length_squared().is_normal() {
+        // Only the directions of `direction` and `up` matter. Scaling each by its largest
+        // component makes any non-zero length safe to square: `up: (3e38, 0, -3e38)` made the
+        // camera's right vector ∞ · 0 = NaN, and a tiny direction's square underflowed to 0.
+        let unit_max = |v: Vec3| {
+            let m = v.abs().max_element();
+            if m > 0.0 { v / m } else { v }
+        };
+        let direction = unit_max(direction);
+        if direction == Vec3::ZERO || !direction.is_finite() {
             return Err("camera: the view direction is zero (look_at equals position?)".into());
         }
         if raw.position.0.abs().max_element() > MAX_COORDINATE {
@@ -146,7 +154,7 @@ impl TryFrom<RawCamera> for CameraDesc {
                 raw.position.0
             ));
         }
-        let up = raw.up.0;
+        let up = unit_max(raw.up.0);
         if direction.normalize().cross(up).length_squared() < 1e-12 {
             return Err("camera: `up` is zero or parallel to the view direction".into());
         }

@@ -35,18 +35,39 @@ pub fn rebuild_geometry(
     let mut sorted: Vec<_> = entities.iter().collect();
     sorted.sort_by_key(|e| *e.1);
     let mut primitives = Vec::new();
+    let mut meshes = Vec::new();
+    let packed = &mut *packed;
     for (slot, (_, _, shape, transform)) in sorted.iter().enumerate() {
-        for p in world_primitives(shape, transform) {
-            primitives.push((slot as u32, p));
+        match shape {
+            // A mesh is placed by reference to its shared BVH, never copied.
+            Shape::Mesh(mesh) if packed.instancing => {
+                meshes.push(mesh.data.clone());
+                let blas = packed.blas_cache.get(&mesh.data);
+                primitives.push((
+                    slot as u32,
+                    Primitive::Instance {
+                        blas,
+                        world_from_object: transform.0,
+                    },
+                ));
+            }
+            _ => primitives.extend(
+                world_primitives(shape, transform)
+                    .into_iter()
+                    .map(|p| (slot as u32, p)),
+            ),
         }
     }
+    packed.blas_cache.retain(&meshes);
     packed.geometry = Geometry::build(&primitives);
     packed.owners = sorted.iter().map(|e| e.0).collect();
+    counters.mesh_bvh_builds = packed.blas_cache.builds();
     counters.bvh_builds += 1;
     timings.bvh = start.elapsed();
 }
 
-/// The world-space primitives of `shape` placed by `transform`.
+/// The world-space primitives of `shape` placed by `transform`; a mesh becomes its triangles
+/// (the flattened form; the rebuild system instances meshes instead).
 ///
 /// Triangles are transformed vertex by vertex and their normals recomputed from the result, so
 /// normals are never transformed as points. A transform that mirrors (negative determinant)

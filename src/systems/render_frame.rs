@@ -7,12 +7,11 @@ use bevy_ecs::prelude::*;
 
 use crate::camera::Camera;
 use crate::ecs::resources::{
-    Accumulation, ActiveCamera, Counters, OwnerMaterials, PackedGeometry, PassPlan, RenderControl,
-    RenderSettings, SceneVersion, Timings,
+    Accumulation, ActiveCamera, Counters, OwnerMaterials, PackedGeometry, PassPlan, Preview,
+    RenderControl, RenderSettings, SceneVersion, Timings,
 };
-use crate::film::Film;
-use crate::geometry::packed::{Aos, LayoutCache, LayoutKind, Soa, SoaSimd};
-use crate::render::{SceneView, TraceStats, render_pass};
+use crate::geometry::packed::{Aos, Hybrid, LayoutCache, LayoutKind, Soa, SoaSimd};
+use crate::render::{SceneView, render_pass, render_preview};
 
 /// Renders one pass. A new scene version resets the film first. The samples of the pass follow
 /// the [`PassPlan`]; a cancelled pass leaves the film incomplete and is redone on the next run.
@@ -34,14 +33,26 @@ pub fn render_frame(
 ) {
     let s = settings.0;
     if version.is_changed() || acc.film.width != s.width || acc.film.height != s.height {
-        acc.film = Film::new(s.width, s.height);
-        acc.stats = TraceStats::default();
-        acc.complete = false;
+        acc.reset(s.width, s.height);
+        acc.preview = Preview::Due;
         timings.render = Default::default();
     }
     if acc.complete || version.0 == 0 {
         return;
     }
+    let block = match control.plan {
+        PassPlan::Progressive { .. } => control.preview_block,
+        PassPlan::Single => 1,
+    };
+    if acc.preview == Preview::Due && block <= 1 {
+        acc.preview = Preview::Done;
+    }
+    if acc.preview == Preview::InFilm {
+        // The preview was shown; the converging image starts from zero.
+        acc.reset(s.width, s.height);
+        acc.preview = Preview::Done;
+    }
+    let preview = acc.preview == Preview::Due;
     let done = acc.film.samples;
     let end = match control.plan {
         PassPlan::Single => s.spp,
@@ -74,24 +85,39 @@ pub fn render_frame(
                 method: s.method,
                 roulette: control.roulette,
             };
-            render_pass(
-                &view,
-                &mut acc.film,
-                s.seed,
-                done..end,
-                &control.cancel,
-                &progress,
-            )
+            if preview {
+                render_preview(
+                    &view,
+                    &mut acc.film,
+                    s.seed,
+                    block as usize,
+                    &control.cancel,
+                )
+            } else {
+                render_pass(
+                    &view,
+                    &mut acc.film,
+                    s.seed,
+                    done..end,
+                    &control.cancel,
+                    &progress,
+                )
+            }
         }};
     }
     let result = match control.layout {
         LayoutKind::Soa => pass!(Soa),
         LayoutKind::Aos => pass!(Aos),
         LayoutKind::SoaSimd => pass!(SoaSimd),
+        LayoutKind::Hybrid => pass!(Hybrid),
     };
     let elapsed = start.elapsed();
     timings.pass = elapsed;
     match result {
+        Ok(_) if preview => {
+            timings.render += elapsed;
+            acc.preview = Preview::InFilm;
+        }
         Ok(stats) => {
             timings.render += elapsed;
             acc.stats = acc.stats + stats;
@@ -101,8 +127,10 @@ pub fn render_frame(
         Err(_) => {
             // Restart cleanly: the partial pass added samples to some rows only.
             control.cancel.store(false, Ordering::Relaxed);
-            acc.film = Film::new(s.width, s.height);
-            acc.stats = TraceStats::default();
+            acc.reset(s.width, s.height);
+            if acc.preview == Preview::InFilm {
+                acc.preview = Preview::Done;
+            }
         }
     }
 }
