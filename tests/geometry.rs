@@ -1,25 +1,14 @@
 //! Intersection kernels through the packed geometry, checked against exact values and against a
 //! brute-force scan of every primitive.
 
+mod common;
+
+use common::geometry_of;
 use glam::{Vec2, Vec3};
 use rondo::geometry::packed::{Geometry, HitKind, Primitive};
 use rondo::geometry::ray::Ray;
 use rondo::shading::rng::Rng;
-use rondo::systems::world_primitives;
 use rondo::{Shape, Transform};
-
-fn geometry_of(shapes: &[(Shape, Transform)]) -> Geometry {
-    let prims: Vec<(u32, Primitive)> = shapes
-        .iter()
-        .enumerate()
-        .flat_map(|(i, (s, t))| {
-            world_primitives(s, t)
-                .into_iter()
-                .map(move |p| (i as u32, p))
-        })
-        .collect();
-    Geometry::build(&prims)
-}
 
 #[test]
 fn box_hit_reports_exact_distance_point_normal_and_uv() {

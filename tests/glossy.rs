@@ -6,7 +6,7 @@ mod common;
 
 use std::f64::consts::PI;
 
-use common::{temp_dir, write_scene};
+use common::{point_estimate, temp_dir, write_scene};
 use glam::{Vec2, Vec3};
 use rondo::scene::format::Method;
 use rondo::shading::material::Material;
@@ -254,15 +254,6 @@ fn the_scene_format_reads_glossy_and_clamps_its_roughness() {
         err.contains("bad.ron:3:") && err.contains("roughness"),
         "{err}"
     );
-}
-
-/// Mean and standard error of the red channel over all pixels.
-fn point_estimate(r: &Renderer) -> (f64, f64) {
-    let px: Vec<f64> = r.film().mean().iter().map(|p| f64::from(p.x)).collect();
-    let n = px.len() as f64;
-    let mean = px.iter().sum::<f64>() / n;
-    let var = px.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
 }
 
 #[test]

@@ -226,7 +226,7 @@ fn live_preview_and_progressive_passes_end_in_the_batch_image() {
     assert_eq!(live.film().sum, batch.film().sum);
     assert_eq!(
         live.counters().passes,
-        4,
-        "passes of 1, 2, 4 and 8 samples in total"
+        5,
+        "the preview, then passes of 1, 2, 4 and 8 samples in total"
     );
 }

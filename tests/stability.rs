@@ -7,7 +7,7 @@ mod common;
 
 use std::sync::Arc;
 
-use common::{render, temp_dir, write_scene};
+use common::{geometry_of, render, temp_dir, write_scene};
 use glam::{Affine3A, EulerRot, Quat, Vec2, Vec3};
 use rondo::Overrides;
 use rondo::ecs::components::MeshData;
@@ -91,21 +91,6 @@ fn random_unit(rng: &mut Rng) -> Vec3 {
             return v / l.sqrt();
         }
     }
-}
-
-/// Packs shapes placed by transforms exactly as the ECS does (`world_primitives`, one owner per
-/// shape).
-fn geometry_of(shapes: &[(Shape, Transform)]) -> Geometry {
-    let prims: Vec<(u32, Primitive)> = shapes
-        .iter()
-        .enumerate()
-        .flat_map(|(i, (s, t))| {
-            world_primitives(s, t)
-                .into_iter()
-                .map(move |p| (i as u32, p))
-        })
-        .collect();
-    Geometry::build(&prims)
 }
 
 /// Owner (shape index) of the primitive a hit refers to.

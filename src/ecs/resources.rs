@@ -100,7 +100,7 @@ pub struct Counters {
     pub bvh_builds: u64,
     /// Material assignments so far.
     pub material_syncs: u64,
-    /// Render passes completed so far.
+    /// Render passes completed so far (a live preview counts as one).
     pub passes: u64,
     /// Mesh (bottom-level) BVH builds so far.
     pub mesh_bvh_builds: u64,

@@ -117,6 +117,7 @@ pub fn render_frame(
         Ok(_) if preview => {
             timings.render += elapsed;
             acc.preview = Preview::InFilm;
+            counters.passes += 1;
         }
         Ok(stats) => {
             timings.render += elapsed;

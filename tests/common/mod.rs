@@ -41,3 +41,30 @@ pub fn pixels(film: &Film) -> Vec<glam::Vec3> {
 pub fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
 }
+
+/// Mean and standard error of the red channel over all pixels (for the vanishing-fov cameras
+/// that make every pixel an independent estimate of one radiance value).
+pub fn point_estimate(r: &Renderer) -> (f64, f64) {
+    let px: Vec<f64> = r.film().mean().iter().map(|p| f64::from(p.x)).collect();
+    let n = px.len() as f64;
+    let mean = px.iter().sum::<f64>() / n;
+    let var = px.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+/// Packs shapes placed by transforms exactly as the ECS does (`world_primitives`, one owner per
+/// shape).
+pub fn geometry_of(
+    shapes: &[(rondo::Shape, rondo::Transform)],
+) -> rondo::geometry::packed::Geometry {
+    let prims: Vec<(u32, rondo::geometry::packed::Primitive)> = shapes
+        .iter()
+        .enumerate()
+        .flat_map(|(i, (s, t))| {
+            rondo::systems::world_primitives(s, t)
+                .into_iter()
+                .map(move |p| (i as u32, p))
+        })
+        .collect();
+    rondo::geometry::packed::Geometry::build(&prims)
+}
