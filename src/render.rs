@@ -169,9 +169,14 @@ pub fn trace_path<L: Layout>(
             radiance +=
                 throughput * direct_light(view, &s, err, ray.direction, material, rng, stats);
         }
-        let Some(scatter) = material.scatter(ray.direction, s.n, s.uv, rng) else {
+        let Some(scatter) =
+            material.scatter(ray.direction, shading_normal(&s, material), s.uv, rng)
+        else {
             break;
         };
+        if leaks(&s, material, ray.direction, scatter.direction) {
+            break;
+        }
         previous = scatter.pdf.map(|pdf| (s.p, pdf));
         throughput *= scatter.attenuation;
         if throughput == Vec3::ZERO {
@@ -187,6 +192,27 @@ pub fn trace_path<L: Layout>(
         ray = spawn(s.p, s.n, err, scatter.direction);
     }
     radiance
+}
+
+/// The normal a material shades with: the interpolated vertex normal of a smooth mesh, except
+/// for glass, whose refraction must follow the true surface to stay watertight.
+#[inline]
+fn shading_normal(s: &Surface, material: &Material) -> Vec3 {
+    if matches!(material, Material::Dielectric { .. }) {
+        s.n
+    } else {
+        s.ns
+    }
+}
+
+/// Whether a reflection `wi` chosen with the shading normal would pass through the geometric
+/// surface a ray arriving along `d` hit: with smooth normals that happens near silhouettes, and
+/// following it would leak light through the mesh, so such directions carry nothing.
+#[inline]
+fn leaks(s: &Surface, material: &Material, d: Vec3, wi: Vec3) -> bool {
+    s.ns != s.n
+        && !matches!(material, Material::Dielectric { .. })
+        && wi.dot(s.n) * d.dot(s.n) >= 0.0
 }
 
 /// One light sample at surface `s` for a ray arriving along `d`: emitted radiance from a point
@@ -216,7 +242,10 @@ fn direct_light<L: Layout>(
     if emitted == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    let Some((f_cos, pdf_bsdf)) = material.eval(d, wi, s.n, s.uv) else {
+    if leaks(s, material, d, wi) {
+        return Vec3::ZERO;
+    }
+    let Some((f_cos, pdf_bsdf)) = material.eval(d, wi, shading_normal(s, material), s.uv) else {
         return Vec3::ZERO;
     };
     if f_cos == Vec3::ZERO {

@@ -314,3 +314,101 @@ fn a_material_edit_rebuilds_no_mesh_bvh_and_a_mesh_edit_rebuilds_only_that_mesh(
     );
     assert_eq!(r.mesh_loads(), 3);
 }
+
+#[test]
+fn obj_vertex_normals_give_interpolated_shading_normals_through_the_instance_transform() {
+    use rondo::geometry::instance::{BlasCache, InstanceSet};
+    use rondo::geometry::ray::Ray;
+    let dir = temp_dir("obj-normals");
+    let path = write_scene(
+        &dir,
+        "t.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvn 0.6 0 0.8\nvn 0 0.6 0.8\nf 1//1 2//2 3//3\n",
+    );
+    let mesh = AssetCache::default().mesh(&path).expect("loads");
+    assert!(mesh.normals.is_some());
+    let blas = BlasCache::default().get(&mesh);
+    let m = glam::Affine3A::from_scale(Vec3::new(2.0, 1.0, 1.0));
+    let set = InstanceSet::build(vec![(0, blas, m)]);
+    // Aim at the centroid (2/3, 1/3, 0) in world space.
+    let target = Vec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0);
+    let ray = Ray::new(target + Vec3::Z, -Vec3::Z);
+    let h = set.intersect(&ray, f32::INFINITY).expect("hit");
+    let s = set.surface(h.instance, h.triangle, h.b1, h.b2);
+    assert!((s.n - Vec3::Z).length() < 1e-6);
+    // By hand: the mean vertex normal is (0.2, 0.2, 0.8667); normals transform by the inverse
+    // transpose diag(1/2, 1, 1): (0.1, 0.2, 0.8667), normalised.
+    let expected = Vec3::new(0.1, 0.2, 2.6 / 3.0).normalize();
+    assert!((s.ns - expected).length() < 1e-4, "{} vs {expected}", s.ns);
+}
+
+#[test]
+fn a_smooth_low_poly_sphere_renders_without_facets_or_nonfinite_samples() {
+    // A 12×8 UV sphere with and without vertex normals, lit by a lamp: facet edges show as
+    // jumps between neighbouring pixels, which smooth normals must reduce.
+    let dir = temp_dir("smooth-sphere");
+    let (nu, nv) = (12usize, 8usize);
+    let mut flat = String::new();
+    let mut normals = String::new();
+    for j in 0..=nv {
+        for i in 0..nu {
+            let (theta, phi) = (
+                std::f32::consts::PI * j as f32 / nv as f32,
+                2.0 * std::f32::consts::PI * i as f32 / nu as f32,
+            );
+            let p = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            );
+            flat += &format!("v {} {} {}\n", p.x, p.y, p.z);
+            normals += &format!("vn {} {} {}\n", p.x, p.y, p.z);
+        }
+    }
+    let mut faces = String::new();
+    let mut faces_n = String::new();
+    let idx = |i: usize, j: usize| j * nu + (i % nu) + 1;
+    for j in 0..nv {
+        for i in 0..nu {
+            let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1));
+            faces += &format!("f {a} {c} {b}\nf {a} {d} {c}\n");
+            faces_n += &format!("f {a}//{a} {c}//{c} {b}//{b}\nf {a}//{a} {d}//{d} {c}//{c}\n");
+        }
+    }
+    write_scene(&dir, "flat.obj", &(flat.clone() + &faces));
+    write_scene(&dir, "smooth.obj", &(flat + &normals + &faces_n));
+    let scene = |mesh: &str| {
+        write_scene(
+            &dir,
+            &format!("{mesh}.ron"),
+            &format!(
+                r#"Scene(
+    camera: Camera(position: (0, 0, -3.2), look_at: (0, 0, 0), fov: 40),
+    settings: Settings(width: 48, height: 48, spp: 128, max_depth: 3, background: (0, 0, 0)),
+    materials: {{ "m": Diffuse(albedo: Constant((0.8, 0.8, 0.8))), "lamp": Light(emit: Constant((1, 1, 1)), intensity: 4) }},
+    entities: [
+        Entity(name: "ball", material: "m", shape: Mesh(path: "{mesh}.obj")),
+        Entity(name: "lamp", material: "lamp", shape: Quad(a: (-2, 3, -3), b: (2, 3, -3), c: (2, 3, 1), d: (-2, 3, 1))),
+    ],
+)"#
+            ),
+        )
+    };
+    // Facets are horizontal bands: the curvature of the row-mean profile (second differences,
+    // which a smooth ramp keeps small and steps make large) measures them; averaging a row's
+    // pixels keeps the sampling noise out of it.
+    let roughness = |r: &rondo::Renderer| {
+        let px = r.film().mean();
+        let rows: Vec<f32> = (8..40)
+            .map(|y| (18..30).map(|x| px[y * 48 + x].x).sum::<f32>() / 12.0)
+            .collect();
+        rows.windows(3)
+            .map(|w| (w[2] - 2.0 * w[1] + w[0]).abs())
+            .sum::<f32>()
+    };
+    let flat = render(&scene("flat"), Overrides::default(), None);
+    let smooth = render(&scene("smooth"), Overrides::default(), None);
+    assert_eq!(smooth.stats().nonfinite, 0);
+    let (f, s) = (roughness(&flat), roughness(&smooth));
+    assert!(s < 0.6 * f, "row-profile curvature: smooth {s}, flat {f}");
+}

@@ -10,6 +10,7 @@ use glam::{Affine3A, Vec3};
 
 use super::aabb::RayQuery;
 use super::bvh::{Bounds, Bvh};
+use super::packed::Surface;
 use super::ray::{Ray, gamma};
 use super::triangle::intersect_triangle;
 use crate::ecs::components::MeshData;
@@ -19,6 +20,8 @@ use crate::ecs::components::MeshData;
 #[derive(Clone, Default)]
 pub struct MeshBlas {
     triangles: Vec<[Vec3; 3]>,
+    /// Vertex normals per triangle (BVH order), when the mesh file has them.
+    normals: Option<Vec<[Vec3; 3]>>,
     bvh: Bvh,
     bounds: Bounds,
 }
@@ -53,8 +56,15 @@ impl MeshBlas {
             .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), b| {
                 (lo.min(b.0), hi.max(b.1))
             });
+        let normals = mesh.normals.as_ref().map(|n| {
+            order
+                .iter()
+                .map(|&k| mesh.triangles[k as usize].map(|v| n[v as usize]))
+                .collect()
+        });
         Self {
             triangles: order.iter().map(|&i| tris[i as usize]).collect(),
+            normals,
             bvh,
             bounds: all,
         }
@@ -288,21 +298,40 @@ impl InstanceSet {
         blocked
     }
 
-    /// World-space point, unit geometric normal and owner of a hit on `triangle` of instance
-    /// `instance` with barycentrics `(b1, b2)`. The point is interpolated in object space and
-    /// transformed; the normal is the object normal transformed by the inverse transpose.
+    /// Local geometry of a hit on `triangle` of instance `instance` with barycentrics
+    /// `(b1, b2)`. The point is interpolated in object space and transformed; normals go through
+    /// the inverse transpose. The shading normal interpolates the mesh's vertex normals (when
+    /// it has them), turned to the side of the geometric normal.
     #[inline]
-    pub fn surface(&self, instance: u32, triangle: u32, b1: f32, b2: f32) -> (Vec3, Vec3, u32) {
+    pub fn surface(&self, instance: u32, triangle: u32, b1: f32, b2: f32) -> Surface {
         let inst = &self.instances[instance as usize];
-        let [a, b, c] = inst.blas.triangles[triangle as usize];
-        let p_obj = (1.0 - b1 - b2) * a + b1 * b + b2 * c;
-        let n_obj = glam::Vec3A::from((b - a).cross(c - a));
-        let n = (inst.object_from_world.matrix3.transpose() * n_obj).normalize();
-        (
-            inst.world_from_object.transform_point3(p_obj),
-            n.into(),
-            inst.owner,
-        )
+        let k = triangle as usize;
+        let [a, b, c] = inst.blas.triangles[k];
+        let b0 = 1.0 - b1 - b2;
+        let p_obj = b0 * a + b1 * b + b2 * c;
+        let normal_to_world = |v: Vec3| -> Vec3 {
+            (inst.object_from_world.matrix3.transpose() * glam::Vec3A::from(v))
+                .normalize_or_zero()
+                .into()
+        };
+        let n = normal_to_world((b - a).cross(c - a));
+        let ns = inst
+            .blas
+            .normals
+            .as_ref()
+            .map(|normals| {
+                let [na, nb, nc] = normals[k];
+                normal_to_world(b0 * na + b1 * nb + b2 * nc)
+            })
+            .filter(|ns| *ns != Vec3::ZERO)
+            .map_or(n, |ns| if ns.dot(n) < 0.0 { -ns } else { ns });
+        Surface {
+            p: inst.world_from_object.transform_point3(p_obj),
+            n,
+            ns,
+            uv: glam::Vec2::ZERO,
+            owner: inst.owner,
+        }
     }
 
     /// Absolute error bound of the world-space point [`InstanceSet::surface`] returns: the
@@ -411,9 +440,10 @@ mod tests {
                 (Some((t, owner)), Some(h)) => {
                     hits += 1;
                     assert!((t - h.t).abs() <= 1e-4 * t, "{t} vs {}", h.t);
-                    let (p, _, o2) = set.surface(h.instance, h.triangle, h.b1, h.b2);
-                    assert_eq!(owner, o2);
-                    assert!((p - ray.at(t)).length() < 1e-3);
+                    let s = set.surface(h.instance, h.triangle, h.b1, h.b2);
+                    assert_eq!(owner, s.owner);
+                    assert!((s.p - ray.at(t)).length() < 1e-3);
+                    assert_eq!(s.ns, s.n, "a mesh without vertex normals shades flat");
                     assert!(
                         set.point_error(h.instance, h.triangle, h.b1, h.b2)
                             .max_element()

@@ -97,6 +97,9 @@ pub struct Surface {
     pub p: Vec3,
     /// Unit geometric normal as the primitive defines it (not flipped towards the ray).
     pub n: Vec3,
+    /// Unit shading normal: interpolated vertex normals of meshes that have them, else `n`.
+    /// On the same side as `n`.
+    pub ns: Vec3,
     /// Texture coordinates.
     pub uv: Vec2,
     /// Owner (scene entity slot) of the primitive.
@@ -491,6 +494,7 @@ impl<L: Layout> Geometry<L> {
                 Surface {
                     p: c + r * n,
                     n,
+                    ns: n,
                     uv,
                     owner: self.sphere_owner[i],
                 }
@@ -499,9 +503,11 @@ impl<L: Layout> Geometry<L> {
                 let [p0, p1, p2] = self.triangles.get(i);
                 let b0 = 1.0 - hit.b1 - hit.b2;
                 let [t0, t1, t2] = self.triangle_uv[i];
+                let n = (p1 - p0).cross(p2 - p0).normalize();
                 Surface {
                     p: b0 * p0 + hit.b1 * p1 + hit.b2 * p2,
-                    n: (p1 - p0).cross(p2 - p0).normalize(),
+                    n,
+                    ns: n,
                     uv: b0 * t0 + hit.b1 * t1 + hit.b2 * t2,
                     owner: self.triangle_owner[i],
                 }
@@ -513,18 +519,13 @@ impl<L: Layout> Geometry<L> {
                 Surface {
                     p,
                     n: pl.normal,
+                    ns: pl.normal,
                     uv: plane_uv(p, pl.point, pl.tangent, pl.bitangent),
                     owner: pl.owner,
                 }
             }
             HitKind::Instance { triangle } => {
-                let (p, n, owner) = self.instances.surface(hit.index, triangle, hit.b1, hit.b2);
-                Surface {
-                    p,
-                    n,
-                    uv: Vec2::ZERO,
-                    owner,
-                }
+                self.instances.surface(hit.index, triangle, hit.b1, hit.b2)
             }
         }
     }
