@@ -8,7 +8,6 @@
 
 pub mod app;
 pub mod bench;
-pub mod bench_accuracy;
 pub mod camera;
 pub mod ecs;
 pub mod film;

@@ -150,7 +150,7 @@ enum BenchCommand {
         #[arg(long)]
         threads: Option<usize>,
         /// First seed of the sweep (render k uses seed + k).
-        #[arg(long, default_value_t = rondo::bench_accuracy::DEFAULT_SEED)]
+        #[arg(long, default_value_t = rondo::bench::accuracy::DEFAULT_SEED)]
         seed: u64,
     },
     /// Latency of `watch`: from a saved edit to the first and to the full-quality image, for a
@@ -276,7 +276,7 @@ fn run(cli: Cli) -> Result<()> {
                     threads,
                     seed,
                 },
-        } => bench_accuracy(&rondo::bench_accuracy::AccuracyOptions {
+        } => bench_accuracy(&rondo::bench::accuracy::AccuracyOptions {
             scene,
             reference,
             out,
@@ -631,11 +631,11 @@ fn diff(image: &Path, reference: &Path, error_image: Option<&Path>) -> Result<()
 }
 
 /// `rondo bench accuracy`: runs the sweep, printing a line per render, then the summary.
-fn bench_accuracy(options: &rondo::bench_accuracy::AccuracyOptions) -> Result<()> {
+fn bench_accuracy(options: &rondo::bench::accuracy::AccuracyOptions) -> Result<()> {
     if options.threads == Some(0) {
         bail!("--threads must be at least 1");
     }
-    let report = rondo::bench_accuracy::run(options, |r| {
+    let report = rondo::bench::accuracy::run(options, |r| {
         eprintln!(
             "{:>5} {:>6} spp  {:9.4} s  rmse {:.4e}  rel_mse {:.4e}  mae {:.4e}",
             r.method.to_string(),
@@ -646,7 +646,7 @@ fn bench_accuracy(options: &rondo::bench_accuracy::AccuracyOptions) -> Result<()
             r.metrics.mae
         );
     })?;
-    println!("{}", rondo::bench_accuracy::summary_markdown(&report));
+    println!("{}", rondo::bench::accuracy::summary_markdown(&report));
     println!(
         "wrote {}/accuracy.csv, accuracy.svg, accuracy_relative.svg, summary.md",
         options.out.display()

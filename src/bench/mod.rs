@@ -1,6 +1,7 @@
 //! Macro benchmarks run by `rondo bench …`: deterministic inputs, interleaved repetitions,
 //! results written as CSV, a Markdown table and an SVG chart.
 
+pub mod accuracy;
 pub mod chart;
 pub mod instances;
 pub mod layout;
