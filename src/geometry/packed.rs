@@ -371,6 +371,19 @@ impl<L: Layout> Geometry<L> {
                     true
                 });
         }
+        self.intersect_outside_bvhs(ray, t_best, best)
+    }
+
+    /// The part of every closest-hit query outside the sphere and triangle BVHs: infinite
+    /// planes, tested linearly, then mesh instances, through their own BVHs. Returns the closest
+    /// of those and `best` (found before `t_best`).
+    #[inline]
+    fn intersect_outside_bvhs(
+        &self,
+        ray: &Ray,
+        mut t_best: f32,
+        mut best: Option<Hit>,
+    ) -> Option<Hit> {
         for (i, plane) in self.planes.iter().enumerate() {
             if let Some(t) = intersect_plane(ray, plane.point, plane.normal, t_best) {
                 t_best = t;
@@ -454,30 +467,7 @@ impl<L: Layout> Geometry<L> {
                 });
             }
         }
-        for (i, plane) in self.planes.iter().enumerate() {
-            if let Some(t) = intersect_plane(ray, plane.point, plane.normal, t_best) {
-                t_best = t;
-                best = Some(Hit {
-                    t,
-                    kind: HitKind::Plane,
-                    index: i as u32,
-                    b1: 0.0,
-                    b2: 0.0,
-                });
-            }
-        }
-        if let Some(h) = self.instances.intersect(ray, t_best) {
-            best = Some(Hit {
-                t: h.t,
-                kind: HitKind::Instance {
-                    triangle: h.triangle,
-                },
-                index: h.instance,
-                b1: h.b1,
-                b2: h.b2,
-            });
-        }
-        best
+        self.intersect_outside_bvhs(ray, t_best, best)
     }
 
     /// Local geometry at `hit`.
