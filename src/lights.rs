@@ -90,32 +90,42 @@ impl LightSet {
             ..Self::default()
         };
         let mut powers = Vec::new();
+        let mut add = |set: &mut Self, kind: HitKind, i: usize, area: f32, (material, power)| {
+            let slot = match kind {
+                HitKind::Sphere => &mut set.sphere_emitter[i],
+                _ => &mut set.triangle_emitter[i],
+            };
+            *slot = set.emitters.len() as u32;
+            set.emitters.push(Emitter {
+                kind,
+                index: i as u32,
+                area,
+                material,
+            });
+            powers.push(area * power);
+        };
         for (i, &owner) in geometry.sphere_owner.iter().enumerate() {
-            if let Some((material, power)) = power_of(owner) {
+            if let Some(emission) = power_of(owner) {
                 let (_, r) = geometry.spheres.get(i);
-                let area = 4.0 * std::f32::consts::PI * r * r;
-                set.sphere_emitter[i] = set.emitters.len() as u32;
-                set.emitters.push(Emitter {
-                    kind: HitKind::Sphere,
-                    index: i as u32,
-                    area,
-                    material,
-                });
-                powers.push(area * power);
+                add(
+                    &mut set,
+                    HitKind::Sphere,
+                    i,
+                    4.0 * std::f32::consts::PI * r * r,
+                    emission,
+                );
             }
         }
         for (i, &owner) in geometry.triangle_owner.iter().enumerate() {
-            if let Some((material, power)) = power_of(owner) {
+            if let Some(emission) = power_of(owner) {
                 let [a, b, c] = geometry.triangles.get(i);
-                let area = 0.5 * (b - a).cross(c - a).length();
-                set.triangle_emitter[i] = set.emitters.len() as u32;
-                set.emitters.push(Emitter {
-                    kind: HitKind::Triangle,
-                    index: i as u32,
-                    area,
-                    material,
-                });
-                powers.push(area * power);
+                add(
+                    &mut set,
+                    HitKind::Triangle,
+                    i,
+                    0.5 * (b - a).cross(c - a).length(),
+                    emission,
+                );
             }
         }
         let total: f32 = powers.iter().sum();

@@ -199,19 +199,24 @@ struct RenderArgs {
 }
 
 impl RenderArgs {
-    fn renderer(&self) -> Result<Renderer> {
-        if self.threads == Some(0) {
-            bail!("--threads must be at least 1");
-        }
-        let mut r = Renderer::new(self.threads, PassPlan::Single)?;
-        r.set_overrides(Overrides {
+    /// The scene-setting overrides given on the command line.
+    fn overrides(&self) -> Overrides {
+        Overrides {
             width: self.width,
             height: self.height,
             spp: self.spp,
             max_depth: self.max_depth,
             seed: self.seed,
             method: self.method,
-        });
+        }
+    }
+
+    fn renderer(&self) -> Result<Renderer> {
+        if self.threads == Some(0) {
+            bail!("--threads must be at least 1");
+        }
+        let mut r = Renderer::new(self.threads, PassPlan::Single)?;
+        r.set_overrides(self.overrides());
         r.set_layout(self.layout);
         Ok(r)
     }
@@ -473,14 +478,7 @@ impl RenderArgs {
         options.threads = self.threads;
         options.first_pass = first_spp;
         options.layout = self.layout;
-        options.overrides = Overrides {
-            width: self.width,
-            height: self.height,
-            spp: self.spp,
-            max_depth: self.max_depth,
-            seed: self.seed,
-            method: self.method,
-        };
+        options.overrides = self.overrides();
         Ok(options)
     }
 }

@@ -141,7 +141,6 @@ pub fn trace_path<L: Layout>(
             break;
         };
         let s = view.geometry.surface(&ray, &hit);
-        let err = point_error(view.geometry, &hit, s.p);
         let material = &view.materials[view.owner_material[s.owner as usize] as usize];
         if material.is_emissive() {
             let emitted = material.emitted(ray.direction, s.n, s.uv);
@@ -162,9 +161,11 @@ pub fn trace_path<L: Layout>(
             };
             radiance += throughput * emitted * weight;
         }
-        if depth + 1 == view.max_depth {
+        if depth + 1 == view.max_depth || material.is_emissive() {
             break;
         }
+        // Only a vertex the path continues from needs the hit point's error bound.
+        let err = point_error(view.geometry, &hit, s.p);
         if sample_lights && material.samples_lights() {
             radiance +=
                 throughput * direct_light(view, &s, err, ray.direction, material, rng, stats);
