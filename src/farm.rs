@@ -332,7 +332,7 @@ report)
   failed=()
   for ((i = 0; i < TASKS; i++)); do
     p=$(part \"$i\")
-    if [[ ! -s $p || -e $p.failed ]]; then
+    if [[ ! -f $p || ! -s $p || -e $p.failed ]]; then
       failed+=(\"$i\")
       echo \"task $i (samples $(range \"$i\")) failed$(cat \"$p.failed\" 2>/dev/null || true); rerun it alone with:\"
       echo \"  $RONDO render $SCENE --samples $(range \"$i\") -o $p ${{FLAGS[*]}}\"
@@ -347,18 +347,19 @@ esac
 
 i=$SLURM_ARRAY_TASK_ID
 p=$(part \"$i\")
-mkdir -p \"$PARTS\"
-rm -f \"$p\" \"$p.failed\"
 trap 'code=$?; if [ $code -ne 0 ]; then echo \" with exit code $code on $(hostname)\" > \"$p.failed\"; fi' EXIT
+mkdir -p \"$PARTS\"
+rm -f \"$p.failed\" \"$p\"
 if [[ $i == \"${{SLURM_ARRAY_TASK_MIN:-0}}\" ]]; then
   script=$(scontrol show job \"$SLURM_JOB_ID\" 2>/dev/null | sed -n 's/^ *Command=//p' | head -n 1)
   export RONDO_FARM_SCRIPT=${{script:-render.sbatch}} RONDO_FARM_ARRAY=$SLURM_ARRAY_JOB_ID
-  RONDO_FARM_STEP=merge sbatch --parsable --array=0 --job-name=\"$NAME-merge\" \\
+  merge=$(RONDO_FARM_STEP=merge sbatch --parsable --array=0 --job-name=\"$NAME-merge\" \\
     --output=\"$NAME-merge-%A.out\" --dependency=\"afterok:$SLURM_ARRAY_JOB_ID\" \\
-    --kill-on-invalid-dep=yes \"$0\"
-  RONDO_FARM_STEP=report sbatch --parsable --array=0 --job-name=\"$NAME-report\" \\
+    --kill-on-invalid-dep=yes \"$0\")
+  report=$(RONDO_FARM_STEP=report sbatch --parsable --array=0 --job-name=\"$NAME-report\" \\
     --output=\"$NAME-report-%A.out\" --dependency=\"afternotok:$SLURM_ARRAY_JOB_ID\" \\
-    --kill-on-invalid-dep=yes \"$0\"
+    --kill-on-invalid-dep=yes \"$0\")
+  echo \"rondo: merge job $merge runs once array job $SLURM_ARRAY_JOB_ID succeeded; report job $report if it fails\"
 fi
 \"$RONDO\" render \"$SCENE\" --samples \"$(range \"$i\")\" -o \"$p\" \\
   --threads \"${{SLURM_CPUS_PER_TASK:-1}}\" \"${{FLAGS[@]}}\"

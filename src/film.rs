@@ -186,11 +186,7 @@ impl Film {
     /// Linear float image of the mean, unclamped.
     pub fn to_linear(&self) -> Rgb32FImage {
         let n = self.count();
-        let data = self
-            .sum
-            .iter()
-            .flat_map(|s| s.mean(n).to_array())
-            .collect();
+        let data = self.sum.iter().flat_map(|s| s.mean(n).to_array()).collect();
         Rgb32FImage::from_raw(self.width, self.height, data).expect("film size matches its pixels")
     }
 
@@ -311,7 +307,10 @@ mod tests {
         let mut forward = Pixel::ZERO;
         samples.iter().for_each(|&s| forward.add(Vec3::splat(s)));
         let mut backward = Pixel::ZERO;
-        samples.iter().rev().for_each(|&s| backward.add(Vec3::splat(s)));
+        samples
+            .iter()
+            .rev()
+            .for_each(|&s| backward.add(Vec3::splat(s)));
         assert_eq!(forward, backward);
         let f: f32 = samples.iter().sum();
         let b: f32 = samples.iter().rev().sum();
@@ -320,7 +319,14 @@ mod tests {
 
     #[test]
     fn words_round_trip_negative_and_large_sums() {
-        for v in [0i128, 1, -1, i128::from(i64::MAX) * 3, -(1i128 << 94), (1 << 94) - 1] {
+        for v in [
+            0i128,
+            1,
+            -1,
+            i128::from(i64::MAX) * 3,
+            -(1i128 << 94),
+            (1 << 94) - 1,
+        ] {
             let p = Pixel([v, -v, v / 7]);
             let mut q = Pixel::ZERO;
             for c in 0..3 {

@@ -493,7 +493,9 @@ fn merge(inputs: &[PathBuf], output: &Path, spp: Option<u32>, allow_gaps: bool) 
     if !plan.missing.is_empty() {
         let missing = rondo::partial::format_ranges(&plan.missing).replace(',', ", ");
         if !allow_gaps {
-            bail!("missing samples {missing} (render them, or merge what is there with --allow-gaps)");
+            bail!(
+                "missing samples {missing} (render them, or merge what is there with --allow-gaps)"
+            );
         }
         eprintln!("warning: missing samples {missing}; the image averages the samples present");
     }

@@ -252,7 +252,10 @@ pub fn read_meta(path: &Path) -> Result<PartialMeta, PartialError> {
     meta_of(path, open(path)?.headers())
 }
 
-fn meta_of(path: &Path, headers: &[exr::meta::header::Header]) -> Result<PartialMeta, PartialError> {
+fn meta_of(
+    path: &Path,
+    headers: &[exr::meta::header::Header],
+) -> Result<PartialMeta, PartialError> {
     let [header] = headers else {
         return Err(error(path, "a partial has one layer"));
     };
@@ -261,7 +264,9 @@ fn meta_of(path: &Path, headers: &[exr::meta::header::Header]) -> Result<Partial
             Some(AttributeValue::Text(t)) => Ok(t.to_string()),
             _ => Err(error(
                 path,
-                format!("not a rondo partial (no {name} attribute; make one with `rondo render --samples A..B`)"),
+                format!(
+                    "not a rondo partial (no {name} attribute; make one with `rondo render --samples A..B`)"
+                ),
             )),
         }
     };
@@ -274,14 +279,16 @@ fn meta_of(path: &Path, headers: &[exr::meta::header::Header]) -> Result<Partial
     }
     let bits = attr("rondo.fraction_bits")?;
     if bits != FRACTION_BITS.to_string() {
-        return Err(error(path, format!("rondo.fraction_bits {bits}, expected {FRACTION_BITS}")));
+        return Err(error(
+            path,
+            format!("rondo.fraction_bits {bits}, expected {FRACTION_BITS}"),
+        ));
     }
     for name in SUM_CHANNELS.iter().flatten() {
-        let found = header
-            .channels
-            .list
-            .iter()
-            .any(|c| c.name == Text::from(*name) && c.sample_type == exr::meta::attribute::SampleType::U32);
+        let found =
+            header.channels.list.iter().any(|c| {
+                c.name == **name && c.sample_type == exr::meta::attribute::SampleType::U32
+            });
         if !found {
             return Err(error(path, format!("partial has no u32 channel {name}")));
         }
@@ -318,7 +325,10 @@ pub fn add_partial(path: &Path, sum: &mut [Pixel]) -> Result<PartialMeta, Partia
     if sum.len() != meta.width as usize * meta.height as usize {
         return Err(error(
             path,
-            format!("size {}x{} differs from the image's", meta.width, meta.height),
+            format!(
+                "size {}x{} differs from the image's",
+                meta.width, meta.height
+            ),
         ));
     }
     let header = &reader.headers()[0];
@@ -331,7 +341,7 @@ pub fn add_partial(path: &Path, sum: &mut [Pixel]) -> Result<PartialMeta, Partia
             SUM_CHANNELS.iter().enumerate().find_map(|(colour, words)| {
                 words
                     .iter()
-                    .position(|n| c.name == Text::from(*n))
+                    .position(|n| c.name == **n)
                     .map(|word| (colour, word))
             })
         })
@@ -450,7 +460,9 @@ pub fn plan_merge(paths: &[PathBuf], expect_end: Option<u32>) -> Result<MergePla
         }
     }
     let ranges = normalize(owned.into_iter().map(|(r, _)| r).collect());
-    let end = expect_end.unwrap_or(0).max(ranges.last().map_or(0, |r| r.end));
+    let end = expect_end
+        .unwrap_or(0)
+        .max(ranges.last().map_or(0, |r| r.end));
     let missing = gaps(&ranges, end);
     let meta = PartialMeta {
         ranges,
