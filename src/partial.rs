@@ -375,15 +375,22 @@ pub fn add_partial(path: &Path, sum: &mut [Pixel]) -> Result<PartialMeta, Partia
                 let pixels = sum
                     .get_mut(start..start + line.location.sample_count)
                     .ok_or_else(|| error(path, "a block lies outside the image"))?;
-                for (pixel, value) in pixels.iter_mut().zip(line.read_samples::<u32>()) {
-                    let v = value.map_err(fail)?;
-                    // Two's complement in 96 bits: the top word carries the sign.
-                    let part = if word + 1 == Pixel::WORDS {
-                        i128::from(v as i32) << (32 * word)
+                // Samples are little-endian u32 (OpenEXR's byte order).
+                let values = line.value.chunks_exact(4);
+                if values.len() != pixels.len() {
+                    return Err(error(path, "a line has the wrong length"));
+                }
+                let shift = 32 * word;
+                // Two's complement in 96 bits: the top word carries the sign.
+                let signed = word + 1 == Pixel::WORDS;
+                for (pixel, bytes) in pixels.iter_mut().zip(values) {
+                    let v = u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]);
+                    let part = if signed {
+                        i128::from(v as i32)
                     } else {
-                        i128::from(v) << (32 * word)
+                        i128::from(v)
                     };
-                    pixel.0[colour] += part;
+                    pixel.0[colour] += part << shift;
                 }
             }
         }
