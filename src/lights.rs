@@ -441,7 +441,10 @@ mod tests {
         // Selection probabilities (spheres first, then triangles) are the power shares and
         // sum to 1.
         let pmf: Vec<f32> = (0..3).map(|k| set.selection_pmf(k)).collect();
-        assert!((pmf[0] - 2.0 * std::f32::consts::PI / total).abs() < 1e-6, "{pmf:?}");
+        assert!(
+            (pmf[0] - 2.0 * std::f32::consts::PI / total).abs() < 1e-6,
+            "{pmf:?}"
+        );
         assert!((pmf[1] + pmf[2] - 1.0 / total).abs() < 1e-6);
         assert_eq!(pmf.iter().sum::<f32>(), 1.0);
         let far = Vec3::new(0.0, 0.0, 100.0);
