@@ -535,7 +535,7 @@ fn bench_watch(scene: &Path, runs: usize, first_spp: u32, options: &RenderArgs) 
         format!("{:8.1} ms (min {:8.1})", ms(v[v.len() / 2]), ms(v[0]))
     };
     println!(
-        "watch latency, save -> image written, {} (debounce {} ms, first pass {first_spp} spp), median of {} edits:",
+        "watch latency, save -> image written, {} (loaded when the save completes, else after {} ms quiet; first pass {first_spp} spp), median of {} edits:",
         scene.display(),
         rondo::watch::DEBOUNCE.as_millis(),
         runs.max(1)
