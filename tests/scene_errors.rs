@@ -381,10 +381,10 @@ fn value_errors_in_a_prefab_name_its_entity() {
             "{HEADER}    materials: {{ \"m\": Diffuse(albedo: Constant((1, 1, 1))) }},\n    entities: [ Entity(name: \"door\", prefab: \"part.ron\") ],\n)"
         ),
     );
-    let e = load_scene(&path, &mut AssetCache::default())
-        .err()
-        .expect("a zero radius is an error")
-        .to_string();
+    let Err(e) = load_scene(&path, &mut AssetCache::default()) else {
+        panic!("a zero radius is an error");
+    };
+    let e = e.to_string();
     let (_, rest) = e.split_once("part.ron:2:").unwrap_or_else(|| panic!("{e}"));
     assert!(
         rest.ends_with(": entity \"knob\": radius must be > 0 (got 0)"),
