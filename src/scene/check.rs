@@ -5,8 +5,8 @@
 //! legal but probably a mistake. Each heuristic is simple and stated on its [`WarningKind`]:
 //!
 //! ```text
-//! warning: scenes/stress.ron:9:9: material "spare" is defined but no entity uses it
-//! warning: scenes/stress.ron:30:23: entities "floor" and "ground" overlap in one plane (z-fighting: …); "ground" is at scenes/stress.ron:31:23
+//! warning: scene.ron:9:9: material "spare" is defined but no entity uses it
+//! warning: scene.ron:30:9: entities "floor" and "ground" overlap in one plane (z-fighting: …); "ground" is at scene.ron:31:9
 //! ```
 //!
 //! Each warning names the file, line and column of the entity (or material) it is about, found
@@ -669,19 +669,11 @@ fn outside_view(scene: &LoadedScene, out: &mut Out) {
                 let bounds = bounds
                     .entry(Arc::as_ptr(&m.data) as usize)
                     .or_insert_with(|| {
-                        let b = Shape::Box {
-                            min: m
-                                .data
-                                .positions
-                                .iter()
-                                .fold(Vec3::INFINITY, |a, &p| a.min(p)),
-                            max: m
-                                .data
-                                .positions
-                                .iter()
-                                .fold(Vec3::NEG_INFINITY, |a, &p| a.max(p)),
-                        };
-                        b
+                        let p = &m.data.positions;
+                        Shape::Box {
+                            min: p.iter().fold(Vec3::INFINITY, |a, &v| a.min(v)),
+                            max: p.iter().fold(Vec3::NEG_INFINITY, |a, &v| a.max(v)),
+                        }
                     });
                 world_primitives(bounds, &e.transform)
             }
