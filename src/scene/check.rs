@@ -590,8 +590,8 @@ fn first_primitives(shape: &Shape, transform: &Transform, count: usize) -> Vec<P
         Shape::Mesh(m) if m.data.triangles.len() > count => {
             let head = MeshData {
                 positions: m.data.positions.clone(),
-                normals: None,
                 triangles: m.data.triangles[..count].to_vec(),
+                ..MeshData::default()
             };
             let shape = Shape::Mesh(MeshRef {
                 path: m.path.clone(),
