@@ -154,6 +154,26 @@ enum BenchCommand {
         #[arg(long, default_value_t = rondo::bench::accuracy::DEFAULT_SEED)]
         seed: u64,
     },
+    /// Load, first image and `check` of generated scenes over sizes, stage by stage.
+    Load {
+        /// Scene kinds (flat, unnamed, materials, meshes, textures, placements, prefab, tiles).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "flat,unnamed,materials,meshes,textures,placements,prefab,tiles"
+        )]
+        kinds: Vec<String>,
+        /// Sizes (what grows in each kind).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "1000,10000,100000,1000000"
+        )]
+        sizes: Vec<usize>,
+        /// Also time watch mode on the flat scene of this size (cold start, one-entity edits).
+        #[arg(long)]
+        watch: Option<usize>,
+    },
     /// Latency of `watch`: from a saved edit to the first and to the full-quality image, for a
     /// material edit and a geometry edit of the Cornell box (edited in a temporary copy).
     Watch {
@@ -302,6 +322,14 @@ fn run(cli: Cli) -> Result<()> {
                     workloads,
                 },
         } => bench_layout(out, max_count, reps, smoke, workloads),
+        Command::Bench {
+            what:
+                BenchCommand::Load {
+                    kinds,
+                    sizes,
+                    watch,
+                },
+        } => rondo::bench::load::main(&kinds, &sizes, watch).map_err(anyhow::Error::msg),
         Command::Diff {
             image,
             reference,
@@ -397,7 +425,7 @@ fn check(scene: &Path) -> Result<()> {
         rondo::scene::load::load_scene(scene, &mut rondo::scene::load::AssetCache::default())?;
     let warnings = rondo::scene::check::check_scene(&loaded);
     for w in &warnings {
-        println!("warning: {}: {w}", scene.display());
+        println!("warning: {w}");
     }
     match warnings.len() {
         0 => println!("{}: no warnings", scene.display()),
