@@ -46,6 +46,7 @@ use crate::app::{Overrides, Renderer};
 use crate::ecs::resources::{ChangeSummary, Counters, PassPlan};
 use crate::film::OutputKind;
 use crate::geometry::layout::LayoutKind;
+use crate::serve::Observer;
 
 /// How long the debouncer holds a file event before passing it on.
 ///
@@ -323,8 +324,9 @@ impl FileWatcher {
 pub struct WatchOptions {
     /// The scene file.
     pub scene: PathBuf,
-    /// The output image (`.png` or `.exr`), rewritten atomically after every pass.
-    pub output: PathBuf,
+    /// The output image (`.png` or `.exr`), rewritten atomically after every pass; `None` to
+    /// write no file (when an [`Observer`] shows the images instead).
+    pub output: Option<PathBuf>,
     /// Render threads (all cores if `None`).
     pub threads: Option<usize>,
     /// Settings overrides applied to every load.
@@ -343,7 +345,7 @@ impl WatchOptions {
     pub fn new(scene: impl Into<PathBuf>, output: impl Into<PathBuf>) -> Self {
         Self {
             scene: scene.into(),
-            output: output.into(),
+            output: Some(output.into()),
             threads: None,
             overrides: Overrides::default(),
             layout: LayoutKind::default(),
@@ -647,13 +649,17 @@ pub struct Watch {
     missing: bool,
     /// Whether the user was told that the output is also one of the scene's textures.
     warned_output: bool,
+    /// The live viewer (`rondo watch --serve`), told of every reload and pass.
+    observer: Option<Box<dyn Observer>>,
 }
 
 impl Watch {
     /// Checks the options, builds the renderer and starts watching the scene's directory.
     pub fn new(options: WatchOptions) -> Result<Self, WatchError> {
-        if OutputKind::from_path(&options.output).is_none() {
-            return Err(WatchError::Output(options.output));
+        if let Some(output) = &options.output
+            && OutputKind::from_path(output).is_none()
+        {
+            return Err(WatchError::Output(output.clone()));
         }
         let plan = PassPlan::Progressive {
             first: options.first_pass.max(1),
@@ -667,7 +673,9 @@ impl Watch {
         let cancel = renderer.cancel_flag();
         let (tx, events) = mpsc::channel();
         let mut watcher = FileWatcher::new(options.debounce, cancel.clone(), tx.clone())?;
-        watcher.ignore(&options.output);
+        if let Some(output) = &options.output {
+            watcher.ignore(output);
+        }
         if let Some(message) = watcher
             .set_files(std::slice::from_ref(&options.scene))
             .into_iter()
@@ -678,7 +686,11 @@ impl Watch {
                 message,
             });
         }
-        let output_key = watch_key(&options.output).ok().map(|(_, key)| key);
+        let output_key = options
+            .output
+            .as_deref()
+            .and_then(|o| watch_key(o).ok())
+            .map(|(_, key)| key);
         let stop = StopHandle {
             stopped: Arc::new(AtomicBool::new(false)),
             cancel: cancel.clone(),
@@ -697,7 +709,14 @@ impl Watch {
             last_error: None,
             missing: false,
             warned_output: false,
+            observer: None,
         })
+    }
+
+    /// Tells `observer` of every reload and every improved image from now on (the live viewer).
+    pub fn set_observer(&mut self, observer: Box<dyn Observer>) {
+        self.renderer.set_progress(observer.progress());
+        self.observer = Some(observer);
     }
 
     /// A handle that stops [`Watch::run`].
@@ -907,6 +926,10 @@ impl Watch {
             applied: false,
             written: 0,
         });
+        // Viewer hook: a render starts.
+        if let (Some(o), Some(job)) = (&self.observer, &self.job) {
+            o.reload(&job.report, &info.settings, job.saved);
+        }
     }
 
     /// Runs one frame of the current job: applies the scene if new, renders a pass, writes the
@@ -946,7 +969,15 @@ impl Watch {
             r.first_pass = Some((samples, timings.pass));
         }
         if samples > job.written {
-            match self.renderer.film().write(&self.options.output) {
+            // Viewer hook: the new image goes to the viewer first, then to disk.
+            if let Some(o) = &self.observer {
+                o.pass(r, self.renderer.film(), job.saved);
+            }
+            let written = match &self.options.output {
+                Some(output) => self.renderer.film().write(output),
+                None => Ok(()),
+            };
+            match written {
                 Ok(()) => {
                     let at = Instant::now();
                     job.written = samples;
@@ -962,7 +993,14 @@ impl Watch {
                     });
                 }
                 Err(e) => report(Report::Warning {
-                    message: format!("{}: cannot write image: {e}", self.options.output.display()),
+                    message: format!(
+                        "{}: cannot write image: {e}",
+                        self.options
+                            .output
+                            .as_deref()
+                            .unwrap_or(Path::new(""))
+                            .display()
+                    ),
                 }),
             }
         }
