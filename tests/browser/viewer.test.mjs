@@ -4,8 +4,9 @@
 //   node viewer.test.mjs                      # the checks, then the latency on the Cornell box
 //   node viewer.test.mjs --screenshot out.png # also a screenshot of the page (docs/viewer.png)
 //
-// RONDO_BIN names the binary (default: ../../target/release/rondo). Every wait is bounded; any
-// failure, including a missing chromium, exits non-zero. The last line is "N passed, N failed".
+// RONDO_BIN names the binary (default: ../../target/release/rondo), RONDO_LATENCY_EDITS the
+// number of timed edits (default 5). Every wait is bounded; any failure, including a missing
+// chromium, exits non-zero. The last line is "N passed, N failed".
 
 import { spawn } from "node:child_process";
 import fs from "node:fs";
@@ -23,7 +24,7 @@ const screenshot = (() => {
   return i > 0 ? path.resolve(process.argv[i + 1]) : null;
 })();
 const WAIT = 30_000;
-const LATENCY_EDITS = 5;
+const LATENCY_EDITS = Number(process.env.RONDO_LATENCY_EDITS) || 5;
 
 let passed = 0, failed = 0;
 function check(name, ok, detail = "") {
@@ -182,7 +183,9 @@ async function behaviour(context) {
   }
 }
 
-// Save -> image drawn on the page, for material edits of the Cornell box at 512x512.
+// Save -> first image of the edit, for material edits of the Cornell box at 512x512: on disk
+// (rondo's own "first image … since save", with -o), on the event stream (the `pass` event
+// reaching the page) and on the page (the canvas drawn).
 async function latency(context) {
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), "rondo-viewer-latency-"));
   const file = path.join(dir, "scene.ron");
@@ -190,14 +193,20 @@ async function latency(context) {
   const [red, blue] = ["(0.65, 0.05, 0.05)", "(0.05, 0.05, 0.65)"];
   if (!original.includes(red)) throw new Error("scenes/cornell.ron: no red material to edit");
   fs.writeFileSync(file, original);
-  const rondo = startRondo(file);
-  const rows = [];
+  const rondo = startRondo(file, ["-o", path.join(dir, "out.png")]);
+  const rows = [], stream = [];
   try {
     const page = await context.newPage();
     await page.goto(await rondo.url);
     await page.waitForFunction(() => document.getElementById("canvas").dataset.reload === "0", null, { timeout: WAIT });
     await page.evaluate(() => {
       window.__seen = [];
+      window.__events = [];
+      const handle = window.onEvent;
+      window.onEvent = (e) => {
+        if (e.kind === "pass") window.__events.push({ reload: e.reload, at: performance.timeOrigin + performance.now() });
+        handle(e);
+      };
       const c = document.getElementById("canvas");
       new MutationObserver(() => window.__seen.push({ reload: Number(c.dataset.reload), at: performance.timeOrigin + performance.now() }))
         .observe(c, { attributes: true, attributeFilter: ["data-samples", "data-reload"] });
@@ -209,19 +218,27 @@ async function latency(context) {
       await new Promise((r) => setTimeout(r, 300));
       const saved = save(file, text);
       await page.waitForFunction((n) => window.__seen.some((s) => s.reload === n), i, { timeout: WAIT, polling: 5 });
-      const drawn = await page.evaluate((n) => window.__seen.find((s) => s.reload === n).at, i);
+      const [drawn, event] = await page.evaluate((n) => [window.__seen.find((s) => s.reload === n).at,
+        window.__events.find((s) => s.reload === n).at], i);
       rows.push(drawn - saved);
+      stream.push(event - saved);
     }
     await page.close();
   } finally {
     await stopRondo(rondo.child);
     fs.rmSync(dir, { recursive: true, force: true });
   }
-  rows.sort((a, b) => a - b);
-  console.log(`latency: save -> image on the page, Cornell box 512x512, material edit, ${rows.length} edits: ` +
-    `median ${rows[rows.length >> 1].toFixed(1)} ms, min ${rows[0].toFixed(1)} ms, max ${rows[rows.length - 1].toFixed(1)} ms`);
-  const line = rondo.log.join("").split("\n").filter((l) => l.startsWith("reload ")).map((l) => /first image ([\d.]+ m?s)/.exec(l)?.[1]);
-  console.log(`         rondo's own first-image times (on disk is off: no -o): ${line.join(", ")}`);
+  const stats = (v) => {
+    v.sort((a, b) => a - b);
+    return `median ${v[v.length >> 1].toFixed(1)} ms (min ${v[0].toFixed(1)}, max ${v[v.length - 1].toFixed(1)})`;
+  };
+  const disk = rondo.log.join("").split("\n").filter((l) => l.startsWith("reload "))
+    .map((l) => /first image ([\d.]+) (m?s)/.exec(l)).filter(Boolean)
+    .map((m) => Number(m[1]) * (m[2] === "s" ? 1000 : 1));
+  console.log(`latency, save -> first image, Cornell box 512x512, material edit, ${rows.length} edits:`);
+  if (disk.length) console.log(`  on disk (rondo's log)     ${stats(disk)}`);
+  console.log(`  on the stream (page)      ${stats(stream)}`);
+  console.log(`  drawn on the page         ${stats(rows)}`);
   check("the page shows each edit", rows.length === LATENCY_EDITS);
 }
 
@@ -233,7 +250,7 @@ async function takeScreenshot(context, out) {
   try {
     const page = await context.newPage();
     await page.goto(await rondo.url);
-    await page.waitForFunction(() => /64\/64 spp \(done\)/.test(document.getElementById("status").textContent), null, { timeout: 10 * WAIT });
+    await page.waitForFunction(() => /64\/64 spp · done/.test(document.getElementById("status").textContent), null, { timeout: 10 * WAIT });
     const box = await page.locator("#canvas").boundingBox();
     await page.mouse.move(box.x + box.width * 0.3, box.y + box.height * 0.6);
     await page.screenshot({ path: out });
