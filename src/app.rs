@@ -10,7 +10,8 @@ use bevy_ecs::schedule::{SystemCondition, common_conditions::resource_changed};
 
 use crate::ecs::resources::{
     Accumulation, ActiveCamera, ChangeSummary, Counters, MaterialTable, Output, OwnerMaterials,
-    PackedGeometry, PassPlan, PendingScene, RenderControl, RenderSettings, SceneVersion, Timings,
+    PackedGeometry, PassPlan, PendingScene, Preview, RenderControl, RenderSettings, SceneVersion,
+    Timings,
 };
 use crate::ecs::sets::RenderSystems;
 use crate::film::Film;
@@ -189,6 +190,7 @@ impl Renderer {
     /// Loads the scene at `path` (textures through the cache), applies the overrides and queues
     /// it for the next frame. Returns what was loaded.
     pub fn load(&mut self, path: &Path) -> Result<LoadInfo, SceneError> {
+        self.assets.begin_load();
         let mut scene = load_scene(path, &mut self.assets)?;
         self.overrides
             .apply(&mut scene.settings)
@@ -274,6 +276,18 @@ impl Renderer {
             .resource::<PackedGeometry>()
             .geometry
             .primitive_count()
+    }
+
+    /// Every texture, mesh and prefab path the last [`Renderer::load`] asked for, found or not:
+    /// after a failed load, the files that may fix it.
+    pub fn requested(&self) -> Vec<std::path::PathBuf> {
+        self.assets.requested().to_vec()
+    }
+
+    /// Whether the film holds the reduced-resolution preview rather than real samples (its
+    /// sample count is then 1 but its pixels are blocks).
+    pub fn film_is_preview(&self) -> bool {
+        self.world.resource::<Accumulation>().preview == Preview::InFilm
     }
 
     /// Number of mesh file loads by the asset cache.

@@ -511,17 +511,15 @@ fn watch(options: WatchOptions, serve: Option<Option<String>>) -> Result<()> {
                 eprintln!("warning: {warning}");
             }
             eprintln!("viewer: {}", viewer.url());
-            watch.set_observer(Box::new(feed.clone()));
-            Some((viewer, feed))
+            watch.set_observer(feed.observer());
+            watch.set_progress(feed.progress_bar());
+            Some(viewer)
         }
         None => None,
     };
     let stop = watch.stop_handle();
     ctrlc::set_handler(move || stop.stop()).context("cannot install the Ctrl-C handler")?;
     watch.run(|report| {
-        if let Some((_, feed)) = &viewer {
-            rondo::serve::Observer::report(feed, &report);
-        }
         if let Some(line) = report.line() {
             eprintln!("{line}");
         }

@@ -11,13 +11,22 @@ use crate::ecs::components::MeshData;
 /// normals are kept when every object has one per vertex. Malformed files, out-of-range
 /// indices, non-finite coordinates and empty meshes are errors, never panics.
 pub fn load_obj(path: &Path) -> Result<MeshData, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read OBJ: {e}"))?;
+    parse_obj(&bytes)
+}
+
+/// Parses the bytes of an OBJ file, as [`load_obj`] (material libraries are not read: materials
+/// come from the scene).
+pub fn parse_obj(bytes: &[u8]) -> Result<MeshData, String> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
         ..Default::default()
     };
-    let (models, _materials) =
-        tobj::load_obj(path, &options).map_err(|e| format!("cannot read OBJ: {e}"))?;
+    let (models, _materials) = tobj::load_obj_buf(&mut &bytes[..], &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|e| format!("cannot read OBJ: {e}"))?;
     let mut mesh = MeshData::default();
     let mut normals = Some(Vec::new());
     for model in &models {

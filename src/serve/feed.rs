@@ -3,9 +3,9 @@
 //! Events, one JSON object each (every one has `kind`; times are milliseconds):
 //!
 //! ```text
-//! {"kind":"reload","reload":3,"trigger":["scene.ron"],"width":512,"height":512,"target_spp":64,"since_save_ms":1.2}
-//! {"kind":"pass","reload":3,"spp":16,"target_spp":64,"width":512,"height":512,"changed":"materials",
-//!  "since_save_ms":41.0,"samples_per_s":2.1e6,"trigger":["scene.ron"]}
+//! {"kind":"reload","reload":3,"trigger":["scene.ron"],"target_spp":64,"since_save_ms":1.2}
+//! {"kind":"pass","reload":3,"spp":16,"preview":false,"target_spp":64,"width":512,"height":512,
+//!  "changed":"materials","since_save_ms":41.0,"samples_per_s":2.1e6,"trigger":["scene.ron"]}
 //! {"kind":"progress","reload":3,"rows":128,"height":512}
 //! {"kind":"done","reload":3,"spp":64,"full_ms":812.0,"line":"reload 3: materials | …"}
 //! {"kind":"error","message":"scene.ron:6:40: …","file":"scene.ron","line":6,"col":40,
@@ -30,8 +30,7 @@ use serde_json::{Value, json};
 
 use crate::ecs::resources::ChangeSummary;
 use crate::film::Film;
-use crate::scene::format::SettingsDesc;
-use crate::watch::{ReloadReport, Report};
+use crate::watch::{Observer, Report};
 
 /// The first 8 bytes of `/image.f32`. Then four little-endian `u32`: width, height, reload
 /// number (low 32 bits) and samples per pixel; then `width × height` pixels of three
@@ -41,21 +40,6 @@ pub const RAW_MAGIC: &[u8; 8] = b"RONDOF32";
 
 /// Events a stalled client may have queued; older ones are dropped.
 const QUEUE: usize = 32;
-
-/// What a render loop tells the viewer. Every call must return promptly: it runs on the
-/// render loop's thread, between passes.
-pub trait Observer: Send {
-    /// A hidden progress bar for the renderer to advance by rows rendered, if wanted.
-    fn progress(&self) -> Option<ProgressBar> {
-        None
-    }
-    /// A save loaded and its render starts (`report` has the number, trigger and spp).
-    fn reload(&self, report: &ReloadReport, settings: &SettingsDesc, saved: Instant);
-    /// A pass finished with more samples than the image before it; `film` is the new image.
-    fn pass(&self, report: &ReloadReport, film: &Film, saved: Instant);
-    /// Anything else the loop reports (errors, finished renders).
-    fn report(&self, report: &Report);
-}
 
 /// One image the server hands out; the encodings are made on first request.
 pub struct Frame {
@@ -171,8 +155,9 @@ struct Render {
     /// When its first frame started (the renderer's clock for samples/s).
     started: Instant,
     height: u32,
-    changed: String,
     trigger: Vec<String>,
+    /// From the save to `started`.
+    since_save: Duration,
 }
 
 /// The events a new client gets first.
@@ -200,8 +185,8 @@ struct Shared {
     progress: ProgressBar,
 }
 
-/// The server's side of the render loop: an [`Observer`] that keeps the latest images and
-/// broadcasts events. Cheap to clone; all clones share one state.
+/// The server's side of the render loop: sees the watch loop's reports (see [`Feed::observer`]),
+/// keeps the latest images and broadcasts events. Cheap to clone; all clones share one state.
 #[derive(Clone)]
 pub struct Feed {
     shared: Arc<Shared>,
@@ -306,6 +291,139 @@ impl Feed {
         self.shared.progress.set_position(0);
         state.progress_sent = 0;
     }
+
+    /// The hidden progress bar the renderer should advance ([`crate::watch::Watch::set_progress`]).
+    pub fn progress_bar(&self) -> ProgressBar {
+        self.shared.progress.clone()
+    }
+
+    /// This feed as the watch loop's [`Observer`].
+    pub fn observer(&self) -> Observer {
+        let feed = self.clone();
+        Box::new(move |report, film| feed.observe(report, film))
+    }
+
+    /// Takes one report of the watch loop (with the film of a [`Report::Wrote`]): updates the
+    /// images and sends the matching event. Returns at once: the film is copied (~1 ms at 512²),
+    /// encodings are made on request.
+    pub fn observe(&self, report: &Report, film: Option<&Film>) {
+        let mut state = self.state();
+        let shown = state.current.as_ref().map(|c| c.reload);
+        let event = match (report, film) {
+            (
+                Report::Started {
+                    reload,
+                    trigger,
+                    spp,
+                    saved,
+                },
+                _,
+            ) => {
+                self.restart_progress(&mut state);
+                let height = state.render.as_ref().map_or(0, |r| r.height);
+                let render = state.render.insert(Render {
+                    reload: *reload,
+                    started: Instant::now(),
+                    height,
+                    trigger: names(trigger),
+                    since_save: saved.elapsed(),
+                });
+                json!({
+                    "kind": "reload",
+                    "reload": reload,
+                    "trigger": render.trigger,
+                    "target_spp": spp,
+                    "since_save_ms": ms(render.since_save),
+                })
+            }
+            (
+                Report::Wrote {
+                    reload,
+                    preview,
+                    spp,
+                    changes,
+                    ..
+                },
+                Some(film),
+            ) => {
+                self.restart_progress(&mut state);
+                if shown.is_some_and(|r| r != *reload) {
+                    state.previous = state.current.take();
+                }
+                state.current = Some(Arc::new(Frame::new(*reload, film.clone())));
+                let render = match state.render.as_mut() {
+                    Some(r) if r.reload == *reload => r,
+                    _ => state.render.insert(Render {
+                        reload: *reload,
+                        started: Instant::now(),
+                        height: film.height,
+                        trigger: Vec::new(),
+                        since_save: Duration::ZERO,
+                    }),
+                };
+                render.height = film.height;
+                let elapsed = render.started.elapsed();
+                let pixels = f64::from(film.width) * f64::from(film.height);
+                let rate = pixels * f64::from(film.samples) / elapsed.as_secs_f64().max(1e-9);
+                json!({
+                    "kind": "pass",
+                    "reload": reload,
+                    "spp": film.samples,
+                    "preview": preview,
+                    "target_spp": spp,
+                    "width": film.width,
+                    "height": film.height,
+                    "changed": changed_text(changes),
+                    "trigger": render.trigger,
+                    "since_save_ms": ms(render.since_save + elapsed),
+                    "samples_per_s": rate.round(),
+                })
+            }
+            (Report::Rendered(r), _) if r.completed() => json!({
+                "kind": "done",
+                "reload": r.number,
+                "spp": r.spp,
+                "full_ms": r.full.map(ms),
+                "line": r.to_string(),
+            }),
+            (Report::Failed { message }, _) => {
+                let at = error_location(message);
+                let (file, line, col) = match &at {
+                    Some((f, l, c)) => (Some(f.display().to_string()), Some(*l), Some(*c)),
+                    None => (None, None, None),
+                };
+                json!({
+                    "kind": "error",
+                    "message": message,
+                    "file": file,
+                    "line": line,
+                    "col": col,
+                    "source_line": at.and_then(|(f, l, _)| source_line(&f, l)),
+                    "reload": shown,
+                })
+            }
+            (Report::SceneMissing { path }, _) => json!({
+                "kind": "error",
+                "message": format!("{}: deleted; waiting for it to come back", path.display()),
+                "reload": shown,
+            }),
+            _ => return,
+        };
+        let text = Self::broadcast(&mut state, &event);
+        let sticky = &mut state.sticky;
+        match event["kind"].as_str() {
+            // A good save starts afresh: the error and the old render's events no longer apply.
+            Some("reload") => {
+                *sticky = Sticky {
+                    reload: Some(text),
+                    ..Sticky::default()
+                }
+            }
+            Some("pass") => sticky.pass = Some(text),
+            Some("done") => sticky.done = Some(text),
+            _ => sticky.error = Some(text),
+        }
+    }
 }
 
 fn ms(d: Duration) -> f64 {
@@ -365,123 +483,6 @@ fn source_line(file: &Path, line: usize) -> Option<String> {
     let text = std::fs::read_to_string(file).ok()?;
     let l = text.lines().nth(line.checked_sub(1)?)?;
     Some(l.chars().take(MAX).collect())
-}
-
-impl Observer for Feed {
-    fn progress(&self) -> Option<ProgressBar> {
-        Some(self.shared.progress.clone())
-    }
-
-    fn reload(&self, report: &ReloadReport, settings: &SettingsDesc, saved: Instant) {
-        let mut state = self.state();
-        self.restart_progress(&mut state);
-        let trigger = names(&report.trigger);
-        state.render = Some(Render {
-            reload: report.number,
-            started: Instant::now(),
-            height: settings.height,
-            changed: String::new(),
-            trigger: trigger.clone(),
-        });
-        let event = json!({
-            "kind": "reload",
-            "reload": report.number,
-            "trigger": trigger,
-            "width": settings.width,
-            "height": settings.height,
-            "target_spp": settings.spp,
-            "since_save_ms": ms(saved.elapsed()),
-        });
-        let text = Self::broadcast(&mut state, &event);
-        state.sticky = Sticky {
-            reload: Some(text),
-            ..Sticky::default()
-        };
-    }
-
-    fn pass(&self, report: &ReloadReport, film: &Film, saved: Instant) {
-        // The copy is the only real work here (~1 ms at 512²); encodings are made on request.
-        let frame = Arc::new(Frame::new(report.number, film.clone()));
-        let mut state = self.state();
-        self.restart_progress(&mut state);
-        if state
-            .current
-            .as_ref()
-            .is_some_and(|c| c.reload != report.number)
-        {
-            state.previous = state.current.take();
-        }
-        state.current = Some(frame);
-        let render = match state.render.as_mut() {
-            Some(r) if r.reload == report.number => r,
-            _ => state.render.insert(Render {
-                reload: report.number,
-                started: Instant::now(),
-                height: film.height,
-                changed: String::new(),
-                trigger: names(&report.trigger),
-            }),
-        };
-        render.changed = changed_text(&report.changes);
-        let secs = render.started.elapsed().as_secs_f64().max(1e-9);
-        let pixels = f64::from(film.width) * f64::from(film.height);
-        let event = json!({
-            "kind": "pass",
-            "reload": report.number,
-            "spp": film.samples,
-            "target_spp": report.spp,
-            "width": film.width,
-            "height": film.height,
-            "changed": render.changed,
-            "trigger": render.trigger,
-            "since_save_ms": ms(saved.elapsed()),
-            "samples_per_s": (pixels * f64::from(film.samples) / secs).round(),
-        });
-        let text = Self::broadcast(&mut state, &event);
-        state.sticky.pass = Some(text);
-    }
-
-    fn report(&self, report: &Report) {
-        let mut state = self.state();
-        let shown = state.current.as_ref().map(|c| c.reload);
-        let event = match report {
-            Report::Rendered(r) if r.completed() => json!({
-                "kind": "done",
-                "reload": r.number,
-                "spp": r.spp,
-                "full_ms": r.full.map(ms),
-                "line": r.to_string(),
-            }),
-            Report::Failed { message } => {
-                let at = error_location(message);
-                let (file, line, col) = match &at {
-                    Some((f, l, c)) => (Some(f.display().to_string()), Some(*l), Some(*c)),
-                    None => (None, None, None),
-                };
-                json!({
-                    "kind": "error",
-                    "message": message,
-                    "file": file,
-                    "line": line,
-                    "col": col,
-                    "source_line": at.and_then(|(f, l, _)| source_line(&f, l)),
-                    "reload": shown,
-                })
-            }
-            Report::SceneMissing { path } => json!({
-                "kind": "error",
-                "message": format!("{}: deleted; waiting for it to come back", path.display()),
-                "reload": shown,
-            }),
-            _ => return,
-        };
-        let text = Self::broadcast(&mut state, &event);
-        if event["kind"] == "done" {
-            state.sticky.done = Some(text);
-        } else {
-            state.sticky.error = Some(text);
-        }
-    }
 }
 
 #[cfg(test)]

@@ -14,8 +14,9 @@
 //! The images answer `503` until the first pass exists. Query strings are ignored (`/image.png?t=1`
 //! is `/image.png`); paths are matched exactly, so `/../image.png` or `//image.png` are 404.
 //!
-//! The render loop talks to the server only through an [`Observer`] ([`Feed`] is the one the
-//! server provides): each call copies what it needs under a short lock and returns. Every
+//! The render loop talks to the server only through the watch loop's event point
+//! ([`crate::watch::Observer`], made by [`Feed::observer`]): each report copies what it needs
+//! under a short lock and returns. Every
 //! event-stream client has its own thread and a bounded queue: a client that stalls loses its
 //! oldest queued events, never blocks the render; a closed client is dropped at its next write.
 //!
@@ -33,7 +34,7 @@ use std::time::Duration;
 
 use tiny_http::{Header, Method, Request, Response, Server, StatusCode};
 
-pub use feed::{Feed, Frame, Observer, RAW_MAGIC};
+pub use feed::{Client, Feed, Frame, RAW_MAGIC, changed_text, error_location};
 
 /// The page, compiled into the binary.
 pub const PAGE: &str = include_str!("page.html");
