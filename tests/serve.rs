@@ -154,9 +154,13 @@ impl Reply {
 }
 
 fn request(addr: SocketAddr, method: &str, target: &str) -> Reply {
+    request_as(addr, method, target, &addr.to_string())
+}
+
+fn request_as(addr: SocketAddr, method: &str, target: &str, host: &str) -> Reply {
     let mut s = TcpStream::connect(addr).expect("connect");
     s.set_read_timeout(Some(WAIT)).expect("timeout");
-    write!(s, "{method} {target} HTTP/1.0\r\nHost: {addr}\r\n\r\n").expect("send");
+    write!(s, "{method} {target} HTTP/1.0\r\nHost: {host}\r\n\r\n").expect("send");
     let mut all = Vec::new();
     s.read_to_end(&mut all).expect("read reply");
     let split = all
@@ -301,6 +305,16 @@ fn routes_have_their_content_types_and_everything_else_is_404() {
         assert!(reply.body.len() < 100, "{target}: no file content");
     }
     assert_eq!(request(rondo.addr, "POST", "/image.png").status, 405);
+    // DNS rebinding: a page of another site that resolves to 127.0.0.1 sends its own Host.
+    let port = rondo.addr.port();
+    for (host, status) in [
+        (format!("evil.example:{port}"), 403),
+        (format!("localhost:{port}"), 200),
+        ("localhost:9000".into(), 200),
+    ] {
+        let reply = request_as(rondo.addr, "GET", "/image.png", &host);
+        assert_eq!(reply.status, status, "Host: {host}");
+    }
     let head = request(rondo.addr, "HEAD", "/image.png");
     assert_eq!((head.status, head.body.len()), (200, 0));
 
@@ -389,17 +403,21 @@ fn idle_and_stalled_clients_do_not_hold_up_the_render() {
     let idle: Vec<TcpStream> = (0..20)
         .map(|_| {
             let mut s = TcpStream::connect(rondo.addr).expect("connect");
-            write!(s, "GET /events HTTP/1.1\r\nHost: x\r\n\r\n").expect("send");
+            write!(s, "GET /events HTTP/1.1\r\nHost: localhost\r\n\r\n").expect("send");
             s
         })
         .collect();
     // And one client that asks for 100 images (20 MB, far more than loopback buffers hold) and
     // never reads: its connection's writer blocks for good.
     let mut stalled = TcpStream::connect(rondo.addr).expect("connect");
-    let pipelined = "GET /image.f32 HTTP/1.1\r\nHost: x\r\n\r\n".repeat(100);
+    let pipelined = "GET /image.f32 HTTP/1.1\r\nHost: localhost\r\n\r\n".repeat(100);
     stalled.write_all(pipelined.as_bytes()).expect("send");
     let mut stalled_events = TcpStream::connect(rondo.addr).expect("connect");
-    write!(stalled_events, "GET /events HTTP/1.1\r\nHost: x\r\n\r\n").expect("send");
+    write!(
+        stalled_events,
+        "GET /events HTTP/1.1\r\nHost: localhost\r\n\r\n"
+    )
+    .expect("send");
 
     for (reload, wall) in [(1, BLUE), (2, GREEN), (3, RED)] {
         rondo.save(&scene(wall, 128, 64));

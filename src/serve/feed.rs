@@ -41,6 +41,17 @@ pub const RAW_MAGIC: &[u8; 8] = b"RONDOF32";
 /// Events a stalled client may have queued; older ones are dropped.
 const QUEUE: usize = 32;
 
+/// The encodings of a [`Frame`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Encoding {
+    /// 8-bit sRGB PNG.
+    Png,
+    /// Linear float OpenEXR.
+    Exr,
+    /// Raw linear floats (see [`RAW_MAGIC`]).
+    Raw,
+}
+
 /// One image the server hands out; the encodings are made on first request.
 pub struct Frame {
     reload: u64,
@@ -80,13 +91,24 @@ impl Frame {
             for v in [f.width, f.height, self.reload as u32, f.samples] {
                 out.extend_from_slice(&v.to_le_bytes());
             }
-            for c in f.mean() {
-                for v in c.to_array() {
+            // As `Film::mean`, without its intermediate vector.
+            let scale = 1.0 / f64::from(f.samples.max(1));
+            for s in &f.sum {
+                for v in (*s * scale).as_vec3().to_array() {
                     out.extend_from_slice(&v.to_le_bytes());
                 }
             }
             out
         })
+    }
+
+    /// The bytes of one encoding (made now if it was not yet).
+    pub fn bytes(&self, encoding: Encoding) -> Result<&[u8], &str> {
+        match encoding {
+            Encoding::Png => self.png(),
+            Encoding::Exr => self.exr(),
+            Encoding::Raw => Ok(self.raw()),
+        }
     }
 
     /// PNG, encoded as [`Film::write`] encodes a `.png`.

@@ -13,6 +13,9 @@
 //!
 //! The images answer `503` until the first pass exists. Query strings are ignored (`/image.png?t=1`
 //! is `/image.png`); paths are matched exactly, so `/../image.png` or `//image.png` are 404.
+//! Bound to loopback, the server answers only requests whose `Host` names a loopback host
+//! (`127.0.0.1`, `localhost`, `[::1]`, any port, so SSH port forwards work) and `403` to the rest:
+//! a web page elsewhere cannot rebind its own name to 127.0.0.1 and read the images.
 //!
 //! The render loop talks to the server only through the watch loop's event point
 //! ([`crate::watch::Observer`], made by [`Feed::observer`]): each report copies what it needs
@@ -34,7 +37,7 @@ use std::time::Duration;
 
 use tiny_http::{Header, Method, Request, Response, Server, StatusCode};
 
-pub use feed::{Client, Feed, Frame, RAW_MAGIC, changed_text, error_location};
+pub use feed::{Client, Encoding, Feed, Frame, RAW_MAGIC, changed_text, error_location};
 
 /// The page, compiled into the binary.
 pub const PAGE: &str = include_str!("page.html");
@@ -116,7 +119,7 @@ impl Viewer {
             let (server, feed) = (server.clone(), feed.clone());
             std::thread::Builder::new()
                 .name("rondo-serve".into())
-                .spawn(move || accept_requests(&server, &feed))
+                .spawn(move || accept_requests(&server, &feed, addr.ip().is_loopback()))
         };
         let ticker = {
             let (feed, stop) = (feed.clone(), stop.clone());
@@ -178,14 +181,14 @@ impl Drop for Viewer {
 
 /// The accept loop: one short-lived thread per request, so a client that never reads its
 /// response holds only its own thread.
-fn accept_requests(server: &Server, feed: &Feed) {
+fn accept_requests(server: &Server, feed: &Feed, loopback: bool) {
     while let Ok(request) = server.recv() {
         let feed = feed.clone();
         // If no thread can be started, the request is dropped (the client sees a closed
         // connection) and the server goes on.
         let _ = std::thread::Builder::new()
             .name("rondo-serve-request".into())
-            .spawn(move || handle(request, &feed));
+            .spawn(move || handle(request, &feed, loopback));
     }
 }
 
@@ -228,7 +231,30 @@ fn text(status: u16, body: &str) -> Response<std::io::Cursor<Vec<u8>>> {
         .with_header(header("Cache-Control", "no-store"))
 }
 
-fn handle(request: Request, feed: &Feed) {
+/// Whether a `Host` header value names a loopback host (any port).
+fn loopback_host(host: &str) -> bool {
+    let name = match host.strip_prefix('[') {
+        Some(rest) => rest.split(']').next().unwrap_or(""),
+        None => host.rsplit_once(':').map_or(host, |(h, _)| h),
+    };
+    name.eq_ignore_ascii_case("localhost")
+        || name
+            .parse::<std::net::IpAddr>()
+            .is_ok_and(|ip| ip.is_loopback())
+}
+
+fn handle(request: Request, feed: &Feed, loopback: bool) {
+    if loopback {
+        let host = request
+            .headers()
+            .iter()
+            .find(|h| h.field.equiv("Host"))
+            .map(|h| h.value.as_str().to_string());
+        if !host.as_deref().is_some_and(loopback_host) {
+            let _ = request.respond(text(403, "the viewer answers only to a loopback Host\n"));
+            return;
+        }
+    }
     let route = Route::of(request.url());
     let method_ok = matches!(request.method(), Method::Get | Method::Head);
     let response = match route {
@@ -251,23 +277,53 @@ fn handle(request: Request, feed: &Feed) {
                 let _ = request.respond(text(503, "no image yet\n"));
                 return;
             };
-            let bytes = match route {
-                Route::Png => frame.png(),
-                Route::Exr => frame.exr(),
-                _ => Ok(frame.raw()),
+            let encoding = match route {
+                Route::Png => Encoding::Png,
+                Route::Exr => Encoding::Exr,
+                _ => Encoding::Raw,
             };
-            match bytes {
-                Ok(bytes) => Response::from_data(bytes.to_vec())
-                    .with_header(header("Content-Type", content_type))
-                    .with_header(header("Cache-Control", "no-store"))
-                    .with_header(header("X-Rondo-Reload", &frame.reload().to_string()))
-                    .with_header(header("X-Rondo-Samples", &frame.samples().to_string())),
+            match frame.bytes(encoding).map(<[u8]>::len) {
+                Ok(len) => {
+                    let headers = vec![
+                        header("Content-Type", content_type),
+                        header("Cache-Control", "no-store"),
+                        header("X-Rondo-Reload", &frame.reload().to_string()),
+                        header("X-Rondo-Samples", &frame.samples().to_string()),
+                    ];
+                    let body = FrameBody {
+                        frame,
+                        encoding,
+                        at: 0,
+                    };
+                    // A Content-Length body, not 8 KiB chunks; read from the shared frame, no copy.
+                    let response = Response::new(StatusCode(200), headers, body, Some(len), None)
+                        .with_chunked_threshold(usize::MAX);
+                    let _ = request.respond(response);
+                    return;
+                }
                 Err(e) => text(500, &format!("cannot encode the image: {e}\n")),
             }
         }
     };
     // The client may be gone already; nothing to do then.
     let _ = request.respond(response);
+}
+
+/// A response body that reads one encoding of a shared frame.
+struct FrameBody {
+    frame: Arc<feed::Frame>,
+    encoding: Encoding,
+    at: usize,
+}
+
+impl std::io::Read for FrameBody {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let bytes = self.frame.bytes(self.encoding).unwrap_or_default();
+        let n = buf.len().min(bytes.len().saturating_sub(self.at));
+        buf[..n].copy_from_slice(&bytes[self.at..self.at + n]);
+        self.at += n;
+        Ok(n)
+    }
 }
 
 /// Answers `/events`: writes the response head, then hands the socket to a loop that writes
@@ -320,6 +376,28 @@ mod tests {
             "http://127.0.0.1/image.png",
         ] {
             assert_eq!(Route::of(bad), None, "{bad}");
+        }
+    }
+
+    #[test]
+    fn only_loopback_host_names_pass() {
+        for ok in [
+            "127.0.0.1:8730",
+            "localhost:9000",
+            "LOCALHOST",
+            "[::1]:8730",
+            "127.1.2.3",
+        ] {
+            assert!(loopback_host(ok), "{ok}");
+        }
+        for bad in [
+            "evil.example:8730",
+            "192.168.1.2:8730",
+            "localhost.evil.example",
+            "[::2]:80",
+            "",
+        ] {
+            assert!(!loopback_host(bad), "{bad}");
         }
     }
 

@@ -194,7 +194,7 @@ async function latency(context) {
   if (!original.includes(red)) throw new Error("scenes/cornell.ron: no red material to edit");
   fs.writeFileSync(file, original);
   const rondo = startRondo(file, ["-o", path.join(dir, "out.png")]);
-  const rows = [], stream = [];
+  const rows = [], stream = [], fetches = [], draws = [];
   try {
     const page = await context.newPage();
     await page.goto(await rondo.url);
@@ -222,6 +222,9 @@ async function latency(context) {
         window.__events.find((s) => s.reload === n).at], i);
       rows.push(drawn - saved);
       stream.push(event - saved);
+      const [fetchMs, drawMs] = await page.evaluate(() => [document.body.dataset.fetchMs, document.body.dataset.drawMs]);
+      fetches.push(Number(fetchMs));
+      draws.push(Number(drawMs));
     }
     await page.close();
   } finally {
@@ -239,6 +242,7 @@ async function latency(context) {
   if (disk.length) console.log(`  on disk (rondo's log)     ${stats(disk)}`);
   console.log(`  on the stream (page)      ${stats(stream)}`);
   console.log(`  drawn on the page         ${stats(rows)}`);
+  console.log(`    of which: fetch of /image.f32 ${stats(fetches)}, tone-map and draw ${stats(draws)}`);
   check("the page shows each edit", rows.length === LATENCY_EDITS);
 }
 
