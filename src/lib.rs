@@ -17,6 +17,7 @@ pub mod lights;
 pub mod metrics;
 pub mod render;
 pub mod scene;
+pub mod serve;
 pub mod shading;
 pub mod systems;
 pub mod watch;

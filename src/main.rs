@@ -43,9 +43,13 @@ enum Command {
     Watch {
         /// Scene file (.ron).
         scene: PathBuf,
-        /// Output image (.png or .exr).
-        #[arg(short, long, value_parser = image_path)]
-        output: PathBuf,
+        /// Output image (.png or .exr); optional with --serve.
+        #[arg(short, long, value_parser = image_path, required_unless_present = "serve")]
+        output: Option<PathBuf>,
+        /// Show every pass in a browser: serve a live viewer on ADDR (HOST:PORT or a port;
+        /// default 127.0.0.1:8730, or a free port if that one is taken).
+        #[arg(long, value_name = "ADDR")]
+        serve: Option<Option<String>>,
         /// Samples per pixel of the first pass.
         #[arg(long, default_value_t = 1, value_parser = at_least_one_u32())]
         first_spp: u32,
@@ -360,9 +364,18 @@ fn run(cli: Cli) -> Result<()> {
         Command::Watch {
             scene,
             output,
+            serve,
             first_spp,
             options,
-        } => watch(options.watch_options(&scene, &output, first_spp)?),
+        } => {
+            let mut watch_options = options.watch_options(
+                &scene,
+                output.as_deref().unwrap_or(Path::new("")),
+                first_spp,
+            )?;
+            watch_options.output = output;
+            watch(watch_options, serve)
+        }
         Command::Bench {
             what:
                 BenchCommand::Watch {
@@ -536,10 +549,30 @@ impl RenderArgs {
     }
 }
 
-/// `rondo watch`: runs until Ctrl-C, one line per reload on stderr.
-fn watch(options: WatchOptions) -> Result<()> {
-    check_output_file(&options.output)?;
-    let watch = Watch::new(options)?;
+/// `rondo watch`: runs until Ctrl-C, one line per reload on stderr; with `serve`, also serves
+/// the live viewer.
+fn watch(options: WatchOptions, serve: Option<Option<String>>) -> Result<()> {
+    if let Some(output) = &options.output {
+        check_output_file(output)?;
+    }
+    let mut watch = Watch::new(options)?;
+    // Viewer hook: start the server and feed it every reload, pass and report.
+    let viewer = match serve {
+        Some(addr) => {
+            let fall_back = addr.is_none();
+            let addr =
+                rondo::serve::parse_addr(addr.as_deref().unwrap_or(rondo::serve::DEFAULT_ADDR))?;
+            let (viewer, feed) = rondo::serve::Viewer::start(addr, fall_back)?;
+            if let Some(warning) = viewer.exposure_warning() {
+                eprintln!("warning: {warning}");
+            }
+            eprintln!("viewer: {}", viewer.url());
+            watch.set_observer(feed.observer());
+            watch.set_progress(feed.progress_bar());
+            Some(viewer)
+        }
+        None => None,
+    };
     let stop = watch.stop_handle();
     ctrlc::set_handler(move || stop.stop()).context("cannot install the Ctrl-C handler")?;
     watch.run(|report| {
@@ -547,6 +580,7 @@ fn watch(options: WatchOptions) -> Result<()> {
             eprintln!("{line}");
         }
     });
+    drop(viewer);
     eprintln!("stopped");
     Ok(())
 }
