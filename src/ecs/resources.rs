@@ -35,7 +35,9 @@ pub struct RenderSettings(pub SettingsDesc);
 #[derive(Resource, Clone, Debug, PartialEq, Default)]
 pub struct MaterialTable(pub BTreeMap<String, Material>);
 
-/// Bumped on every applied scene, changed or not: every save re-renders.
+/// Bumped on every applied scene that changes anything (see [`ChangeSummary::is_empty`]): an
+/// unchanged save, or a metadata-only event, keeps the render going instead of starting over,
+/// since a deterministic render of the same scene gives the same image.
 #[derive(Resource, Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct SceneVersion(pub u64);
 
@@ -91,6 +93,16 @@ pub struct ChangeSummary {
     pub camera: bool,
     /// Whether the settings changed.
     pub settings: bool,
+    /// Whether entities kept by the reload changed their order in the scene (geometry is packed
+    /// in scene order, so this rebuilds the BVH).
+    pub reordered: bool,
+}
+
+impl ChangeSummary {
+    /// Whether the reload changed nothing at all.
+    pub fn is_empty(&self) -> bool {
+        *self == Self::default()
+    }
 }
 
 /// Work counters, so tests can assert what a reload did.
@@ -140,8 +152,8 @@ pub struct RenderControl {
     pub progress: Option<indicatif::ProgressBar>,
     /// Russian roulette on (the default; off only to test that it is unbiased).
     pub roulette: bool,
-    /// Progressive renders start with a preview of one sample per `preview_block`² pixels
-    /// (1 = no preview).
+    /// Progressive renders start with a preview of one sample per `preview_block`² pixels, or
+    /// larger blocks for large images (see [`crate::systems::preview_block`]); 1 = no preview.
     pub preview_block: u32,
     /// Layout of the geometry the render reads; images are bit-identical in every layout.
     pub layout: LayoutKind,
