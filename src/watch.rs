@@ -458,8 +458,9 @@ impl FileWatcher {
 pub struct WatchOptions {
     /// The scene file.
     pub scene: PathBuf,
-    /// The output image (`.png` or `.exr`), rewritten atomically after every pass.
-    pub output: PathBuf,
+    /// The output image (`.png` or `.exr`), rewritten atomically after every pass; `None` to
+    /// write no file (when an [`Observer`] shows the images instead: `watch --serve`).
+    pub output: Option<PathBuf>,
     /// Render threads (all cores if `None`).
     pub threads: Option<usize>,
     /// Settings overrides applied to every load.
@@ -478,7 +479,7 @@ impl WatchOptions {
     pub fn new(scene: impl Into<PathBuf>, output: impl Into<PathBuf>) -> Self {
         Self {
             scene: scene.into(),
-            output: output.into(),
+            output: Some(output.into()),
             threads: None,
             overrides: Overrides::default(),
             layout: LayoutKind::default(),
@@ -707,6 +708,8 @@ pub enum Report {
         preview: bool,
         /// Samples per pixel the scene asks for.
         spp: u32,
+        /// What the reload changed in the world.
+        changes: ChangeSummary,
         /// When the write finished.
         at: Instant,
     },
@@ -932,8 +935,10 @@ pub struct Watch {
 impl Watch {
     /// Checks the options, builds the renderer and starts watching the scene's directory.
     pub fn new(options: WatchOptions) -> Result<Self, WatchError> {
-        if OutputKind::from_path(&options.output).is_none() {
-            return Err(WatchError::Output(options.output));
+        if let Some(output) = &options.output
+            && OutputKind::from_path(output).is_none()
+        {
+            return Err(WatchError::Output(output.clone()));
         }
         let plan = PassPlan::Progressive {
             first: options.first_pass.max(1),
@@ -947,7 +952,9 @@ impl Watch {
         let cancel = renderer.cancel_flag();
         let (tx, events) = mpsc::channel();
         let mut watcher = FileWatcher::new(cancel.clone(), tx.clone())?;
-        watcher.ignore(&options.output);
+        if let Some(output) = &options.output {
+            watcher.ignore(output);
+        }
         let scene = vec![options.scene.clone()];
         if watch_key(&options.scene).is_err() {
             let message = "its directory does not exist".to_string();
@@ -962,7 +969,11 @@ impl Watch {
                 message,
             });
         }
-        let output_key = watch_key(&options.output).ok().map(|(_, key)| key);
+        let output_key = options
+            .output
+            .as_deref()
+            .and_then(|o| watch_key(o).ok())
+            .map(|(_, key)| key);
         let stop = StopHandle {
             stopped: Arc::new(AtomicBool::new(false)),
             cancel: cancel.clone(),
@@ -995,6 +1006,12 @@ impl Watch {
     /// Sets the observer that sees every report, with the film of each written pass.
     pub fn set_observer(&mut self, observer: Observer) {
         self.observer = Some(observer);
+    }
+
+    /// Attaches a (hidden) progress bar that the renderer advances by rows rendered (the live
+    /// viewer's progress indicator).
+    pub fn set_progress(&mut self, bar: indicatif::ProgressBar) {
+        self.renderer.set_progress(Some(bar));
     }
 
     /// Loads and renders the scene, then re-renders on every relevant save until stopped.
@@ -1255,7 +1272,13 @@ impl Watch {
                 r.preview = !now.real;
             }
             if now > self.on_disk {
-                match film.write_live(&self.options.output) {
+                // No output file with `--serve` alone: the observer shows the image.
+                let written = self
+                    .options
+                    .output
+                    .as_deref()
+                    .map_or(Ok(()), |o| film.write_live(o));
+                match written {
                     Ok(()) => {
                         let at = Instant::now();
                         self.on_disk = now;
@@ -1268,13 +1291,14 @@ impl Watch {
                             samples: now.samples,
                             preview: !now.real,
                             spp: r.spp,
+                            changes: r.changes.clone(),
                             at,
                         };
                         out.emit(report, Some(film));
                     }
                     Err(e) => {
-                        let message =
-                            format!("{}: cannot write image: {e}", self.options.output.display());
+                        let output = self.options.output.as_deref().unwrap_or(Path::new(""));
+                        let message = format!("{}: cannot write image: {e}", output.display());
                         out.emit(Report::Warning { message }, None);
                     }
                 }
