@@ -9,6 +9,7 @@
 pub mod app;
 pub mod bench;
 pub mod camera;
+pub mod cli;
 pub mod ecs;
 pub mod film;
 pub mod geometry;
