@@ -297,7 +297,8 @@ impl Feed {
             return;
         }
         state.progress_sent = rows;
-        let Some(render) = state.render.as_ref() else {
+        // The height is known from the render's first image on (the preview comes first).
+        let Some(render) = state.render.as_ref().filter(|r| r.height > 0) else {
             return;
         };
         let event = json!({
