@@ -16,6 +16,8 @@ use crate::shading::texture::Texture;
 
 /// Marks a primitive slot that is not an emitter.
 const NONE: u32 = u32::MAX;
+/// The largest `f32` below 1.
+const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Emitter {
@@ -163,7 +165,8 @@ impl LightSet {
         self.emitters.len()
     }
 
-    /// Samples a point: `u_select` picks the emitter, `u` the point on it.
+    /// Samples a point: `u_select` picks the emitter; its remainder within the emitter's share,
+    /// rescaled to [0, 1), and `u.y` pick the point on it (`u.x` is not used).
     #[inline]
     pub fn sample<L: Layout>(
         &self,
@@ -177,6 +180,11 @@ impl LightSet {
             .min(self.emitters.len().checked_sub(1)?);
         let e = self.emitters[k];
         let i = e.index as usize;
+        // Where `u_select` fell within the chosen emitter's share, rescaled to [0, 1), is the
+        // first coordinate of the point (pbrt-v4's remapped discrete sample): the integrator
+        // passes `u_select = u.x`, so one stratified 2D sample picks both emitter and point.
+        let lo = if k == 0 { 0.0 } else { self.cdf[k - 1] };
+        let u = Vec2::new(((u_select - lo) / self.pmf[k]).clamp(0.0, ONE_BELOW), u.y);
         let (p, n, uv, err) = match e.kind {
             HitKind::Sphere => {
                 let (c, r) = geometry.spheres.get(i);

@@ -11,6 +11,7 @@ use rondo::bench::layout;
 use rondo::film::OutputKind;
 use rondo::geometry::layout::LayoutKind;
 use rondo::scene::format::Method;
+use rondo::shading::sampler::SamplerKind;
 use rondo::watch::{Report, Watch, WatchOptions, WatchSession};
 use rondo::{Overrides, PassPlan, Renderer};
 
@@ -193,6 +194,9 @@ struct RenderArgs {
     /// Light-transport method: naive, nee or mis (overrides the scene).
     #[arg(long)]
     method: Option<Method>,
+    /// Sample generator: independent or sobol (overrides the scene).
+    #[arg(long)]
+    sampler: Option<SamplerKind>,
     /// Geometry layout: soa, aos or soa-simd. Images are bit-identical; only speed differs.
     #[arg(long, default_value_t = LayoutKind::default())]
     layout: LayoutKind,
@@ -208,6 +212,7 @@ impl RenderArgs {
             max_depth: self.max_depth,
             seed: self.seed,
             method: self.method,
+            sampler: self.sampler,
         }
     }
 

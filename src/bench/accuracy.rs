@@ -180,6 +180,7 @@ pub fn measure(
         max_depth: options.max_depth,
         seed: Some(seed),
         method: Some(method),
+        ..Default::default()
     };
     // Warm-up, not recorded: builds the BVH and touches every page once.
     renderer.set_overrides(overrides(options.methods[0], 1, options.seed));

@@ -9,6 +9,7 @@ use serde::de::Error as _;
 use serde::{Deserialize, Deserializer};
 
 use crate::ecs::components::Shape;
+use crate::shading::sampler::SamplerKind;
 
 /// A finite number (RON accepts `inf` and `NaN`; scenes may not).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -223,7 +224,8 @@ impl std::fmt::Display for Method {
     }
 }
 
-/// `Settings(width, height, spp, max_depth, background, seed, method)`; every field optional.
+/// `Settings(width, height, spp, max_depth, background, seed, method, sampler)`; every field
+/// optional.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Settings", try_from = "RawSettings")]
 pub struct SettingsDesc {
@@ -241,6 +243,8 @@ pub struct SettingsDesc {
     pub seed: u64,
     /// Light-transport method.
     pub method: Method,
+    /// Sample generator.
+    pub sampler: SamplerKind,
 }
 
 impl Default for SettingsDesc {
@@ -253,6 +257,7 @@ impl Default for SettingsDesc {
             background: Vec3::ZERO,
             seed: 0,
             method: Method::Mis,
+            sampler: SamplerKind::default(),
         }
     }
 }
@@ -267,6 +272,7 @@ struct RawSettings {
     background: Option<Color>,
     seed: Option<u64>,
     method: Option<Method>,
+    sampler: Option<SamplerKind>,
 }
 
 impl TryFrom<RawSettings> for SettingsDesc {
@@ -281,6 +287,7 @@ impl TryFrom<RawSettings> for SettingsDesc {
             background: raw.background.map_or(d.background, |c| c.0),
             seed: raw.seed.unwrap_or(d.seed),
             method: raw.method.unwrap_or(d.method),
+            sampler: raw.sampler.unwrap_or(d.sampler),
         };
         s.validate()?;
         Ok(s)
