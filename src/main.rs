@@ -126,7 +126,7 @@ enum BenchCommand {
         workloads: Vec<String>,
     },
     /// Error against a reference image as a function of render time, for each light-transport
-    /// method over a sweep of spp (renders interleaved); writes accuracy.csv, accuracy.svg (log-log
+    /// method and sampler over a sweep of spp (renders interleaved); writes accuracy.csv, accuracy.svg (log-log
     /// RMSE against time) and summary.md (equal-time comparison) in --out.
     Accuracy {
         /// Scene file (.ron).
@@ -144,6 +144,9 @@ enum BenchCommand {
         /// Methods compared, comma-separated.
         #[arg(long, value_delimiter = ',', default_value = "naive,nee,mis")]
         methods: Vec<Method>,
+        /// Samplers compared with every method, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "sobol")]
+        samplers: Vec<SamplerKind>,
         /// Rays per path, camera ray included (overrides the scene).
         #[arg(long)]
         max_depth: Option<u32>,
@@ -282,6 +285,7 @@ fn run(cli: Cli) -> Result<()> {
                     out,
                     spp_list,
                     methods,
+                    samplers,
                     max_depth,
                     threads,
                     seed,
@@ -292,6 +296,7 @@ fn run(cli: Cli) -> Result<()> {
             out,
             spp_list,
             methods,
+            samplers,
             threads,
             max_depth,
             seed,
@@ -640,8 +645,9 @@ fn bench_accuracy(options: &rondo::bench::accuracy::AccuracyOptions) -> Result<(
     }
     let report = rondo::bench::accuracy::run(options, |r| {
         eprintln!(
-            "{:>5} {:>6} spp  {:9.4} s  rmse {:.4e}  rel_mse {:.4e}  mae {:.4e}",
+            "{:>5} {:>11} {:>6} spp  {:9.4} s  rmse {:.4e}  rel_mse {:.4e}  mae {:.4e}",
             r.method.to_string(),
+            r.sampler.to_string(),
             r.spp,
             r.seconds,
             r.metrics.rmse,
