@@ -308,18 +308,19 @@ fn write_error(path: &Path) -> impl Fn(std::io::Error) -> AccuracyError + '_ {
 
 /// Writes `rows` as CSV with a header line.
 pub fn write_csv(path: &Path, rows: &[AccuracyRow]) -> Result<(), AccuracyError> {
-    let mut text = String::from("method,sampler,spp,seed,seconds,rmse,rel_mse,mae\n");
+    // The sampler comes last, so the columns of files written before it keep their places.
+    let mut text = String::from("method,spp,seed,seconds,rmse,rel_mse,mae,sampler\n");
     for r in rows {
         text += &format!(
-            "{},{},{},{},{:.6},{:.6e},{:.6e},{:.6e}\n",
+            "{},{},{},{:.6},{:.6e},{:.6e},{:.6e},{}\n",
             r.method,
-            r.sampler,
             r.spp,
             r.seed,
             r.seconds,
             r.metrics.rmse,
             r.metrics.rel_mse,
-            r.metrics.mae
+            r.metrics.mae,
+            r.sampler
         );
     }
     std::fs::write(path, text).map_err(write_error(path))
