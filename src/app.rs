@@ -10,7 +10,8 @@ use bevy_ecs::schedule::{SystemCondition, common_conditions::resource_changed};
 
 use crate::ecs::resources::{
     Accumulation, ActiveCamera, ChangeSummary, Counters, MaterialTable, Output, OwnerMaterials,
-    PackedGeometry, PassPlan, PendingScene, RenderControl, RenderSettings, SceneVersion, Timings,
+    PackedGeometry, PassPlan, PendingScene, Preview, RenderControl, RenderSettings, SceneVersion,
+    Timings,
 };
 use crate::ecs::sets::RenderSystems;
 use crate::film::Film;
@@ -166,7 +167,11 @@ impl Renderer {
     /// Sets the geometry layout the renderer traces (default: [`LayoutKind::default`]). Images
     /// are bit-identical in every layout; only speed differs.
     pub fn set_layout(&mut self, layout: LayoutKind) {
-        self.world.resource_mut::<RenderControl>().layout = layout;
+        let mut control = self.world.resource_mut::<RenderControl>();
+        if control.layout != layout {
+            control.layout = layout;
+            self.restart_render();
+        }
     }
 
     /// Places meshes as instances of a shared BVH (`true`, the default) or copies their
@@ -177,7 +182,20 @@ impl Renderer {
 
     /// Turns Russian roulette on or off (on by default; both are unbiased).
     pub fn set_roulette(&mut self, on: bool) {
-        self.world.resource_mut::<RenderControl>().roulette = on;
+        let mut control = self.world.resource_mut::<RenderControl>();
+        if control.roulette != on {
+            control.roulette = on;
+            self.restart_render();
+        }
+    }
+
+    /// Starts the loaded scene's render over (a reload of an unchanged scene keeps the film, so
+    /// a change of how it is traced must say so).
+    fn restart_render(&mut self) {
+        let mut version = self.world.resource_mut::<SceneVersion>();
+        if version.0 > 0 {
+            version.0 += 1;
+        }
     }
 
     /// Attaches a progress bar advanced by rendered rows.
@@ -193,6 +211,7 @@ impl Renderer {
     /// Loads the scene at `path` (textures through the cache), applies the overrides and queues
     /// it for the next frame. Returns what was loaded.
     pub fn load(&mut self, path: &Path) -> Result<LoadInfo, SceneError> {
+        self.assets.begin_load();
         let mut scene = load_scene(path, &mut self.assets)?;
         self.overrides
             .apply(&mut scene.settings)
@@ -278,6 +297,18 @@ impl Renderer {
             .resource::<PackedGeometry>()
             .geometry
             .primitive_count()
+    }
+
+    /// Every texture, mesh and prefab path the last [`Renderer::load`] asked for, found or not:
+    /// after a failed load, the files that may fix it.
+    pub fn requested(&self) -> Vec<std::path::PathBuf> {
+        self.assets.requested().to_vec()
+    }
+
+    /// Whether the film holds the reduced-resolution preview rather than real samples (its
+    /// sample count is then 1 but its pixels are blocks).
+    pub fn film_is_preview(&self) -> bool {
+        self.world.resource::<Accumulation>().preview == Preview::InFilm
     }
 
     /// Number of mesh file loads by the asset cache.

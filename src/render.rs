@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use crate::camera::Camera;
 use crate::film::Film;
 use crate::geometry::layout::{DefaultLayout, Layout, SphereStore, TriangleStore};
-use crate::geometry::packed::{Geometry, Hit, HitKind, Surface};
+use crate::geometry::packed::{Geometry, Hit, HitKind, LayoutKind, Surface};
 use crate::geometry::ray::{Ray, gamma, spawn_origin};
 use crate::lights::LightSet;
 use crate::scene::format::Method;
@@ -53,6 +53,9 @@ pub struct TraceStats {
     pub rays: u64,
     /// Samples whose radiance was NaN or infinite; they are dropped, never written.
     pub nonfinite: u64,
+    /// Passes traced in each layout, in the order of [`LayoutKind::ALL`]: which monomorphised
+    /// code really ran.
+    pub layout_passes: [u64; 4],
 }
 
 impl std::ops::Add for TraceStats {
@@ -61,6 +64,7 @@ impl std::ops::Add for TraceStats {
         Self {
             rays: self.rays + o.rays,
             nonfinite: self.nonfinite + o.nonfinite,
+            layout_passes: std::array::from_fn(|k| self.layout_passes[k] + o.layout_passes[k]),
         }
     }
 }
@@ -159,14 +163,14 @@ pub fn trace_path<L: Layout, S: Sampler>(
             let emitted = material.emitted(ray.direction, s.n, s.uv);
             let weight = match previous {
                 Some((p_prev, pdf_bsdf)) if sample_lights => {
-                    let pdf_area = view.lights.pdf_area(hit.kind, hit.index);
-                    if pdf_area == 0.0 {
+                    let pdf_light =
+                        view.lights
+                            .pdf(view.geometry, hit.kind, hit.index, p_prev, s.p, s.n);
+                    if pdf_light == 0.0 {
                         1.0
                     } else if view.method == Method::Nee {
                         0.0
                     } else {
-                        let cos = ray.direction.dot(s.n).abs();
-                        let pdf_light = pdf_area * (s.p - p_prev).length_squared() / cos;
                         power_heuristic(pdf_bsdf, pdf_light)
                     }
                 }
@@ -247,7 +251,7 @@ fn direct_light<L: Layout>(
 ) -> Vec3 {
     // One 2D sample picks the emitter and the point on it, so both are stratified together.
     let u = sampler.next_2d();
-    let Some(light) = view.lights.sample(view.geometry, u.x, u) else {
+    let Some(light) = view.lights.sample(view.geometry, s.p, u.x, u) else {
         return Vec3::ZERO;
     };
     let to_light = light.p - s.p;
@@ -269,8 +273,7 @@ fn direct_light<L: Layout>(
     if f_cos == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    let cos_light = wi.dot(light.n).abs();
-    let pdf_light = light.pdf_area * dist2 / cos_light;
+    let pdf_light = light.pdf;
     if !(pdf_light > 0.0 && pdf_light.is_finite()) {
         return Vec3::ZERO;
     }
@@ -372,6 +375,10 @@ fn render_pass_with<L: Layout, S: Sampler>(
         return Err(Cancelled);
     }
     film.samples = samples.end;
+    let mut stats = stats;
+    if let Some(slot) = LayoutKind::ALL.iter().position(|&k| k == L::KIND) {
+        stats.layout_passes[slot] += 1;
+    }
     Ok(stats)
 }
 

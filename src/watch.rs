@@ -1,19 +1,58 @@
 //! Live editing: re-render a scene whenever a file it depends on is saved.
 //!
 //! Two halves:
-//! - [`FileWatcher`] is the notify debouncer thread. It watches the *parent directories* of the
-//!   scene's dependencies and turns relevant file events into [`FileEvent`]s on a channel. It
-//!   knows nothing of the ECS or the renderer, only a cancel flag that it raises so the pass in
-//!   flight stops within one band of rows.
+//! - [`FileWatcher`] turns notify's raw file events into [`FileEvent`]s on a channel, the moment
+//!   they happen. It knows nothing of the ECS or the renderer, only a cancel flag that it raises
+//!   so the pass in flight stops within one band of rows.
 //! - [`Watch`] is the loop that drives a [`Renderer`] through its public API: reload on an event,
 //!   keep the last good scene (and image) when a save is bad, render progressively and write the
 //!   image after each pass, and describe each step as a [`Report`]. [`WatchSession`] runs it on a
 //!   thread for tests and tools.
 //!
-//! Directories are watched, not files, because editors save in different ways. Vim and many IDEs
-//! write a temporary file and rename it over the original: a watch on the original file (an
-//! inode) dies with it, while a watch on the directory sees the new file arrive under the same
-//! name. Truncate-then-write and delete-then-recreate look the same from the directory.
+//! # What is watched
+//!
+//! Directories, not files, because editors save in different ways. Vim and many IDEs write a
+//! temporary file and rename it over the original: a watch on the original file (an inode) dies
+//! with it, while a watch on the directory sees the new file arrive under the same name.
+//! Truncate-then-write and delete-then-recreate look the same from the directory. Beyond the
+//! directories of the dependencies:
+//! - the *parent* of each of them, so that a directory deleted, renamed or replaced
+//!   (`mv prefabs old && cp -r old prefabs`) is seen and watched again (the old watch follows the
+//!   old inode);
+//! - for a dependency whose directory does not exist (yet), the nearest existing ancestor, so
+//!   that creating the directory arms a watch on it;
+//! - for a symlinked dependency, the directory of its target as well;
+//! - after a failed load, every file that load asked for (a texture, mesh or prefab that does not
+//!   exist yet), not only the dependencies of the last good load.
+//!
+//! Whenever the set of watched directories grows, the scene is read once more right away: a
+//! file written between the load and the new watch would otherwise go unnoticed.
+//!
+//! # When a save is loaded
+//!
+//! As soon as it is complete. On Linux the kernel says when: the writer closed the file
+//! (`IN_CLOSE_WRITE`) or renamed it into place (`IN_MOVED_TO`). The loop then loads at once;
+//! a file that is still being written (an event without its close) holds the load back until
+//! [`DEBOUNCE`] has passed without events, which is also the fallback where the platform reports
+//! no close. A load that fails is not reported at once: the rest of the save may follow (a slow
+//! writer, a delete-then-recreate), so the error waits three windows for more events and is
+//! reported only if none come ([`Report::Deferred`] says that it waits). A half-written save is
+//! therefore never rendered on Linux (its close has not happened) and never reported as an
+//! error that the complete save then replaces. A newer event cancels the pass in flight and
+//! starts over; a metadata-only event (`touch`, `chmod`) reloads without cancelling, and a
+//! reload that changes nothing keeps the render going.
+//!
+//! # The event point
+//!
+//! Everything the loop does goes out through one function, `Emitter::emit`, as a [`Report`]:
+//! [`Report::Started`] when a reload has loaded and its render begins, [`Report::Wrote`] after
+//! each pass that improved the image (with the [`Film`] it came from), [`Report::Failed`] with a
+//! `file:line:col` message, [`Report::Rendered`] when the render is done (complete or
+//! superseded), plus [`Report::Watching`], [`Report::SceneMissing`], [`Report::Deferred`] and
+//! [`Report::Warning`]. Each report goes first to the [`Observer`] set with
+//! [`Watch::set_observer`] (which also gets the film for `Wrote`), then to the callback of
+//! [`Watch::run`]. An observer runs on the render thread: it must return quickly (copy what it
+//! needs and hand it to its own thread).
 //!
 //! ```no_run
 //! use std::time::Duration;
@@ -33,38 +72,28 @@ use std::collections::{BTreeSet, HashSet};
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
+use std::sync::mpsc::{self, Receiver, Sender};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use notify_debouncer_full::notify::event::{AccessKind, AccessMode, MetadataKind, ModifyKind};
-use notify_debouncer_full::notify::{self, EventKind, RecommendedWatcher, RecursiveMode};
-use notify_debouncer_full::{DebounceEventResult, Debouncer, RecommendedCache, new_debouncer};
+use notify::event::{AccessKind, AccessMode, CreateKind, MetadataKind, ModifyKind, RenameMode};
+use notify::{EventKind, RecommendedWatcher, RecursiveMode, Watcher};
 
 use crate::app::{Overrides, Renderer};
 use crate::ecs::resources::{ChangeSummary, Counters, PassPlan};
-use crate::film::OutputKind;
+use crate::film::{Film, OutputKind};
 use crate::geometry::layout::LayoutKind;
 
-/// How long the debouncer holds a file event before passing it on.
+/// How long the files must be quiet before a save that is not known to be complete is loaded,
+/// and a third of how long a failed load waits for the rest of its save before it is reported.
 ///
 /// 50 ms: the steps of one save (truncate + write + fsync + chmod, or write a temporary file and
 /// rename it, or vim's backup-rename + write + delete) land within about 10 ms of each other
 /// (vim here: 8 ms from truncate to the last attribute change, the fsync in between), so 50 ms
-/// turns a save into one reload with room to spare on a loaded machine; and it is half of the
-/// ~100 ms within which a response still feels immediate, leaving the rest for the first pass.
-///
-/// The debouncer (notify-debouncer-full) releases each raw event once it is a window old,
-/// checking every [`tick`] (a tenth of the window), so the steps of one save can come out in
-/// batches a tick apart; the loop merges batches until a quiet gap of two ticks. A save is thus
-/// acted on 60–65 ms after its last write.
+/// holds a save together with room to spare on a loaded machine. Saves that end in a close or a
+/// rename (every editor on Linux) do not wait for it: they load as soon as that event arrives.
 pub const DEBOUNCE: Duration = Duration::from_millis(50);
-
-/// How often the debouncer checks for events old enough to release: a tenth of the window.
-pub fn tick(window: Duration) -> Duration {
-    (window / 10).max(Duration::from_millis(1))
-}
 
 /// How often an idle loop wakes to check its stop flag even without events (stopping also sends
 /// a wake-up, so this is only a safety net).
@@ -101,70 +130,121 @@ pub enum WatchError {
 // ------------------------------------------------------------------------------------------------
 // The file watcher: notify → channel.
 
+/// What an event says about a file's contents.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Effect {
+    /// Attributes only (times, permissions): worth a reload, not worth cancelling a pass.
+    Metadata,
+    /// The contents may be in the middle of changing: a write, a truncation, a creation, a
+    /// removal or a rename away.
+    Partial,
+    /// The contents are final: the writer closed the file, it was renamed into place, or a
+    /// directory was created.
+    Complete,
+}
+
+/// What an event of `kind` means for the path at `index` of its paths; `None` if it cannot
+/// change contents (opening and reading, which the loader's own reads would otherwise turn into
+/// reloads forever, and access-time updates).
+fn effect(kind: &EventKind, index: usize) -> Option<Effect> {
+    Some(match kind {
+        EventKind::Access(AccessKind::Close(AccessMode::Write)) => Effect::Complete,
+        EventKind::Access(_) => return None,
+        EventKind::Modify(ModifyKind::Metadata(MetadataKind::AccessTime)) => return None,
+        EventKind::Modify(ModifyKind::Metadata(_)) => Effect::Metadata,
+        EventKind::Modify(ModifyKind::Name(RenameMode::To)) => Effect::Complete,
+        // `[from, to]`: the old name is gone, the new one is in place.
+        EventKind::Modify(ModifyKind::Name(RenameMode::Both)) if index > 0 => Effect::Complete,
+        EventKind::Create(CreateKind::Folder) => Effect::Complete,
+        _ => Effect::Partial,
+    })
+}
+
+/// A batch of file events, as the loop receives it.
+#[derive(Clone, Debug)]
+pub struct Change {
+    /// The files concerned, as watched (parent directory canonicalised), with what happened to
+    /// each. Empty after an event overflow.
+    pub paths: Vec<(PathBuf, Effect)>,
+    /// Whether the directories to watch may have changed: a watched directory or one on the way
+    /// to a dependency was created, removed or renamed (or events were lost).
+    pub rearm: bool,
+    /// Events were lost (the kernel queue overflowed): anything may have changed.
+    pub overflow: bool,
+    /// When the watcher received it.
+    pub at: Instant,
+}
+
 /// What the file watcher tells the loop.
 #[derive(Clone, Debug)]
 pub enum FileEvent {
-    /// Files the scene depends on (or, after a failed load, asset files it may come to depend on)
-    /// were created, written, renamed or removed.
-    Changed {
-        /// The files, as watched (parent directory canonicalised); empty after an event overflow.
-        paths: Vec<PathBuf>,
-        /// Whether a current dependency is among them.
-        dependency: bool,
-        /// When the latest of the underlying raw events happened: about when the save ended.
-        saved: Instant,
-    },
+    /// Files the scene depends on (or may come to depend on) changed.
+    Changed(Change),
     /// The watcher reported an error (e.g. too many watches).
     Error(String),
     /// Nothing happened; sent to wake the loop (see [`StopHandle::stop`]).
     Wake,
 }
 
-/// Which paths are relevant. Shared with the debouncer thread.
+/// How a path matters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Class {
+    /// A file the scene reads (or a failed load asked for).
+    File,
+    /// A directory whose creation, removal or rename changes what must be watched.
+    Arm,
+}
+
+/// Which paths are relevant. Shared with the notify thread.
 #[derive(Default)]
 struct Filter {
-    /// Dependencies, as [`watch_key`]s.
+    /// Files, as [`watch_key`]s.
     files: HashSet<PathBuf>,
-    /// Also accept asset files (see [`is_asset`]) in the watched directories: after a failed
-    /// load, when a missing texture, prefab or mesh may be about to appear.
-    assets: bool,
+    /// Watched directories (seen from their parents, or reporting their own removal) and missing
+    /// directories on the way to a file.
+    arms: HashSet<PathBuf>,
     /// Never relevant (the output image, which we write ourselves).
     ignore: HashSet<PathBuf>,
 }
 
 impl Filter {
-    /// `Some(true)` for a dependency, `Some(false)` for an accepted asset, `None` to ignore.
-    fn classify(&self, path: &Path) -> Option<bool> {
+    fn classify(&self, path: &Path) -> Option<Class> {
         if self.ignore.contains(path) {
             None
         } else if self.files.contains(path) {
-            Some(true)
-        } else if self.assets && is_asset(path) {
-            Some(false)
+            Some(Class::File)
+        } else if self.arms.contains(path) {
+            Some(Class::Arm)
         } else {
             None
         }
     }
-}
 
-/// Whether `path` looks like a file a scene can load: a scene or prefab (`.ron`), a mesh
-/// (`.obj`) or an image. Editors' swap and backup files (`.swp`, `~`, `4913`) are not.
-fn is_asset(path: &Path) -> bool {
-    let ron_or_obj = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("ron") || e.eq_ignore_ascii_case("obj"));
-    ron_or_obj || image::ImageFormat::from_path(path).is_ok()
-}
-
-/// Whether an event kind can mean new file contents. Opening and reading are not (the loader's
-/// own reads would otherwise trigger reloads forever), nor are access-time updates.
-fn changes_content(kind: &EventKind) -> bool {
-    match kind {
-        EventKind::Access(AccessKind::Close(AccessMode::Write)) => true,
-        EventKind::Access(_) => false,
-        EventKind::Modify(ModifyKind::Metadata(MetadataKind::AccessTime)) => false,
-        _ => true,
+    /// The change `event` makes, if it concerns any path of interest.
+    fn change(&self, event: &notify::Event) -> Option<Change> {
+        let at = Instant::now();
+        if event.need_rescan() {
+            return Some(Change {
+                paths: Vec::new(),
+                rearm: true,
+                overflow: true,
+                at,
+            });
+        }
+        let mut change = Change {
+            paths: Vec::new(),
+            rearm: false,
+            overflow: false,
+            at,
+        };
+        for (i, path) in event.paths.iter().enumerate() {
+            let (Some(class), Some(effect)) = (self.classify(path), effect(&event.kind, i)) else {
+                continue;
+            };
+            change.rearm |= class == Class::Arm && effect != Effect::Metadata;
+            change.paths.push((path.clone(), effect));
+        }
+        (!change.paths.is_empty()).then_some(change)
     }
 }
 
@@ -181,76 +261,117 @@ pub fn watch_key(path: &Path) -> std::io::Result<(PathBuf, PathBuf)> {
     Ok((dir, key))
 }
 
-/// Watches the parent directories (non-recursively) of a set of files and sends a
-/// [`FileEvent::Changed`] for each debounced batch of events that touches one of them, after
-/// raising the cancel flag.
-pub struct FileWatcher {
-    debouncer: Debouncer<RecommendedWatcher, RecommendedCache>,
-    filter: Arc<Mutex<Filter>>,
+/// For a file whose directory does not exist: the nearest existing ancestor (canonical) and the
+/// path of the missing directory under it whose creation is to be watched for.
+fn nearest_ancestor(path: &Path) -> Option<(PathBuf, PathBuf)> {
+    let absolute = std::path::absolute(path).ok()?;
+    let mut below: Option<&Path> = None;
+    for dir in absolute.parent()?.ancestors() {
+        if dir.is_dir() {
+            let canonical = dir.canonicalize().ok()?;
+            let name = below?.file_name()?;
+            return Some((canonical.clone(), canonical.join(name)));
+        }
+        below = Some(dir);
+    }
+    None
+}
+
+/// What to watch for a set of files.
+#[derive(Default, PartialEq, Eq)]
+struct Plan {
+    files: HashSet<PathBuf>,
+    arms: HashSet<PathBuf>,
+    /// Directories holding files (shown to the user).
     dirs: BTreeSet<PathBuf>,
+    /// Parents and ancestors watched for arms.
+    guards: BTreeSet<PathBuf>,
+}
+
+impl Plan {
+    fn new(files: &[PathBuf]) -> Self {
+        let mut plan = Self::default();
+        for file in files {
+            match watch_key(file) {
+                Ok((dir, key)) => {
+                    plan.dirs.insert(dir);
+                    plan.files.insert(key);
+                    // A symlinked file changes when its target does.
+                    let link = std::fs::symlink_metadata(file).is_ok_and(|m| m.is_symlink());
+                    if let Some((dir, key)) = link
+                        .then(|| std::fs::canonicalize(file).ok())
+                        .flatten()
+                        .and_then(|target| watch_key(&target).ok())
+                    {
+                        plan.dirs.insert(dir);
+                        plan.files.insert(key);
+                    }
+                }
+                Err(_) => {
+                    if let Some((ancestor, missing)) = nearest_ancestor(file) {
+                        plan.guards.insert(ancestor);
+                        plan.arms.insert(missing);
+                    }
+                }
+            }
+        }
+        for dir in &plan.dirs {
+            plan.arms.insert(dir.clone());
+            if let Some(parent) = dir.parent() {
+                plan.guards.insert(parent.to_path_buf());
+            }
+        }
+        plan
+    }
+
+    fn directories(&self) -> BTreeSet<PathBuf> {
+        self.dirs.union(&self.guards).cloned().collect()
+    }
+}
+
+/// Watches the directories (non-recursively) around a set of files and sends a
+/// [`FileEvent::Changed`] for each event that concerns them, after raising the cancel flag if
+/// contents may have changed. See the module docs for what is watched.
+pub struct FileWatcher {
+    watcher: RecommendedWatcher,
+    filter: Arc<Mutex<Filter>>,
+    /// The files as last given to [`FileWatcher::set_files`].
+    files: Vec<PathBuf>,
+    /// Directories shown to the user (those holding files).
+    dirs: BTreeSet<PathBuf>,
+    /// Every directory watched.
+    watched: BTreeSet<PathBuf>,
 }
 
 impl FileWatcher {
-    /// Starts the debouncer thread with the given window. Relevant events set `cancel` and are
-    /// sent to `events`. Nothing is watched until [`FileWatcher::set_files`].
-    pub fn new(
-        window: Duration,
-        cancel: Arc<AtomicBool>,
-        events: Sender<FileEvent>,
-    ) -> Result<Self, notify::Error> {
+    /// Starts the notify watcher. Relevant events set `cancel` (unless they change only
+    /// metadata) and are sent to `events`. Nothing is watched until [`FileWatcher::set_files`].
+    pub fn new(cancel: Arc<AtomicBool>, events: Sender<FileEvent>) -> Result<Self, notify::Error> {
         let filter = Arc::new(Mutex::new(Filter::default()));
         let shared = filter.clone();
-        let handler = move |result: DebounceEventResult| match result {
-            Ok(batch) => {
-                let filter = shared.lock().unwrap_or_else(PoisonError::into_inner);
-                let mut paths: Vec<PathBuf> = Vec::new();
-                let mut relevant = false;
-                let mut dependency = false;
-                let mut saved: Option<Instant> = None;
-                for event in &batch {
-                    let mut hit = false;
-                    if event.need_rescan() {
-                        // Events were lost: anything may have changed.
-                        hit = true;
-                        dependency = true;
-                    } else if changes_content(&event.kind) {
-                        for path in &event.paths {
-                            if let Some(is_dependency) = filter.classify(path) {
-                                hit = true;
-                                dependency |= is_dependency;
-                                if !paths.contains(path) {
-                                    paths.push(path.clone());
-                                }
-                            }
-                        }
+        let handler = move |result: notify::Result<notify::Event>| match result {
+            Ok(event) => {
+                let change = shared
+                    .lock()
+                    .unwrap_or_else(PoisonError::into_inner)
+                    .change(&event);
+                if let Some(change) = change {
+                    if change.overflow || change.paths.iter().any(|(_, e)| *e != Effect::Metadata) {
+                        cancel.store(true, Ordering::SeqCst);
                     }
-                    if hit {
-                        relevant = true;
-                        saved = saved.max(Some(event.time));
-                    }
-                }
-                drop(filter);
-                if relevant {
-                    cancel.store(true, Ordering::SeqCst);
-                    let _ = events.send(FileEvent::Changed {
-                        paths,
-                        dependency,
-                        saved: saved.unwrap_or_else(Instant::now),
-                    });
+                    let _ = events.send(FileEvent::Changed(change));
                 }
             }
-            Err(errors) => {
-                let text: Vec<String> = errors.iter().map(ToString::to_string).collect();
-                let _ = events.send(FileEvent::Error(text.join("; ")));
+            Err(error) => {
+                let _ = events.send(FileEvent::Error(error.to_string()));
             }
         };
-        // A zero window would make the debouncer thread spin.
-        let window = window.max(Duration::from_millis(1));
-        let debouncer = new_debouncer(window, Some(tick(window)), handler)?;
         Ok(Self {
-            debouncer,
+            watcher: notify::recommended_watcher(handler)?,
             filter,
+            files: Vec::new(),
             dirs: BTreeSet::new(),
+            watched: BTreeSet::new(),
         })
     }
 
@@ -258,48 +379,55 @@ impl FileWatcher {
         self.filter.lock().unwrap_or_else(PoisonError::into_inner)
     }
 
-    /// Makes `files` the watched set: watches their directories not yet watched, unwatches
-    /// directories no longer needed. Returns a warning per file or directory that cannot be
-    /// watched (the others still are).
-    pub fn set_files(&mut self, files: &[PathBuf]) -> Vec<String> {
-        let mut warnings = Vec::new();
-        let mut keys = HashSet::new();
-        let mut dirs = BTreeSet::new();
-        for file in files {
-            match watch_key(file) {
-                Ok((dir, key)) => {
-                    dirs.insert(dir);
-                    keys.insert(key);
-                }
-                Err(e) => warnings.push(format!("{}: cannot watch: {e}", file.display())),
-            }
+    /// Makes `files` the watched set: watches the directories it needs that are not watched yet,
+    /// unwatches those no longer needed. Returns whether a directory was added, and a warning
+    /// per directory that cannot be watched (the others still are).
+    pub fn set_files(&mut self, files: &[PathBuf]) -> (bool, Vec<String>) {
+        self.files = files.to_vec();
+        let plan = Plan::new(files);
+        let wanted = plan.directories();
+        {
+            let mut filter = self.filter();
+            filter.files = plan.files;
+            filter.arms = plan.arms;
         }
-        self.filter().files = keys;
-        for dir in self.dirs.difference(&dirs) {
+        for dir in self.watched.difference(&wanted) {
             // The directory may be gone already; nothing to do then.
-            let _ = self.debouncer.unwatch(dir);
+            let _ = self.watcher.unwatch(dir);
         }
+        let mut warnings = Vec::new();
+        let mut added = false;
         let mut watched = BTreeSet::new();
-        for dir in dirs {
-            if self.dirs.contains(&dir) {
+        for dir in wanted {
+            if self.watched.contains(&dir) {
                 watched.insert(dir);
                 continue;
             }
-            match self.debouncer.watch(&dir, RecursiveMode::NonRecursive) {
+            match self.watcher.watch(&dir, RecursiveMode::NonRecursive) {
                 Ok(()) => {
+                    added = true;
                     watched.insert(dir);
                 }
-                Err(e) => warnings.push(format!("{}: cannot watch: {e}", dir.display())),
+                Err(e) => {
+                    if plan.dirs.contains(&dir) {
+                        warnings.push(format!("{}: cannot watch: {e}", dir.display()));
+                    }
+                }
             }
         }
-        self.dirs = watched;
-        warnings
+        self.watched = watched;
+        self.dirs = plan.dirs;
+        (added, warnings)
     }
 
-    /// Also accept any asset file (scene, prefab, mesh or image) in the watched directories,
-    /// not only the dependencies (see [`FileEvent::Changed`]).
-    pub fn set_accept_assets(&self, on: bool) {
-        self.filter().assets = on;
+    /// Watches every directory afresh: after a directory was deleted, renamed or replaced, a
+    /// watch may follow an inode that is no longer at its path.
+    pub fn rearm(&mut self) -> (bool, Vec<String>) {
+        for dir in std::mem::take(&mut self.watched) {
+            let _ = self.watcher.unwatch(&dir);
+        }
+        let files = std::mem::take(&mut self.files);
+        self.set_files(&files)
     }
 
     /// Never report `path` (for the output image, which the loop writes itself).
@@ -309,9 +437,14 @@ impl FileWatcher {
         }
     }
 
-    /// The directories being watched.
+    /// The directories holding watched files (their parents are watched too, unlisted).
     pub fn directories(&self) -> Vec<PathBuf> {
         self.dirs.iter().cloned().collect()
+    }
+
+    /// The number of files watched (symlink targets included).
+    pub fn file_count(&self) -> usize {
+        self.filter().files.len()
     }
 }
 
@@ -333,13 +466,16 @@ pub struct WatchOptions {
     pub layout: LayoutKind,
     /// Samples of the first pass; later passes double the total up to the scene's spp.
     pub first_pass: u32,
-    /// The debounce window.
+    /// The quiet window (see [`DEBOUNCE`]).
     pub debounce: Duration,
+    /// Load a save as soon as it is complete (the default). `false` waits for the quiet window
+    /// after every save, as rondo did before (kept to measure the difference).
+    pub eager: bool,
 }
 
 impl WatchOptions {
     /// Defaults: all cores, no overrides, the default layout, a first pass of 1 sample, the
-    /// [`DEBOUNCE`] window.
+    /// [`DEBOUNCE`] window, eager loads.
     pub fn new(scene: impl Into<PathBuf>, output: impl Into<PathBuf>) -> Self {
         Self {
             scene: scene.into(),
@@ -349,6 +485,7 @@ impl WatchOptions {
             layout: LayoutKind::default(),
             first_pass: 1,
             debounce: DEBOUNCE,
+            eager: true,
         }
     }
 }
@@ -360,6 +497,9 @@ pub struct ReloadReport {
     pub number: u64,
     /// The changed files that caused it (empty for the first load).
     pub trigger: Vec<PathBuf>,
+    /// Whether its first frame ran (the scene was applied to the world); a reload superseded
+    /// before that hands its changes on to the next one.
+    pub applied: bool,
     /// What the scene diff changed in the world.
     pub changes: ChangeSummary,
     /// Whether the geometry and its BVH were rebuilt.
@@ -378,6 +518,8 @@ pub struct ReloadReport {
     pub bvh: Duration,
     /// The first pass: its sample count and duration.
     pub first_pass: Option<(u32, Duration)>,
+    /// Whether the first pass was the reduced-resolution preview (one sample per block).
+    pub preview: bool,
     /// From the save to the first image written.
     pub first_image: Option<Duration>,
     /// From the save to the full-quality image written; `None` if superseded by a newer save.
@@ -413,6 +555,32 @@ fn human(d: Duration) -> String {
 
 impl fmt::Display for ReloadReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.number == 0 {
+            write!(f, "loaded: ")?;
+        } else {
+            write!(f, "reload {}: ", self.number)?;
+        }
+        if !self.applied {
+            let names: Vec<String> = self
+                .trigger
+                .iter()
+                .map(|p| {
+                    p.file_name()
+                        .unwrap_or(p.as_os_str())
+                        .to_string_lossy()
+                        .into_owned()
+                })
+                .collect();
+            let names = if names.is_empty() {
+                "files".to_string()
+            } else {
+                names.join(", ")
+            };
+            return write!(
+                f,
+                "{names} changed | superseded by a newer save before its first frame"
+            );
+        }
         let c = &self.changes;
         let mut changed = Vec::new();
         for (n, what) in [
@@ -426,6 +594,7 @@ impl fmt::Display for ReloadReport {
             }
         }
         for (flag, what) in [
+            (c.reordered, "entities reordered"),
             (c.materials, "materials"),
             (c.camera, "camera"),
             (c.settings, "settings"),
@@ -452,11 +621,6 @@ impl fmt::Display for ReloadReport {
         } else {
             rebuilt.join(", ")
         };
-        if self.number == 0 {
-            write!(f, "loaded: ")?;
-        } else {
-            write!(f, "reload {}: ", self.number)?;
-        }
         write!(f, "{} | rebuilt {rebuilt} | ", changed.join(", "))?;
         write!(f, "parse {}, ECS {}, ", human(self.parse), human(self.ecs))?;
         if self.bvh_rebuilt {
@@ -465,6 +629,7 @@ impl fmt::Display for ReloadReport {
             write!(f, "BVH -, ")?;
         }
         match self.first_pass {
+            Some((_, d)) if self.preview => write!(f, "first pass {} (preview), ", human(d))?,
             Some((spp, d)) => write!(f, "first pass {} ({spp} spp), ", human(d))?,
             None => write!(f, "first pass -, ")?,
         }
@@ -487,7 +652,8 @@ impl fmt::Display for ReloadReport {
     }
 }
 
-/// What the loop did, for the command line to print and tests to wait on.
+/// What the loop did, for the command line to print, tests to wait on and observers (see the
+/// module docs, "The event point").
 #[derive(Clone, Debug)]
 pub enum Report {
     /// The set of watched files changed.
@@ -497,12 +663,25 @@ pub enum Report {
         /// Their directories.
         directories: Vec<PathBuf>,
     },
-    /// An image was written.
+    /// A save loaded; its render starts (the reload is not applied to the world yet).
+    Started {
+        /// The reload ([`ReloadReport::number`]).
+        reload: u64,
+        /// The changed files that caused it (empty for the first load).
+        trigger: Vec<PathBuf>,
+        /// Samples per pixel the scene asks for.
+        spp: u32,
+        /// When the save happened (the latest file event).
+        saved: Instant,
+    },
+    /// A pass improved the image and it was written (an observer gets the film with it).
     Wrote {
         /// The reload it belongs to ([`ReloadReport::number`]).
         reload: u64,
-        /// Samples per pixel in it.
+        /// Samples per pixel in it (1 for the preview).
         samples: u32,
+        /// Whether it is the reduced-resolution preview.
+        preview: bool,
         /// Samples per pixel the scene asks for.
         spp: u32,
         /// When the write finished.
@@ -513,6 +692,12 @@ pub enum Report {
     /// A save could not be loaded; the previous scene and image are kept.
     Failed {
         /// The error, starting with `file:line:col` where known.
+        message: String,
+    },
+    /// A load failed but the save may not be over: the error is reported only if no further
+    /// event comes within three windows. Not printed.
+    Deferred {
+        /// The error so far.
         message: String,
     },
     /// The scene file is gone; the loop waits for it to come back.
@@ -529,7 +714,8 @@ pub enum Report {
 }
 
 impl Report {
-    /// The line the command line prints, if any (image writes are silent).
+    /// The line the command line prints, if any (starts, image writes and deferred errors are
+    /// silent).
     pub fn line(&self) -> Option<String> {
         Some(match self {
             Self::Watching { files, directories } => {
@@ -542,7 +728,7 @@ impl Report {
                     dirs.join(", ")
                 )
             }
-            Self::Wrote { .. } => return None,
+            Self::Started { .. } | Self::Wrote { .. } | Self::Deferred { .. } => return None,
             Self::Rendered(r) => r.to_string(),
             Self::Failed { message } => {
                 format!("error: {message} (keeping the last good image; fix and save again)")
@@ -552,6 +738,25 @@ impl Report {
             }
             Self::Warning { message } => format!("warning: {message}"),
         })
+    }
+}
+
+/// Sees every [`Report`] of a [`Watch`] before its [`Watch::run`] callback does, with the film
+/// of a [`Report::Wrote`] (`None` for the other reports). Runs on the render thread.
+pub type Observer = Box<dyn FnMut(&Report, Option<&Film>) + Send>;
+
+/// The one point through which the loop reports (see the module docs, "The event point").
+struct Emitter<'a> {
+    observer: Option<Observer>,
+    report: &'a mut dyn FnMut(Report),
+}
+
+impl Emitter<'_> {
+    fn emit(&mut self, report: Report, film: Option<&Film>) {
+        if let Some(observer) = &mut self.observer {
+            observer(&report, film);
+        }
+        (self.report)(report);
     }
 }
 
@@ -578,57 +783,100 @@ impl StopHandle {
     }
 }
 
-/// The changes gathered since the last reload.
-struct Trigger {
-    paths: Vec<PathBuf>,
-    dependency: bool,
-    saved: Instant,
+/// Why a load did not give a scene.
+enum Failure {
+    /// The scene file does not exist.
+    Missing,
+    /// The scene (or a file it reads) is bad.
+    Error(String),
 }
 
-impl Trigger {
-    /// Adds a later trigger's changes.
-    fn extend(&mut self, later: Self) {
-        Self::merge_into(self, later.paths, later.dependency, later.saved);
+/// The changes gathered since the last reload, until they are loaded.
+struct Pending {
+    /// The files concerned.
+    paths: Vec<PathBuf>,
+    /// When the latest event happened: about when the save ended.
+    last: Instant,
+    /// Files with an event that leaves them unfinished and no completing event since.
+    unfinished: HashSet<PathBuf>,
+    /// Whether an event completed a file.
+    completed: bool,
+    /// Whether events were lost.
+    overflow: bool,
+    /// Whether the watched directories must be set up afresh.
+    rearm: bool,
+    /// A failed load of these changes, reported at the given time unless another event comes.
+    failed: Option<(Failure, Instant)>,
+}
+
+impl Pending {
+    /// The first load: complete by definition.
+    fn initial() -> Self {
+        Self {
+            paths: Vec::new(),
+            last: Instant::now(),
+            unfinished: HashSet::new(),
+            completed: true,
+            overflow: false,
+            rearm: false,
+            failed: None,
+        }
     }
 
-    fn merge_into(&mut self, paths: Vec<PathBuf>, dependency: bool, saved: Instant) {
-        for p in paths {
-            if !self.paths.contains(&p) {
-                self.paths.push(p);
+    fn add(&mut self, change: Change) {
+        self.last = self.last.max(change.at);
+        self.failed = None;
+        self.overflow |= change.overflow;
+        self.rearm |= change.rearm;
+        for (path, effect) in change.paths {
+            match effect {
+                Effect::Metadata => {}
+                Effect::Partial => {
+                    self.unfinished.insert(path.clone());
+                }
+                Effect::Complete => {
+                    self.unfinished.remove(&path);
+                    self.completed = true;
+                }
+            }
+            if !self.paths.contains(&path) {
+                self.paths.push(path);
             }
         }
-        self.dependency |= dependency;
-        self.saved = self.saved.max(saved);
     }
 
-    /// Adds changes to `this`, creating it if needed.
-    fn merge(this: &mut Option<Self>, paths: Vec<PathBuf>, dependency: bool, saved: Instant) {
-        match this {
-            Some(t) => t.merge_into(paths, dependency, saved),
-            None => {
-                *this = Some(Self {
-                    paths,
-                    dependency,
-                    saved,
-                })
+    /// When to act: report a failure, load now (every file complete), or load once the files
+    /// have been quiet for `window`.
+    fn due(&self, window: Duration, eager: bool) -> Instant {
+        match &self.failed {
+            Some((_, at)) => *at,
+            None if eager && self.completed && self.unfinished.is_empty() && !self.overflow => {
+                self.last
             }
+            None => self.last + window,
         }
     }
+}
+
+/// The samples of the image on disk for the current scene. After a cancelled pass the film
+/// restarts from zero; images are written again only once they are better than this (passes are
+/// deterministic, so fewer samples would only overwrite a better image).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
+struct OnDisk {
+    /// Samples per pixel.
+    samples: u32,
+    /// Whether it is real samples and not the preview (ordered after the preview of the same
+    /// count: a 1-spp scene's real pass replaces its 1-sample preview).
+    real: bool,
 }
 
 /// The render of the current scene, until it completes or a newer save replaces it.
 struct Job {
     report: ReloadReport,
-    /// When the save happened (the start of the first load).
+    /// When the save happened.
     saved: Instant,
     /// Counters before the load, to tell what the first frame rebuilt.
     before: Counters,
-    /// Whether the first frame (scene applied to the world) has run.
-    applied: bool,
-    /// Samples per pixel in the image on disk for this scene. After a cancelled pass the film
-    /// restarts from zero; images are written again only once they have more samples than this
-    /// (passes are deterministic, so fewer samples would only overwrite a better image).
-    written: u32,
 }
 
 /// The watch loop: owns a [`Renderer`] and a [`FileWatcher`]. Create with [`Watch::new`] (files
@@ -641,7 +889,12 @@ pub struct Watch {
     stop: StopHandle,
     cancel: Arc<AtomicBool>,
     output_key: Option<PathBuf>,
+    observer: Option<Observer>,
     job: Option<Job>,
+    /// The image on disk (for the scene in the world).
+    on_disk: OnDisk,
+    /// The files of the last good load.
+    good_files: Vec<PathBuf>,
     reloads: u64,
     last_error: Option<String>,
     missing: bool,
@@ -662,17 +915,21 @@ impl Watch {
         renderer.set_overrides(options.overrides);
         renderer.set_layout(options.layout);
         // The loop writes the image itself: it knows which writes are worth making (see
-        // `Job::written`) and times them apart from the ECS update.
+        // `OnDisk`) and times them apart from the ECS update.
         renderer.set_output(None, false);
         let cancel = renderer.cancel_flag();
         let (tx, events) = mpsc::channel();
-        let mut watcher = FileWatcher::new(options.debounce, cancel.clone(), tx.clone())?;
+        let mut watcher = FileWatcher::new(cancel.clone(), tx.clone())?;
         watcher.ignore(&options.output);
-        if let Some(message) = watcher
-            .set_files(std::slice::from_ref(&options.scene))
-            .into_iter()
-            .next()
-        {
+        let scene = vec![options.scene.clone()];
+        if watch_key(&options.scene).is_err() {
+            let message = "its directory does not exist".to_string();
+            return Err(WatchError::Directory {
+                path: options.scene,
+                message,
+            });
+        }
+        if let Some(message) = watcher.set_files(&scene).1.into_iter().next() {
             return Err(WatchError::Directory {
                 path: options.scene,
                 message,
@@ -692,7 +949,10 @@ impl Watch {
             stop,
             cancel,
             output_key,
+            observer: None,
             job: None,
+            on_disk: OnDisk::default(),
+            good_files: scene,
             reloads: 0,
             last_error: None,
             missing: false,
@@ -705,187 +965,207 @@ impl Watch {
         self.stop.clone()
     }
 
+    /// Sets the observer that sees every report, with the film of each written pass.
+    pub fn set_observer(&mut self, observer: Observer) {
+        self.observer = Some(observer);
+    }
+
     /// Loads and renders the scene, then re-renders on every relevant save until stopped.
-    /// Everything that happens is passed to `report`.
+    /// Everything that happens is passed to `report` (after the observer, if any).
     pub fn run(mut self, mut report: impl FnMut(Report)) {
-        let report: &mut dyn FnMut(Report) = &mut report;
-        report(self.watching_report());
-        let mut trigger = Some(Trigger {
-            paths: Vec::new(),
-            dependency: true,
-            saved: Instant::now(),
-        });
+        let mut out = Emitter {
+            observer: self.observer.take(),
+            report: &mut report,
+        };
+        out.emit(self.watching_report(), None);
+        let window = self.options.debounce;
+        let mut pending = Some(Pending::initial());
         loop {
-            if trigger.is_none() {
-                let first = if self.job.is_some() {
-                    self.events.try_recv().ok()
-                } else {
-                    self.events.recv_timeout(IDLE_POLL).ok()
-                };
-                if let Some(event) = first {
-                    self.absorb(event, &mut trigger, report);
-                    // The rest of the same save may follow a debouncer tick later.
-                    let quiet = 2 * tick(self.options.debounce);
-                    while !self.stop.is_stopped()
-                        && let Ok(event) = self.events.recv_timeout(quiet)
-                    {
-                        self.absorb(event, &mut trigger, report);
-                    }
-                }
+            while let Ok(event) = self.events.try_recv() {
+                Self::absorb(event, &mut pending, &mut out);
             }
             if self.stop.is_stopped() {
                 break;
             }
-            if let Some(t) = trigger.take() {
-                self.reload(t, report);
+            if let Some(p) = pending.as_mut()
+                && std::mem::take(&mut p.rearm)
+            {
+                let (_, warnings) = self.watcher.rearm();
+                for message in warnings {
+                    out.emit(Report::Warning { message }, None);
+                }
+            }
+            let now = Instant::now();
+            let due = pending.as_ref().map(|p| p.due(window, self.options.eager));
+            if let Some(p) = pending.take_if(|_| due.is_some_and(|d| d <= now)) {
+                pending = self.act(p, &mut out);
                 continue;
             }
-            self.step(report);
+            // Render while waiting, unless a change cancelled the pass.
+            if self.job.is_some() && !self.cancel.load(Ordering::SeqCst) {
+                self.step(&mut out);
+                continue;
+            }
+            let until = due.unwrap_or(now + IDLE_POLL);
+            if let Ok(event) = self
+                .events
+                .recv_timeout(until.saturating_duration_since(now))
+            {
+                Self::absorb(event, &mut pending, &mut out);
+            }
         }
     }
 
-    /// Folds one event into the pending trigger.
-    fn absorb(
-        &self,
-        event: FileEvent,
-        trigger: &mut Option<Trigger>,
-        report: &mut dyn FnMut(Report),
-    ) {
+    /// Folds one event into the pending changes.
+    fn absorb(event: FileEvent, pending: &mut Option<Pending>, out: &mut Emitter<'_>) {
         match event {
-            FileEvent::Changed {
-                paths,
-                dependency,
-                saved,
-            } => Trigger::merge(trigger, paths, dependency, saved),
-            FileEvent::Error(message) => report(Report::Warning { message }),
+            FileEvent::Changed(change) => match pending {
+                Some(p) => p.add(change),
+                None => {
+                    let mut p = Pending::initial();
+                    p.completed = false;
+                    p.last = change.at;
+                    p.add(change);
+                    *pending = Some(p);
+                }
+            },
+            FileEvent::Error(message) => out.emit(Report::Warning { message }, None),
             FileEvent::Wake => {}
         }
     }
 
     fn watching_report(&self) -> Report {
         Report::Watching {
-            files: self.watched_files(),
+            files: self.watcher.file_count(),
             directories: self.watcher.directories(),
         }
     }
 
-    fn watched_files(&self) -> usize {
-        self.watcher.filter().files.len()
-    }
-
-    /// Waits up to three debounce windows for more changes of the same save. The debouncer
-    /// releases each raw event a window (plus at most a tick) after it happened, not after the
-    /// last one, so a save spread over more than the quiet gap (truncate now, write later;
-    /// delete now, recreate later) can reach us as several batches, and a load between them
-    /// sees a half-written or missing file. That is not worth reporting if the rest of the save
-    /// follows: anything written within a window of our read arrives within 2.1 windows; three
-    /// leave room for a busy machine. Only bad saves pay this delay.
-    fn follow_up(&self, report: &mut dyn FnMut(Report)) -> Option<Trigger> {
-        let deadline = Instant::now() + 3 * self.options.debounce;
-        let mut trigger = None;
-        while trigger.is_none() && !self.stop.is_stopped() {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match self.events.recv_timeout(left) {
-                Ok(event) => self.absorb(event, &mut trigger, report),
-                Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => break,
+    /// Acts on due changes: reports a failure that stood, or loads. A failed load is kept
+    /// pending, to be reported three windows later unless another event comes first.
+    fn act(&mut self, mut p: Pending, out: &mut Emitter<'_>) -> Option<Pending> {
+        if let Some((failure, _)) = p.failed.take() {
+            match failure {
+                Failure::Missing => {
+                    if !std::mem::replace(&mut self.missing, true) {
+                        let path = self.options.scene.clone();
+                        out.emit(Report::SceneMissing { path }, None);
+                    }
+                }
+                Failure::Error(message) => {
+                    self.last_error = Some(message.clone());
+                    out.emit(Report::Failed { message }, None);
+                }
+            }
+            return None;
+        }
+        match self.reload(&p, out) {
+            Ok(()) => None,
+            Err(failure) => {
+                let message = match &failure {
+                    Failure::Missing => format!("{}: missing", self.options.scene.display()),
+                    Failure::Error(m) => m.clone(),
+                };
+                out.emit(Report::Deferred { message }, None);
+                p.failed = Some((failure, Instant::now() + 3 * self.options.debounce));
+                Some(p)
             }
         }
-        trigger
+    }
+
+    /// Watches `files`; returns whether a directory was added.
+    fn watch_files(&mut self, files: &[PathBuf], out: &mut Emitter<'_>) -> bool {
+        let (dirs, count) = (self.watcher.directories(), self.watcher.file_count());
+        let (added, warnings) = self.watcher.set_files(files);
+        for message in warnings {
+            out.emit(Report::Warning { message }, None);
+        }
+        if self.watcher.directories() != dirs || self.watcher.file_count() != count {
+            out.emit(self.watching_report(), None);
+        }
+        added
+    }
+
+    /// The dependencies of a load to watch: all but the output image (which we write).
+    fn dependencies(&mut self, dependencies: Vec<PathBuf>, out: &mut Emitter<'_>) -> Vec<PathBuf> {
+        let mut files = Vec::with_capacity(dependencies.len());
+        for dep in dependencies {
+            let is_output = self.output_key.is_some()
+                && watch_key(&dep).ok().map(|(_, k)| k) == self.output_key;
+            if !is_output {
+                files.push(dep);
+            } else if !std::mem::replace(&mut self.warned_output, true) {
+                let message = format!(
+                    "{}: the output image is also a texture of the scene; its writes do not trigger reloads",
+                    dep.display()
+                );
+                out.emit(Report::Warning { message }, None);
+            }
+        }
+        files
     }
 
     /// Loads the scene after a change. On success the new scene is queued and a new job starts;
-    /// on failure the old scene keeps rendering (if it was not finished) and the image on disk
-    /// is left alone.
-    fn reload(&mut self, mut trigger: Trigger, report: &mut dyn FnMut(Report)) {
+    /// on failure the old scene keeps rendering (if it was not finished), the image on disk is
+    /// left alone, and the files the failed load asked for are watched too.
+    fn reload(&mut self, p: &Pending, out: &mut Emitter<'_>) -> Result<(), Failure> {
         // The pass this change interrupted is gone; the next one must run.
         self.cancel.store(false, Ordering::SeqCst);
         let scene = self.options.scene.clone();
         let decodes = self.renderer.texture_decodes();
         let before = self.renderer.counters();
-        let mut start = Instant::now();
-        let result = loop {
+        // Read again at once if the load made us watch a new directory: a file in it written
+        // between the read and the watch would go unnoticed.
+        let mut retried = false;
+        let (info, parse) = loop {
             if matches!(std::fs::metadata(&scene), Err(e) if e.kind() == std::io::ErrorKind::NotFound)
             {
-                if let Some(more) = self.follow_up(report) {
-                    trigger.extend(more);
-                    self.cancel.store(false, Ordering::SeqCst);
-                    start = Instant::now();
-                    continue;
-                }
-                if !self.missing {
-                    self.missing = true;
-                    report(Report::SceneMissing { path: scene });
-                }
-                return;
+                return Err(Failure::Missing);
             }
             self.missing = false;
-            match self.renderer.load(&scene) {
-                Ok(info) => break Ok(info),
-                Err(e) => match self.follow_up(report) {
-                    Some(more) => {
-                        trigger.extend(more);
-                        self.cancel.store(false, Ordering::SeqCst);
-                        start = Instant::now();
+            let start = Instant::now();
+            let result = self.renderer.load(&scene);
+            let parse = start.elapsed();
+            let info = match result {
+                Ok(info) => info,
+                Err(e) => {
+                    let mut files = self.good_files.clone();
+                    files.extend(self.renderer.requested());
+                    let files = self.dependencies(files, out);
+                    if self.watch_files(&files, out) && !std::mem::replace(&mut retried, true) {
+                        continue;
                     }
-                    None => break Err(e),
-                },
-            }
-        };
-        let info = match result {
-            Ok(info) => info,
-            Err(e) => {
-                let message = e.to_string();
-                // A non-dependency asset appearing while the scene is broken retries the load;
-                // the same error again is not news.
-                let repeat = !trigger.dependency && self.last_error.as_ref() == Some(&message);
-                if !repeat {
-                    report(Report::Failed {
-                        message: message.clone(),
-                    });
+                    return Err(Failure::Error(e.to_string()));
                 }
-                self.last_error = Some(message);
-                self.watcher.set_accept_assets(true);
-                return;
+            };
+            let files = self.dependencies(info.dependencies.clone(), out);
+            self.good_files = files.clone();
+            if self.watch_files(&files, out) && !std::mem::replace(&mut retried, true) {
+                continue;
             }
+            break (info, parse);
         };
-        let parse = start.elapsed();
         self.last_error = None;
-        self.watcher.set_accept_assets(false);
-
-        let mut files = Vec::with_capacity(info.dependencies.len());
-        for dep in info.dependencies {
-            let is_output = self.output_key.is_some()
-                && watch_key(&dep).ok().map(|(_, k)| k) == self.output_key;
-            if is_output {
-                if !std::mem::replace(&mut self.warned_output, true) {
-                    report(Report::Warning {
-                        message: format!(
-                            "{}: the output image is also a texture of the scene; its writes do not trigger reloads",
-                            dep.display()
-                        ),
-                    });
-                }
-            } else {
-                files.push(dep);
-            }
-        }
-        let (dirs, count) = (self.watcher.directories(), self.watched_files());
-        for message in self.watcher.set_files(&files) {
-            report(Report::Warning { message });
-        }
-        if self.watcher.directories() != dirs || self.watched_files() != count {
-            report(self.watching_report());
-        }
 
         if let Some(old) = self.job.take() {
-            report(Report::Rendered(old.report));
+            out.emit(Report::Rendered(old.report), None);
         }
         let number = self.reloads;
         self.reloads += 1;
+        out.emit(
+            Report::Started {
+                reload: number,
+                trigger: p.paths.clone(),
+                spp: info.settings.spp,
+                saved: p.last,
+            },
+            None,
+        );
         self.job = Some(Job {
             report: ReloadReport {
                 number,
-                trigger: trigger.paths,
+                trigger: p.paths.clone(),
+                applied: false,
                 changes: ChangeSummary::default(),
                 bvh_rebuilt: false,
                 primitives: 0,
@@ -895,6 +1175,7 @@ impl Watch {
                 ecs: Duration::ZERO,
                 bvh: Duration::ZERO,
                 first_pass: None,
+                preview: false,
                 first_image: None,
                 full: None,
                 samples: 0,
@@ -902,16 +1183,15 @@ impl Watch {
                 restarts: 0,
                 counters: before,
             },
-            saved: trigger.saved,
+            saved: p.last,
             before,
-            applied: false,
-            written: 0,
         });
+        Ok(())
     }
 
     /// Runs one frame of the current job: applies the scene if new, renders a pass, writes the
     /// image if it improved, and finishes the job when the film is complete.
-    fn step(&mut self, report: &mut dyn FnMut(Report)) {
+    fn step(&mut self, out: &mut Emitter<'_>) {
         let Some(job) = self.job.as_mut() else {
             return;
         };
@@ -922,8 +1202,8 @@ impl Watch {
         let counters = self.renderer.counters();
         let timings = self.renderer.timings();
         let r = &mut job.report;
-        if !job.applied {
-            job.applied = true;
+        if !r.applied {
+            r.applied = true;
             r.changes = self.renderer.change_summary();
             r.bvh_rebuilt = counters.bvh_builds > job.before.bvh_builds;
             r.bvh = if r.bvh_rebuilt {
@@ -934,42 +1214,60 @@ impl Watch {
             r.materials_synced = counters.material_syncs > job.before.material_syncs;
             r.primitives = self.renderer.primitive_count();
             r.ecs = wall.saturating_sub(timings.pass + r.bvh);
+            if !r.changes.is_empty() || r.number == 0 {
+                // A new image; the one on disk is of another scene.
+                self.on_disk = OnDisk::default();
+            }
         }
         r.counters = counters;
-        if counters.passes == passes {
+        let complete = self.renderer.is_complete();
+        if counters.passes == passes && !complete {
             // Cancelled: a change is on its way (or we are stopping). The film starts over.
             r.restarts += 1;
             return;
         }
-        let samples = self.renderer.film().samples;
-        if r.first_pass.is_none() {
-            r.first_pass = Some((samples, timings.pass));
-        }
-        if samples > job.written {
-            match self.renderer.film().write(&self.options.output) {
-                Ok(()) => {
-                    let at = Instant::now();
-                    job.written = samples;
-                    r.samples = samples;
-                    if r.first_image.is_none() {
-                        r.first_image = Some(at.saturating_duration_since(job.saved));
+        if counters.passes > passes {
+            let film = self.renderer.film();
+            let now = OnDisk {
+                samples: film.samples,
+                real: !self.renderer.film_is_preview(),
+            };
+            if r.first_pass.is_none() {
+                r.first_pass = Some((now.samples, timings.pass));
+                r.preview = !now.real;
+            }
+            if now > self.on_disk {
+                match film.write(&self.options.output) {
+                    Ok(()) => {
+                        let at = Instant::now();
+                        self.on_disk = now;
+                        r.samples = now.samples;
+                        if r.first_image.is_none() {
+                            r.first_image = Some(at.saturating_duration_since(job.saved));
+                        }
+                        let report = Report::Wrote {
+                            reload: r.number,
+                            samples: now.samples,
+                            preview: !now.real,
+                            spp: r.spp,
+                            at,
+                        };
+                        out.emit(report, Some(film));
                     }
-                    report(Report::Wrote {
-                        reload: r.number,
-                        samples,
-                        spp: r.spp,
-                        at,
-                    });
+                    Err(e) => {
+                        let message =
+                            format!("{}: cannot write image: {e}", self.options.output.display());
+                        out.emit(Report::Warning { message }, None);
+                    }
                 }
-                Err(e) => report(Report::Warning {
-                    message: format!("{}: cannot write image: {e}", self.options.output.display()),
-                }),
             }
         }
-        if self.renderer.is_complete() {
+        if complete {
+            // (Also when the reload changed nothing and the film was already complete.)
+            r.samples = self.on_disk.samples;
             r.full = Some(job.saved.elapsed());
             if let Some(job) = self.job.take() {
-                report(Report::Rendered(job.report));
+                out.emit(Report::Rendered(job.report), None);
             }
         }
     }
@@ -1057,41 +1355,65 @@ mod tests {
     use super::*;
 
     #[test]
-    fn reads_and_opens_do_not_count_as_changes() {
-        use notify::event::{CreateKind, DataChange};
-        assert!(!changes_content(&EventKind::Access(AccessKind::Open(
-            AccessMode::Any
-        ))));
-        assert!(!changes_content(&EventKind::Access(AccessKind::Close(
-            AccessMode::Read
-        ))));
-        assert!(!changes_content(&EventKind::Modify(ModifyKind::Metadata(
-            MetadataKind::AccessTime
-        ))));
-        assert!(changes_content(&EventKind::Access(AccessKind::Close(
-            AccessMode::Write
-        ))));
-        assert!(changes_content(&EventKind::Modify(ModifyKind::Data(
-            DataChange::Any
-        ))));
-        assert!(changes_content(&EventKind::Create(CreateKind::File)));
+    fn reads_and_opens_do_not_count_as_changes_and_closes_complete_a_file() {
+        use notify::event::DataChange;
+        let e = |kind| effect(&kind, 0);
+        assert_eq!(
+            e(EventKind::Access(AccessKind::Open(AccessMode::Any))),
+            None
+        );
+        assert_eq!(
+            e(EventKind::Access(AccessKind::Close(AccessMode::Read))),
+            None
+        );
+        assert_eq!(
+            e(EventKind::Modify(ModifyKind::Metadata(
+                MetadataKind::AccessTime
+            ))),
+            None
+        );
+        assert_eq!(
+            e(EventKind::Modify(ModifyKind::Metadata(MetadataKind::Any))),
+            Some(Effect::Metadata)
+        );
+        assert_eq!(
+            e(EventKind::Access(AccessKind::Close(AccessMode::Write))),
+            Some(Effect::Complete)
+        );
+        assert_eq!(
+            e(EventKind::Modify(ModifyKind::Data(DataChange::Any))),
+            Some(Effect::Partial)
+        );
+        assert_eq!(
+            e(EventKind::Create(CreateKind::File)),
+            Some(Effect::Partial)
+        );
+        assert_eq!(
+            e(EventKind::Create(CreateKind::Folder)),
+            Some(Effect::Complete)
+        );
+        let both = EventKind::Modify(ModifyKind::Name(RenameMode::Both));
+        assert_eq!(effect(&both, 0), Some(Effect::Partial), "the old name");
+        assert_eq!(effect(&both, 1), Some(Effect::Complete), "the new name");
     }
 
     #[test]
-    fn filter_ignores_the_output_and_accepts_other_assets_only_when_asked() {
+    fn filter_ignores_the_output_and_flags_directories_for_rearming() {
         let mut f = Filter::default();
         f.files.insert(PathBuf::from("/d/scene.ron"));
+        f.arms.insert(PathBuf::from("/d/prefabs"));
         f.ignore.insert(PathBuf::from("/d/out.png"));
-        assert_eq!(f.classify(Path::new("/d/scene.ron")), Some(true));
+        assert_eq!(f.classify(Path::new("/d/scene.ron")), Some(Class::File));
+        assert_eq!(f.classify(Path::new("/d/prefabs")), Some(Class::Arm));
         assert_eq!(f.classify(Path::new("/d/tex.png")), None);
-        f.assets = true;
-        assert_eq!(f.classify(Path::new("/d/tex.png")), Some(false));
-        assert_eq!(f.classify(Path::new("/d/bunny.OBJ")), Some(false));
-        assert_eq!(f.classify(Path::new("/d/prefab.ron")), Some(false));
-        assert_eq!(f.classify(Path::new("/d/4913")), None);
-        assert_eq!(f.classify(Path::new("/d/scene.ron~")), None);
         assert_eq!(f.classify(Path::new("/d/out.png")), None);
-        assert_eq!(f.classify(Path::new("/d/.scene.ron.swp")), None);
+        let event = notify::Event::new(EventKind::Remove(notify::event::RemoveKind::Folder))
+            .add_path(PathBuf::from("/d/prefabs"));
+        let change = f.change(&event).expect("relevant");
+        assert!(change.rearm);
+        let event = notify::Event::new(EventKind::Create(CreateKind::File))
+            .add_path(PathBuf::from("/d/scene.ron.swp"));
+        assert!(f.change(&event).is_none());
     }
 
     #[test]
@@ -1106,5 +1428,23 @@ mod tests {
             missing.is_err(),
             "a missing directory is an error, not a panic"
         );
+    }
+
+    #[test]
+    fn a_file_in_missing_directories_arms_the_nearest_existing_ancestor() {
+        let dir = std::env::temp_dir();
+        let canonical = dir.canonicalize().expect("temp dir exists");
+        let file = dir.join("no-such-dir-rondo").join("deeper").join("a.png");
+        let (ancestor, missing) = nearest_ancestor(&file).expect("the temp dir exists");
+        assert_eq!(ancestor, canonical);
+        assert_eq!(missing, canonical.join("no-such-dir-rondo"));
+        let plan = Plan::new(&[file, dir.join("b.ron")]);
+        assert!(plan.guards.contains(&canonical));
+        assert!(plan.arms.contains(&canonical.join("no-such-dir-rondo")));
+        assert!(
+            plan.arms.contains(&canonical),
+            "a watched directory is armed"
+        );
+        assert!(plan.files.contains(&canonical.join("b.ron")));
     }
 }

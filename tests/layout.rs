@@ -392,6 +392,21 @@ fn every_layout_finds_the_same_closest_hit_through_the_bvh() {
     assert!(hits.iter().all(|&h| h > 1000), "{hits:?}");
 }
 
+/// Asserts that the render's one pass ran the code monomorphised for `layout` (the pass
+/// records its layout type's `KIND`), so comparing images compares layouts.
+fn assert_traced_in(r: &Renderer, layout: LayoutKind) {
+    let expected: Vec<u64> = LayoutKind::ALL
+        .iter()
+        .map(|&k| u64::from(k == layout))
+        .collect();
+    assert_eq!(
+        r.stats().layout_passes.to_vec(),
+        expected,
+        "passes per layout {:?}, asked for {layout}",
+        LayoutKind::ALL
+    );
+}
+
 fn render_film(scene: &Path, layout: LayoutKind) -> Vec<[u64; 3]> {
     let mut r = Renderer::new(Some(2), PassPlan::Single).expect("thread pool");
     r.set_overrides(Overrides {
@@ -404,6 +419,7 @@ fn render_film(scene: &Path, layout: LayoutKind) -> Vec<[u64; 3]> {
     r.load(scene).unwrap_or_else(|e| panic!("{e}"));
     r.render_to_completion();
     assert!(r.is_complete());
+    assert_traced_in(&r, layout);
     r.film()
         .sum
         .iter()
@@ -454,6 +470,7 @@ fn switching_layout_between_renders_keeps_the_image() {
         r.set_layout(layout);
         r.load(&scene).unwrap_or_else(|e| panic!("{e}"));
         r.render_to_completion();
+        assert_traced_in(&r, layout);
         films.push(r.film().sum.clone());
     }
     assert_eq!(films[0], films[1]);

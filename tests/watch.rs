@@ -3,7 +3,7 @@
 //! (a report or a timeout), never sleeps.
 
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use rondo::watch::{ReloadReport, Report, WatchOptions, WatchSession};
 
@@ -235,9 +235,15 @@ fn a_save_split_by_a_pause_is_not_reported_as_an_error() {
     let mut file = std::fs::File::create(&f.scene).expect("truncate scene");
     file.write_all(head.as_bytes()).expect("write");
     file.flush().expect("flush");
-    // A slow writer: the pause is longer than the debounce window, so the watcher sees the
-    // half-written file before the rest arrives.
-    std::thread::sleep(Duration::from_millis(70));
+    // A slow writer: the watcher loads the half-written file (and holds its error back) before
+    // the rest arrives.
+    f.wait("the half-written save to be tried", |r| {
+        assert!(
+            !matches!(r, Report::Failed { .. } | Report::Rendered(_)),
+            "a half-written save was reported: {r:?}"
+        );
+        matches!(r, Report::Deferred { .. })
+    });
     file.write_all(tail.as_bytes()).expect("write");
     drop(file);
     match f.wait("the complete save to render", |r| {
@@ -358,7 +364,7 @@ fn save_during_a_long_render_cancels_it_promptly() {
     );
 
     f.write_scene(&simple(BLUE));
-    let saved = Instant::now();
+    // A render that ignored the cancel would not be superseded within the wait.
     let Report::Rendered(old) = f.wait("the long render to be superseded", |r| {
         matches!(r, Report::Rendered(_))
     }) else {
@@ -366,11 +372,6 @@ fn save_during_a_long_render_cancels_it_promptly() {
     };
     assert_eq!(old.number, 1);
     assert!(!old.completed(), "{old}");
-    assert!(
-        saved.elapsed() < Duration::from_secs(5),
-        "cancelling took {:?}",
-        saved.elapsed()
-    );
     let new = f.rendered();
     assert_eq!(new.number, 2);
     assert_eq!(f.centre(), [0, 0, 255]);
@@ -384,16 +385,17 @@ fn stop_returns_promptly_during_a_long_render() {
         "the long render under way",
         |r| matches!(r, Report::Wrote { reload: 1, samples, .. } if *samples >= 64),
     );
-    let start = Instant::now();
-    f.session
-        .take()
-        .expect("session running")
-        .stop()
-        .expect("stops cleanly");
-    assert!(
-        start.elapsed() < Duration::from_secs(5),
-        "stopping took {:?}",
-        start.elapsed()
+    // Stop on another thread and wait for it with a deadline: a stop that ignored the cancel
+    // would hang until the billion samples were done.
+    let session = f.session.take().expect("session running");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(session.stop().is_ok());
+    });
+    assert_eq!(
+        rx.recv_timeout(WAIT),
+        Ok(true),
+        "stop did not return cleanly"
     );
     let image = std::fs::read(&f.out).expect("image");
     assert!(
@@ -406,4 +408,246 @@ fn stop_returns_promptly_during_a_long_render() {
         .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
         .collect();
     assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+}
+
+// ------------------------------------------------------------------------------------------------
+// The stale states of issue 14, one test each: after the last edit, watch shows what a fresh
+// render of the files on disk shows.
+
+/// A fresh batch render of `scene`, as the 8-bit image `rondo render` writes.
+fn fresh_render(scene: &Path) -> image::RgbImage {
+    let mut r = rondo::Renderer::new(Some(2), rondo::PassPlan::Single).expect("thread pool");
+    r.load(scene).unwrap_or_else(|e| panic!("{e}"));
+    r.render_to_completion();
+    r.film().to_srgb8()
+}
+
+/// A scene with the given materials and entities (RON fragments) and the camera of [`scene`].
+fn custom(materials: &str, entities: &str, spp: u32) -> String {
+    format!(
+        r#"Scene(
+    camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0), fov: 40.0),
+    settings: Settings(width: 32, height: 32, spp: {spp}, max_depth: 3),
+    materials: {{ {materials} }},
+    entities: [ {entities} ],
+)
+"#
+    )
+}
+
+/// A prefab holding the wall emitter of [`scene`] in the given colour.
+fn wall_prefab(colour: &str) -> String {
+    format!(
+        r#"Prefab(
+    materials: {{ "wall": Light(emit: {colour}, intensity: 1.0, two_sided: true) }},
+    entities: [ Entity(name: "w", material: "wall", shape: Quad(a: (-10, -10, 5), b: (10, -10, 5), c: (10, 10, 5), d: (-10, 10, 5))) ],
+)
+"#
+    )
+}
+
+fn placed_wall(prefab: &str) -> String {
+    custom(
+        "",
+        &format!(r#"Entity(name: "wall", prefab: "{prefab}")"#),
+        4,
+    )
+}
+
+fn failed(f: &Fixture, what: &str) -> String {
+    match f.wait(what, |r| matches!(r, Report::Failed { .. })) {
+        Report::Failed { message } => message,
+        _ => unreachable!(),
+    }
+}
+
+#[test]
+fn issue14_case1_spp_one_leaves_the_real_pass_on_disk_not_the_preview() {
+    // Noisy at 1 spp (a diffuse ball lit by the wall): the real pass differs from its 2×2-block
+    // preview in almost every block.
+    let (f, first) = Fixture::start("spp-one", &scene(RED, GREY, 0.0, 1), &[]);
+    assert!(first.preview, "{first}");
+    let line = first.to_string();
+    assert!(
+        line.contains("(preview)") && !line.contains("(1 spp),"),
+        "{line}"
+    );
+    let on_disk = image::open(&f.out).expect("output image").to_rgb8();
+    assert!(
+        on_disk == fresh_render(&f.scene),
+        "the image on disk is not the 1-spp render"
+    );
+
+    // And after an edit, through the overrides path too.
+    f.write_scene(&scene(RED, GREY, 0.5, 1));
+    f.rendered();
+    let on_disk = image::open(&f.out).expect("output image").to_rgb8();
+    assert!(
+        on_disk == fresh_render(&f.scene),
+        "the image on disk is not the 1-spp render"
+    );
+}
+
+#[test]
+fn issue14_case2_a_texture_in_a_directory_created_later_is_picked_up() {
+    let (f, _) = Fixture::start("late-dir", &simple(RED), &[]);
+    f.write_scene(&simple(r#"Image(path: "newtex/wood.png")"#));
+    failed(&f, "the missing texture error");
+    std::fs::create_dir(f.dir.join("newtex")).expect("mkdir");
+    write_png(&f.dir.join("newtex/wood.png"), [0, 255, 0]);
+    f.rendered();
+    assert_eq!(f.centre(), [0, 255, 0]);
+    // The new directory is watched from now on.
+    write_png(&f.dir.join("newtex/wood.png"), [0, 0, 255]);
+    f.rendered();
+    assert_eq!(f.centre(), [0, 0, 255]);
+}
+
+#[test]
+fn issue14_case2_a_prefab_in_a_new_subdirectory_fixing_a_cycle_is_picked_up() {
+    let f = Fixture::open("late-prefab", &placed_wall("wall.ron"), &[]);
+    // wall.ron places itself: a cycle.
+    std::fs::write(
+        f.dir.join("wall.ron"),
+        r#"Prefab(entities: [ Entity(name: "again", prefab: "wall.ron") ])"#,
+    )
+    .expect("write prefab");
+    let message = failed(&f, "the cycle");
+    assert!(message.contains("cycle"), "{message}");
+    // The fix names a prefab in a directory that does not exist yet…
+    std::fs::write(
+        f.dir.join("wall.ron"),
+        r#"Prefab(entities: [ Entity(name: "real", prefab: "sub/wall.ron") ])"#,
+    )
+    .expect("write prefab");
+    failed(&f, "the missing prefab");
+    // …which then appears.
+    std::fs::create_dir(f.dir.join("sub")).expect("mkdir");
+    std::fs::write(f.dir.join("sub/wall.ron"), wall_prefab(BLUE)).expect("write prefab");
+    f.rendered();
+    assert_eq!(f.centre(), [0, 0, 255]);
+}
+
+#[test]
+fn issue14_case3_a_deleted_then_restored_directory_is_watched_again() {
+    let f = Fixture::open("restored-dir", &placed_wall("prefabs/wall.ron"), &[]);
+    std::fs::create_dir(f.dir.join("prefabs")).expect("mkdir");
+    std::fs::write(f.dir.join("prefabs/wall.ron"), wall_prefab(RED)).expect("write prefab");
+    f.rendered();
+    assert_eq!(f.centre(), [255, 0, 0]);
+
+    std::fs::remove_dir_all(f.dir.join("prefabs")).expect("rm -rf");
+    failed(&f, "the missing prefab");
+    std::fs::create_dir(f.dir.join("prefabs")).expect("mkdir");
+    std::fs::write(f.dir.join("prefabs/wall.ron"), wall_prefab(RED)).expect("write prefab");
+    f.rendered();
+    assert_eq!(f.centre(), [255, 0, 0]);
+    std::fs::write(f.dir.join("prefabs/wall.ron"), wall_prefab(BLUE)).expect("write prefab");
+    f.rendered();
+    assert_eq!(f.centre(), [0, 0, 255]);
+}
+
+#[test]
+fn issue14_case3_a_directory_moved_away_and_copied_back_is_watched_again() {
+    let f = Fixture::open("replaced-dir", &placed_wall("prefabs/wall.ron"), &[]);
+    std::fs::create_dir(f.dir.join("prefabs")).expect("mkdir");
+    std::fs::write(f.dir.join("prefabs/wall.ron"), wall_prefab(RED)).expect("write prefab");
+    f.rendered();
+
+    // mv prefabs prefabs.old && cp -r prefabs.old prefabs: the old watch follows prefabs.old.
+    std::fs::rename(f.dir.join("prefabs"), f.dir.join("prefabs.old")).expect("mv");
+    std::fs::create_dir(f.dir.join("prefabs")).expect("mkdir");
+    std::fs::copy(
+        f.dir.join("prefabs.old/wall.ron"),
+        f.dir.join("prefabs/wall.ron"),
+    )
+    .expect("cp");
+    f.rendered();
+    std::fs::write(f.dir.join("prefabs/wall.ron"), wall_prefab(BLUE)).expect("write prefab");
+    f.rendered();
+    assert_eq!(f.centre(), [0, 0, 255]);
+}
+
+#[test]
+fn issue14_case4_a_mesh_replaced_with_the_same_size_and_mtime_is_reloaded() {
+    // A light triangle in front of the wall covers the centre pixel, or (same byte count) not.
+    let covering = "v -2 -2 0\nv 2 -2 0\nv 0 3 0\nf 1 2 3\n";
+    let aside = "v -2 -2 0\nv 2 -2 0\nv 9 3 0\nf 1 2 3\n";
+    assert_eq!(covering.len(), aside.len());
+    let materials = format!(
+        r#""wall": Light(emit: {RED}, intensity: 1.0, two_sided: true), "tri": Light(emit: {BLUE}, intensity: 1.0, two_sided: true)"#
+    );
+    let entities = r#"Entity(name: "wall", material: "wall", shape: Quad(a: (-10, -10, 5), b: (10, -10, 5), c: (10, 10, 5), d: (-10, 10, 5))),
+        Entity(name: "tri", material: "tri", shape: Mesh(path: "tri.obj"))"#;
+    let f = Fixture::open("same-stamp", &custom(&materials, entities, 4), &[]);
+    let mesh = f.dir.join("tri.obj");
+    std::fs::write(&mesh, covering).expect("write mesh");
+    f.rendered();
+    assert_eq!(f.centre(), [0, 0, 255]);
+
+    let stamp = std::fs::metadata(&mesh)
+        .and_then(|m| m.modified())
+        .expect("mtime");
+    std::fs::write(&mesh, aside).expect("write mesh");
+    std::fs::File::options()
+        .write(true)
+        .open(&mesh)
+        .and_then(|file| file.set_modified(stamp))
+        .expect("restore the mtime");
+    let meta = std::fs::metadata(&mesh).expect("stat");
+    assert_eq!(
+        (meta.len(), meta.modified().ok()),
+        (covering.len() as u64, Some(stamp))
+    );
+    f.rendered();
+    assert_eq!(f.centre(), [255, 0, 0]);
+}
+
+#[test]
+fn issue14_case5_editing_the_target_of_a_symlinked_texture_rerenders() {
+    let f = Fixture::open("symlink", &simple(RED), &[]);
+    f.rendered();
+    std::fs::create_dir(f.dir.join("elsewhere")).expect("mkdir");
+    write_png(&f.dir.join("elsewhere/real.png"), [0, 255, 0]);
+    std::os::unix::fs::symlink(f.dir.join("elsewhere/real.png"), f.dir.join("link.png"))
+        .expect("symlink");
+    f.write_scene(&simple(r#"Image(path: "link.png")"#));
+    f.rendered();
+    assert_eq!(f.centre(), [0, 255, 0]);
+    write_png(&f.dir.join("elsewhere/real.png"), [0, 0, 255]);
+    f.rendered();
+    assert_eq!(f.centre(), [0, 0, 255]);
+}
+
+#[test]
+fn issue14_log_a_reorder_says_so_and_an_unchanged_save_keeps_the_image() {
+    let a = r#"Entity(name: "wall", material: "wall", shape: Quad(a: (-10, -10, 5), b: (10, -10, 5), c: (10, 10, 5), d: (-10, 10, 5)))"#;
+    let b = r#"Entity(name: "ball", material: "ball", shape: Sphere(center: (0.0, 1.4, 0), radius: 0.3))"#;
+    let materials = format!(
+        r#""wall": Light(emit: {RED}, intensity: 1.0, two_sided: true), "ball": Diffuse(albedo: {GREY})"#
+    );
+    let (f, _) = Fixture::start("reorder", &custom(&materials, &format!("{a}, {b}"), 4), &[]);
+    f.write_scene(&custom(&materials, &format!("{b}, {a}"), 4));
+    let r = f.rendered();
+    assert!(r.changes.reordered && r.bvh_rebuilt, "{r}");
+    assert!(r.to_string().contains("entities reordered"), "{r}");
+    let on_disk = image::open(&f.out).expect("output image").to_rgb8();
+    assert!(on_disk == fresh_render(&f.scene));
+
+    // The same text again: nothing to do, nothing rewritten.
+    let before = std::fs::read(&f.out).expect("image");
+    f.write_scene(&custom(&materials, &format!("{b}, {a}"), 4));
+    let r = f.wait("the unchanged save", |r| {
+        assert!(
+            !matches!(r, Report::Wrote { .. }),
+            "rewrote an unchanged image"
+        );
+        matches!(r, Report::Rendered(_))
+    });
+    let Report::Rendered(r) = r else {
+        unreachable!()
+    };
+    assert!(r.completed() && r.changes.is_empty(), "{r}");
+    assert!(r.to_string().contains("no changes"), "{r}");
+    assert_eq!(std::fs::read(&f.out).expect("image"), before);
 }

@@ -35,7 +35,9 @@ pub struct RenderSettings(pub SettingsDesc);
 #[derive(Resource, Clone, Debug, PartialEq, Default)]
 pub struct MaterialTable(pub BTreeMap<String, Material>);
 
-/// Bumped on every applied scene, changed or not: every save re-renders.
+/// Bumped on every applied scene that changes anything (see [`ChangeSummary::is_empty`]): an
+/// unchanged save, or a metadata-only event, keeps the render going instead of starting over,
+/// since a deterministic render of the same scene gives the same image.
 #[derive(Resource, Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct SceneVersion(pub u64);
 
@@ -91,6 +93,16 @@ pub struct ChangeSummary {
     pub camera: bool,
     /// Whether the settings changed.
     pub settings: bool,
+    /// Whether entities kept by the reload changed their order in the scene (geometry is packed
+    /// in scene order, so this rebuilds the BVH).
+    pub reordered: bool,
+}
+
+impl ChangeSummary {
+    /// Whether the reload changed nothing at all.
+    pub fn is_empty(&self) -> bool {
+        *self == Self::default()
+    }
 }
 
 /// Work counters, so tests can assert what a reload did.

@@ -21,7 +21,8 @@ type SceneEntity = (
 
 /// Diffs the pending scene against the world by entity name: unchanged entities are not touched
 /// (`set_if_neq`, so change detection stays quiet), changed ones are updated in place, missing
-/// ones despawned and new ones spawned.
+/// ones despawned and new ones spawned. The [`SceneVersion`] (and so the film) moves only when
+/// something changed.
 #[expect(
     clippy::too_many_arguments,
     reason = "one parameter per piece of scene state"
@@ -47,6 +48,9 @@ pub fn apply_scene(
         .map(|(i, e)| (e.name.as_str(), i))
         .collect();
 
+    // (old order, new order) of the entities kept, to tell a reorder from the shifts that
+    // additions and removals cause.
+    let mut kept: Vec<(u32, u32)> = Vec::new();
     for (entity, name, mut shape, mut transform, mut material, mut order) in &mut entities {
         let Some(i) = incoming.remove(name.0.as_str()) else {
             commands.entity(entity).despawn();
@@ -57,6 +61,7 @@ pub fn apply_scene(
         let a = shape.set_if_neq(new.shape.clone());
         let b = transform.set_if_neq(new.transform);
         let c = material.set_if_neq(MaterialRef(new.material.clone()));
+        kept.push((order.0, i as u32));
         order.set_if_neq(SceneOrder(i as u32));
         if a || b || c {
             report.changed += 1;
@@ -76,9 +81,13 @@ pub fn apply_scene(
         report.added += 1;
     }
 
+    kept.sort_unstable();
+    report.reordered = kept.windows(2).any(|w| w[0].1 > w[1].1);
     report.camera = camera.set_if_neq(ActiveCamera(scene.camera));
     report.settings = settings.set_if_neq(RenderSettings(scene.settings));
     report.materials = materials.set_if_neq(MaterialTable(scene.materials));
-    version.0 += 1;
+    if version.0 == 0 || !report.is_empty() {
+        version.0 += 1;
+    }
     *summary = report;
 }

@@ -1,0 +1,617 @@
+//! Differential test of live editing: random sequences of edits (scene, prefab, mesh, texture and
+//! directory operations, valid and broken, saved in the ways editors save, with random gaps of
+//! 0–100 ms) are played against a running watch; after each sequence the watch must show what a
+//! fresh render of the files on disk shows: the same pixels, or the same error.
+//!
+//! Renders are deterministic for any pass split, which makes the fresh render an exact oracle.
+//! The watch runs in-process ([`WatchSession`]) on the real notify watcher: the `rondo watch`
+//! binary adds only the printing of [`Report::line`], so running it would test nothing more.
+//! Waits are for reports, with a deadline that only guards against hangs; the sleeps are the
+//! gaps between edits, part of the generated input.
+//!
+//! `RONDO_DIFF_SEQUENCES` sets the number of random sequences (default 240, split over four
+//! watch sessions); `RONDO_DIFF_SEED` the seed. A failure prints the seed, the sequence and the
+//! reports; every sequence that ever failed is kept below as a named regression case.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use rondo::watch::{Report, WatchOptions, WatchSession};
+
+/// Upper bound of the wait for the watch to settle after a sequence.
+const WAIT: Duration = Duration::from_secs(20);
+
+const COLOURS: [(&str, [u8; 3]); 3] = [
+    ("(1.0, 0.0, 0.0)", [255, 0, 0]),
+    ("(0.0, 0.0, 1.0)", [0, 0, 255]),
+    ("(0.0, 1.0, 0.0)", [0, 255, 0]),
+];
+
+/// Two meshes of the same byte count: a light triangle over the centre of the image, or aside.
+const MESHES: [&str; 2] = [
+    "v -2 -2 0\nv 2 -2 0\nv 0 3 0\nf 1 2 3\n",
+    "v -2 -2 0\nv 2 -2 0\nv 9 3 0\nf 1 2 3\n",
+];
+const BROKEN_MESH: &str = "v 0 0 0\nf 1 2 9\n";
+
+/// splitmix64: a small seeded generator, enough for test inputs.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+
+    fn chance(&mut self, percent: u64) -> bool {
+        self.next() % 100 < percent
+    }
+}
+
+/// What the scene file says.
+#[derive(Clone, Debug)]
+struct SceneText {
+    /// Wall colour (index into [`COLOURS`]) when the wall is inline.
+    wall: usize,
+    /// The wall comes from `prefabs/wall.ron` instead.
+    wall_prefab: bool,
+    /// The ball's albedo is `tex/ball.png` instead of grey.
+    textured: bool,
+    /// The mesh entity `meshes/tri.obj` is in the scene.
+    mesh: bool,
+    /// The ball comes before the wall.
+    swapped: bool,
+    /// Samples per pixel (1 or 4).
+    spp: u32,
+    /// A syntax error (or, if `truncated`, only the first half of the text).
+    broken: bool,
+    truncated: bool,
+}
+
+impl SceneText {
+    fn random(rng: &mut Rng) -> Self {
+        let broken = rng.chance(15);
+        Self {
+            wall: rng.below(COLOURS.len()),
+            wall_prefab: rng.chance(40),
+            textured: rng.chance(40),
+            mesh: rng.chance(40),
+            swapped: rng.chance(30),
+            spp: if rng.chance(20) { 1 } else { 4 },
+            broken,
+            truncated: broken && rng.chance(50),
+        }
+    }
+
+    fn text(&self) -> String {
+        let wall = if self.wall_prefab {
+            r#"Entity(name: "wall", prefab: "prefabs/wall.ron")"#.to_string()
+        } else {
+            r#"Entity(name: "wall", material: "wall", shape: Quad(a: (-10, -10, 5), b: (10, -10, 5), c: (10, 10, 5), d: (-10, 10, 5)))"#.to_string()
+        };
+        let ball = r#"Entity(name: "ball", material: "ball", shape: Sphere(center: (0.4, 0.6, 0), radius: 0.8))"#;
+        let mut entities = if self.swapped {
+            vec![ball.to_string(), wall]
+        } else {
+            vec![wall, ball.to_string()]
+        };
+        if self.mesh {
+            entities.push(
+                r#"Entity(name: "tri", material: "tri", shape: Mesh(path: "meshes/tri.obj"))"#
+                    .into(),
+            );
+        }
+        let albedo = if self.textured {
+            r#"Image(path: "tex/ball.png")"#
+        } else {
+            "Constant((0.5, 0.5, 0.5))"
+        };
+        let text = format!(
+            r#"Scene(
+    camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0), fov: 40.0),
+    settings: Settings(width: 32, height: 32, spp: {spp}, max_depth: 3),
+    materials: {{
+        "wall": Light(emit: Constant({wall}), intensity: 1.0, two_sided: true),
+        "ball": Diffuse(albedo: {albedo}),
+        "tri": Light(emit: Constant((0.2, 0.9, 0.2)), intensity: 1.0, two_sided: true),
+    }},
+    entities: [ {entities} ],
+)
+"#,
+            spp = self.spp,
+            wall = COLOURS[self.wall].0,
+            entities = entities.join(",\n        "),
+        );
+        if self.truncated {
+            text[..text.len() / 2].to_string()
+        } else if self.broken {
+            text.replace("intensity: 1.0,", "intensity: 1.0 oops,")
+        } else {
+            text
+        }
+    }
+}
+
+/// How a file is saved.
+#[derive(Clone, Copy, Debug)]
+enum Save {
+    /// Truncate and write in place (most tools).
+    InPlace,
+    /// Write a temporary file and rename it over the original (vim, many IDEs).
+    Rename,
+    /// Delete, then create (some tools, `git checkout`).
+    Recreate,
+    /// In place, keeping the old modification time (`cp -p`, build tools).
+    KeepMtime,
+    /// In place in two halves with a pause between (a slow writer).
+    Split(u64),
+}
+
+impl Save {
+    fn random(rng: &mut Rng) -> Self {
+        match rng.below(6) {
+            0 | 1 => Self::InPlace,
+            2 => Self::Rename,
+            3 => Self::Recreate,
+            4 => Self::KeepMtime,
+            _ => Self::Split(rng.below(90) as u64),
+        }
+    }
+
+    fn write(self, path: &Path, bytes: &[u8]) {
+        use std::io::Write;
+        match self {
+            Self::InPlace => std::fs::write(path, bytes).expect("write"),
+            Self::Rename => {
+                let name = path.file_name().expect("name").to_string_lossy();
+                let tmp = path.with_file_name(format!(".{name}.tmp~"));
+                std::fs::write(&tmp, bytes).expect("write temp");
+                std::fs::rename(&tmp, path).expect("rename");
+            }
+            Self::Recreate => {
+                let _ = std::fs::remove_file(path);
+                std::fs::write(path, bytes).expect("write");
+            }
+            Self::KeepMtime => {
+                let stamp = std::fs::metadata(path).and_then(|m| m.modified()).ok();
+                std::fs::write(path, bytes).expect("write");
+                if let Some(stamp) = stamp {
+                    std::fs::File::options()
+                        .write(true)
+                        .open(path)
+                        .and_then(|f| f.set_modified(stamp))
+                        .expect("set mtime");
+                }
+            }
+            Self::Split(pause) => {
+                let mut file = std::fs::File::create(path).expect("create");
+                let (head, tail) = bytes.split_at(bytes.len() / 2);
+                file.write_all(head).expect("write");
+                file.flush().expect("flush");
+                std::thread::sleep(Duration::from_millis(pause));
+                file.write_all(tail).expect("write");
+            }
+        }
+    }
+}
+
+/// The directories the scene's files live in.
+const DIRS: [&str; 3] = ["prefabs", "tex", "meshes"];
+
+/// One edit.
+#[derive(Clone, Debug)]
+enum Op {
+    Scene(SceneText, Save),
+    /// `prefabs/wall.ron`: a wall of a colour, or broken.
+    Prefab(Option<usize>, Save),
+    /// `tex/ball.png`: a colour, or not an image.
+    Texture(Option<usize>, Save),
+    /// `meshes/tri.obj`: one of [`MESHES`], or broken.
+    Mesh(Option<usize>, Save),
+    /// `rm -rf DIR`.
+    RemoveDir(usize),
+    /// `mkdir DIR` and write its file (a valid one).
+    CreateDir(usize, usize),
+    /// `mv DIR DIR.old && cp -r DIR.old DIR && rm -rf DIR.old`, then rewrite its file.
+    ReplaceDir(usize, usize),
+    /// Wait before the next edit.
+    Gap(u64),
+}
+
+fn prefab_text(colour: Option<usize>) -> String {
+    match colour {
+        Some(c) => format!(
+            r#"Prefab(
+    materials: {{ "wall": Light(emit: Constant({}), intensity: 1.0, two_sided: true) }},
+    entities: [ Entity(name: "w", material: "wall", shape: Quad(a: (-10, -10, 5), b: (10, -10, 5), c: (10, 10, 5), d: (-10, 10, 5))) ],
+)
+"#,
+            COLOURS[c].0
+        ),
+        None => "Prefab(entities: [ Entity(name: \"w\", prefab: \"wall.ron\") ])".into(),
+    }
+}
+
+fn png_bytes(colour: Option<usize>) -> Vec<u8> {
+    match colour {
+        Some(c) => {
+            let mut bytes = Vec::new();
+            image::RgbImage::from_pixel(4, 4, image::Rgb(COLOURS[c].1))
+                .write_to(
+                    &mut std::io::Cursor::new(&mut bytes),
+                    image::ImageFormat::Png,
+                )
+                .expect("encode png");
+            bytes
+        }
+        None => b"not a png".to_vec(),
+    }
+}
+
+fn mesh_text(variant: Option<usize>) -> &'static str {
+    variant.map_or(BROKEN_MESH, |v| MESHES[v])
+}
+
+/// The file of directory `d` and its valid contents for variant `v`.
+fn dir_file(d: usize, v: usize) -> (&'static str, Vec<u8>) {
+    match d {
+        0 => (
+            "wall.ron",
+            prefab_text(Some(v % COLOURS.len())).into_bytes(),
+        ),
+        1 => ("ball.png", png_bytes(Some(v % COLOURS.len()))),
+        _ => (
+            "tri.obj",
+            mesh_text(Some(v % MESHES.len())).as_bytes().to_vec(),
+        ),
+    }
+}
+
+impl Op {
+    fn random(rng: &mut Rng, dir: &Path) -> Self {
+        let d = rng.below(DIRS.len());
+        let exists = dir.join(DIRS[d]).is_dir();
+        match rng.below(10) {
+            0..=2 => Self::Scene(SceneText::random(rng), Save::random(rng)),
+            3 => Self::Prefab(
+                (!rng.chance(20)).then(|| rng.below(COLOURS.len())),
+                Save::random(rng),
+            ),
+            4 => Self::Texture(
+                (!rng.chance(20)).then(|| rng.below(COLOURS.len())),
+                Save::random(rng),
+            ),
+            5 => Self::Mesh(
+                (!rng.chance(20)).then(|| rng.below(MESHES.len())),
+                Save::random(rng),
+            ),
+            6 | 7 if !exists => Self::CreateDir(d, rng.below(6)),
+            6 => Self::RemoveDir(d),
+            7 => Self::ReplaceDir(d, rng.below(6)),
+            _ => Self::Gap(rng.below(101) as u64),
+        }
+    }
+
+    fn apply(&self, dir: &Path) {
+        let file = |sub: &str, name: &str| {
+            let d = dir.join(sub);
+            d.is_dir().then(|| d.join(name))
+        };
+        match self {
+            Self::Scene(text, save) => save.write(&dir.join("scene.ron"), text.text().as_bytes()),
+            Self::Prefab(c, save) => {
+                if let Some(path) = file("prefabs", "wall.ron") {
+                    save.write(&path, prefab_text(*c).as_bytes());
+                }
+            }
+            Self::Texture(c, save) => {
+                if let Some(path) = file("tex", "ball.png") {
+                    save.write(&path, &png_bytes(*c));
+                }
+            }
+            Self::Mesh(v, save) => {
+                if let Some(path) = file("meshes", "tri.obj") {
+                    save.write(&path, mesh_text(*v).as_bytes());
+                }
+            }
+            Self::RemoveDir(d) => {
+                let _ = std::fs::remove_dir_all(dir.join(DIRS[*d]));
+            }
+            Self::CreateDir(d, v) => {
+                let sub = dir.join(DIRS[*d]);
+                std::fs::create_dir_all(&sub).expect("mkdir");
+                let (name, bytes) = dir_file(*d, *v);
+                std::fs::write(sub.join(name), bytes).expect("write");
+            }
+            Self::ReplaceDir(d, v) => {
+                let sub = dir.join(DIRS[*d]);
+                let old = dir.join(format!("{}.old", DIRS[*d]));
+                let _ = std::fs::remove_dir_all(&old);
+                std::fs::rename(&sub, &old).expect("mv");
+                std::fs::create_dir(&sub).expect("mkdir");
+                for entry in std::fs::read_dir(&old).expect("read dir").flatten() {
+                    std::fs::copy(entry.path(), sub.join(entry.file_name())).expect("cp");
+                }
+                std::fs::remove_dir_all(&old).expect("rm -rf");
+                let (name, bytes) = dir_file(*d, *v);
+                std::fs::write(sub.join(name), bytes).expect("write");
+            }
+            Self::Gap(ms) => std::thread::sleep(Duration::from_millis(*ms)),
+        }
+    }
+}
+
+/// What a fresh render of the files gives: the image, or the error.
+fn fresh(scene: &Path) -> Result<image::RgbImage, String> {
+    let mut r = rondo::Renderer::new(Some(1), rondo::PassPlan::Single).expect("thread pool");
+    r.load(scene).map_err(|e| e.to_string())?;
+    r.render_to_completion();
+    Ok(r.film().to_srgb8())
+}
+
+/// What the watch shows, as told by its reports.
+#[derive(Clone, Debug, PartialEq)]
+enum Shown {
+    /// Between a change and its outcome.
+    Busy,
+    /// A complete render: the image on disk.
+    Image,
+    /// The error of the last save.
+    Error(String),
+    /// The scene file is missing.
+    Missing,
+}
+
+/// A watch session on a directory of its own, with the initial files.
+struct Bench {
+    dir: PathBuf,
+    session: Option<WatchSession>,
+    shown: Shown,
+    reports: Vec<String>,
+}
+
+impl Bench {
+    fn new(name: &str) -> Self {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos());
+        let dir =
+            std::env::temp_dir().join(format!("rondo-diff-{name}-{}-{nanos}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("create temp dir");
+        for (d, sub) in DIRS.iter().enumerate() {
+            std::fs::create_dir(dir.join(sub)).expect("mkdir");
+            let (file, bytes) = dir_file(d, 0);
+            std::fs::write(dir.join(sub).join(file), bytes).expect("write");
+        }
+        let text = SceneText {
+            wall: 0,
+            wall_prefab: true,
+            textured: true,
+            mesh: true,
+            swapped: false,
+            spp: 4,
+            broken: false,
+            truncated: false,
+        };
+        std::fs::write(dir.join("scene.ron"), text.text()).expect("write scene");
+        let mut options = WatchOptions::new(dir.join("scene.ron"), dir.join("out.png"));
+        options.threads = Some(1);
+        let session = WatchSession::start(options).expect("start watching");
+        let mut bench = Self {
+            dir,
+            session: Some(session),
+            shown: Shown::Busy,
+            reports: Vec::new(),
+        };
+        bench
+            .settle("the first render")
+            .unwrap_or_else(|e| panic!("{e}"));
+        bench
+    }
+
+    fn observe(&mut self, report: &Report) {
+        if let Some(line) = report.line() {
+            self.reports.push(line);
+        }
+        match report {
+            Report::Started { .. } | Report::Deferred { .. } => self.shown = Shown::Busy,
+            Report::Rendered(r) if r.completed() => self.shown = Shown::Image,
+            Report::Failed { message } => self.shown = Shown::Error(message.clone()),
+            Report::SceneMissing { .. } => self.shown = Shown::Missing,
+            _ => {}
+        }
+    }
+
+    /// Whether what the watch shows is what a fresh render gives.
+    fn matches(&self, expected: &Result<image::RgbImage, String>) -> bool {
+        match (&self.shown, expected) {
+            (Shown::Image, Ok(image)) => {
+                image::open(self.dir.join("out.png")).is_ok_and(|shown| shown.to_rgb8() == *image)
+            }
+            (Shown::Error(shown), Err(error)) => shown == error,
+            _ => false,
+        }
+    }
+
+    /// Waits until the watch shows what a fresh render of the files gives.
+    fn settle(&mut self, what: &str) -> Result<(), String> {
+        let expected = fresh(&self.dir.join("scene.ron"));
+        let deadline = Instant::now() + WAIT;
+        while !self.matches(&expected) {
+            let left = deadline.saturating_duration_since(Instant::now());
+            let session = self.session.as_ref().expect("session running");
+            match session.next_report(left) {
+                Some(report) => self.observe(&report),
+                None => {
+                    return Err(format!(
+                        "{what}: the watch shows {:?}, a fresh render gives {}; reports:\n{}",
+                        self.shown,
+                        match &expected {
+                            Ok(_) => "an image (different)".to_string(),
+                            Err(e) => format!("the error `{e}`"),
+                        },
+                        self.reports.join("\n")
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Plays `ops`, then waits for the watch to show what a fresh render shows.
+    fn play(&mut self, ops: &[Op]) -> Result<(), String> {
+        self.reports.clear();
+        for op in ops {
+            op.apply(&self.dir);
+        }
+        self.settle(&format!("after {ops:?}"))
+    }
+}
+
+impl Drop for Bench {
+    fn drop(&mut self) {
+        if let Some(session) = self.session.take() {
+            let stopped = session.stop();
+            if !std::thread::panicking() {
+                stopped.expect("watch thread ends cleanly");
+            }
+        }
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+/// A random sequence of 1–6 edits, each followed by a gap of 0–100 ms (a third of them 0).
+fn random_sequence(rng: &mut Rng, dir: &Path) -> Vec<Op> {
+    let n = 1 + rng.below(6);
+    let mut ops = Vec::new();
+    for _ in 0..n {
+        let op = Op::random(rng, dir);
+        // Directory operations are applied at once below, so the next op sees their effect.
+        op.apply(dir);
+        ops.push(op);
+        let gap = if rng.chance(33) {
+            0
+        } else {
+            rng.below(101) as u64
+        };
+        std::thread::sleep(Duration::from_millis(gap));
+        ops.push(Op::Gap(gap));
+    }
+    ops
+}
+
+fn env_number(name: &str, default: u64) -> u64 {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+#[test]
+fn random_edit_sequences_end_in_what_a_fresh_render_shows() {
+    const SESSIONS: u64 = 4;
+    let sequences = env_number("RONDO_DIFF_SEQUENCES", 240);
+    let seed = env_number("RONDO_DIFF_SEED", 14);
+    let start = Instant::now();
+    let workers: Vec<_> = (0..SESSIONS)
+        .map(|w| {
+            std::thread::spawn(move || {
+                let mut bench = Bench::new(&format!("random{w}"));
+                let mut rng = Rng(seed ^ (w + 1).wrapping_mul(0x2545_f491_4f6c_dd1d));
+                for i in 0..sequences.div_ceil(SESSIONS) {
+                    bench.reports.clear();
+                    let ops = random_sequence(&mut rng, &bench.dir);
+                    if let Err(e) = bench.settle(&format!("sequence {i} of session {w}: {ops:?}")) {
+                        return Err(format!("seed {seed}: {e}"));
+                    }
+                }
+                Ok(())
+            })
+        })
+        .collect();
+    let failures: Vec<String> = workers
+        .into_iter()
+        .filter_map(|w| w.join().expect("worker").err())
+        .collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+    eprintln!(
+        "{sequences} sequences in {:.1} s",
+        start.elapsed().as_secs_f64()
+    );
+}
+
+// ------------------------------------------------------------------------------------------------
+// Regression cases: sequences that once failed.
+
+fn scene_text(wall: usize) -> SceneText {
+    SceneText {
+        wall,
+        wall_prefab: false,
+        textured: false,
+        mesh: false,
+        swapped: false,
+        spp: 4,
+        broken: false,
+        truncated: false,
+    }
+}
+
+#[test]
+fn regression_spp_one_after_a_preview() {
+    let mut b = Bench::new("spp-one");
+    let text = SceneText {
+        spp: 1,
+        ..scene_text(1)
+    };
+    b.play(&[Op::Scene(text, Save::InPlace)])
+        .unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn regression_directory_removed_then_created_with_new_contents() {
+    let mut b = Bench::new("dir-recreated");
+    b.play(&[Op::RemoveDir(0), Op::Gap(30)])
+        .unwrap_or_else(|e| panic!("{e}"));
+    b.play(&[Op::CreateDir(0, 2)])
+        .unwrap_or_else(|e| panic!("{e}"));
+    b.play(&[Op::Prefab(Some(1), Save::InPlace)])
+        .unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn regression_directory_replaced_then_edited_at_once() {
+    let mut b = Bench::new("dir-replaced");
+    b.play(&[Op::ReplaceDir(1, 1), Op::Texture(Some(2), Save::Rename)])
+        .unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn regression_mesh_swapped_keeping_size_and_mtime() {
+    let mut b = Bench::new("mesh-stamp");
+    b.play(&[Op::Mesh(Some(1), Save::KeepMtime)])
+        .unwrap_or_else(|e| panic!("{e}"));
+    b.play(&[Op::Mesh(Some(0), Save::KeepMtime)])
+        .unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn regression_broken_then_fixed_within_a_window() {
+    let mut b = Bench::new("broken-fixed");
+    let broken = SceneText {
+        broken: true,
+        ..scene_text(2)
+    };
+    b.play(&[
+        Op::Scene(broken, Save::InPlace),
+        Op::Gap(10),
+        Op::Scene(scene_text(1), Save::Split(60)),
+    ])
+    .unwrap_or_else(|e| panic!("{e}"));
+}
