@@ -20,6 +20,7 @@ use crate::render::TraceStats;
 use crate::scene::error::SceneError;
 use crate::scene::format::{CameraDesc, Method, SettingsDesc};
 use crate::scene::load::{AssetCache, LoadedScene, load_scene};
+use crate::shading::sampler::SamplerKind;
 use crate::systems::{
     apply_scene, assign_materials, geometry_changed, material_refs_changed, rebuild_geometry,
     render_frame, write_image,
@@ -40,6 +41,8 @@ pub struct Overrides {
     pub seed: Option<u64>,
     /// Light-transport method.
     pub method: Option<Method>,
+    /// Sample generator.
+    pub sampler: Option<SamplerKind>,
 }
 
 impl Overrides {
@@ -51,6 +54,7 @@ impl Overrides {
         s.max_depth = self.max_depth.unwrap_or(s.max_depth);
         s.seed = self.seed.unwrap_or(s.seed);
         s.method = self.method.unwrap_or(s.method);
+        s.sampler = self.sampler.unwrap_or(s.sampler);
         s.validate()
     }
 }

@@ -35,6 +35,8 @@ use crate::shading::texture::Texture;
 
 /// Marks a primitive slot that is not an emitter.
 const NONE: u32 = u32::MAX;
+/// The largest `f32` below 1.
+const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// Resolution of the selection table: cumulative counts out of 2²⁴.
 const SELECT_SCALE: u32 = 1 << 24;
@@ -299,8 +301,9 @@ impl LightSet {
         }
     }
 
-    /// Samples a point seen from shading point `p_ref`: `u_select` picks the emitter, `u` the
-    /// point on it.
+    /// Samples a point seen from shading point `p_ref`: `u_select` picks the emitter; its
+    /// remainder within the emitter's share, rescaled to [0, 1), and `u.y` pick the point on it
+    /// (`u.x` is not used).
     #[inline]
     pub fn sample<L: Layout>(
         &self,
@@ -312,6 +315,12 @@ impl LightSet {
         let (k, pmf) = self.select(u_select)?;
         let e = self.emitters[k];
         let i = e.index as usize;
+        // Where `u_select` fell within the chosen emitter's share, rescaled to [0, 1), is the
+        // first coordinate of the point (pbrt-v4's remapped discrete sample): the integrator
+        // passes `u_select = u.x`, so one stratified 2D sample picks both emitter and point.
+        let lo = if k == 0 { 0 } else { self.cdf[k - 1] };
+        let share = (u_select * SELECT_SCALE as f32 - lo as f32) / (self.cdf[k] - lo) as f32;
+        let u = Vec2::new(share.clamp(0.0, ONE_BELOW), u.y);
         let strategy = Self::strategy(geometry, &e, p_ref);
         let (p, n, uv, err) = match e.kind {
             HitKind::Sphere => {

@@ -12,6 +12,7 @@ use rondo::cli::{EXIT_INPUT, check_output_dir, check_output_file};
 use rondo::film::OutputKind;
 use rondo::geometry::layout::LayoutKind;
 use rondo::scene::format::{MAX_DEPTH, MAX_SIDE, MAX_SPP, Method};
+use rondo::shading::sampler::SamplerKind;
 use rondo::watch::{Report, Watch, WatchOptions, WatchSession};
 use rondo::{Overrides, PassPlan, Renderer};
 
@@ -187,7 +188,7 @@ enum BenchCommand {
         workloads: Vec<String>,
     },
     /// Error against a reference image as a function of render time, for each light-transport
-    /// method over a sweep of spp (renders interleaved); writes accuracy.csv, accuracy.svg (log-log
+    /// method and sampler over a sweep of spp (renders interleaved); writes accuracy.csv, accuracy.svg (log-log
     /// RMSE against time) and summary.md (equal-time comparison) in --out.
     Accuracy {
         /// Scene file (.ron).
@@ -205,6 +206,9 @@ enum BenchCommand {
         /// Methods compared, comma-separated.
         #[arg(long, value_delimiter = ',', default_value = "naive,nee,mis")]
         methods: Vec<Method>,
+        /// Samplers compared with every method, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "sobol")]
+        samplers: Vec<SamplerKind>,
         /// Rays per path, camera ray included (overrides the scene).
         #[arg(long, value_parser = at_most_u32(MAX_DEPTH))]
         max_depth: Option<u32>,
@@ -275,6 +279,9 @@ struct RenderArgs {
     /// Light-transport method: naive, nee or mis (overrides the scene).
     #[arg(long)]
     method: Option<Method>,
+    /// Sample generator: independent or sobol (overrides the scene).
+    #[arg(long)]
+    sampler: Option<SamplerKind>,
     /// Geometry layout: soa, aos or soa-simd. Images are bit-identical; only speed differs.
     #[arg(long, default_value_t = LayoutKind::default())]
     layout: LayoutKind,
@@ -290,6 +297,7 @@ impl RenderArgs {
             max_depth: self.max_depth,
             seed: self.seed,
             method: self.method,
+            sampler: self.sampler,
         }
     }
 
@@ -446,6 +454,7 @@ fn run(cli: Cli) -> Result<()> {
                     out,
                     spp_list,
                     methods,
+                    samplers,
                     max_depth,
                     threads,
                     seed,
@@ -456,6 +465,7 @@ fn run(cli: Cli) -> Result<()> {
             out,
             spp_list,
             methods,
+            samplers,
             threads,
             max_depth,
             seed,
@@ -918,8 +928,9 @@ fn bench_accuracy(options: &rondo::bench::accuracy::AccuracyOptions) -> Result<(
     check_output_dir(&options.out)?;
     let report = rondo::bench::accuracy::run(options, |r| {
         eprintln!(
-            "{:>5} {:>6} spp  {:9.4} s  rmse {:.4e}  rel_mse {:.4e}  mae {:.4e}",
+            "{:>5} {:>11} {:>6} spp  {:9.4} s  rmse {:.4e}  rel_mse {:.4e}  mae {:.4e}",
             r.method.to_string(),
+            r.sampler.to_string(),
             r.spp,
             r.seconds,
             r.metrics.rmse,

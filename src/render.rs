@@ -3,7 +3,7 @@
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use glam::{DVec3, Vec2, Vec3};
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::camera::Camera;
@@ -15,6 +15,7 @@ use crate::lights::LightSet;
 use crate::scene::format::Method;
 use crate::shading::material::Material;
 use crate::shading::rng::Rng;
+use crate::shading::sampler::{Sampler, SamplerKind, SobolSampler};
 
 /// Rows per parallel work item. Small enough to balance two cores and to cancel promptly.
 const BAND_ROWS: usize = 4;
@@ -41,6 +42,8 @@ pub struct SceneView<'a, L: Layout = DefaultLayout> {
     pub method: Method,
     /// Whether paths may be ended early by Russian roulette (unbiased either way).
     pub roulette: bool,
+    /// Sample generator of the converging passes.
+    pub sampler: SamplerKind,
 }
 
 /// Counters of one render.
@@ -72,6 +75,16 @@ pub struct Cancelled;
 
 /// Bounces after which Russian roulette may end a path.
 const ROULETTE_DEPTH: u32 = 3;
+
+/// The sampler's dimension layout: dimension 0 is the pixel position; bounce `b` then owns
+/// dimensions `1 + b·BOUNCE_DIMENSIONS + k` with `k` one of the offsets below.
+const BOUNCE_DIMENSIONS: u32 = 4;
+/// The light sample (2D): its x picks the emitter and, rescaled, the point with its y.
+const LIGHT_DIMENSION: u32 = 0;
+/// The BSDF's 2D sample, then one more 1D value (glass's choice, metal's fuzz depth).
+const BSDF_DIMENSION: u32 = 1;
+/// Russian roulette (1D).
+const ROULETTE_DIMENSION: u32 = 3;
 
 /// Veach's power heuristic (β = 2) weight of a strategy with density `a` against one with `b`.
 #[inline]
@@ -127,10 +140,10 @@ pub fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
 /// Emission seen by the camera or after a glass/mirror bounce always counts in full. Russian
 /// roulette (after a few bounces, survival probability = the path's throughput) ends paths
 /// early without bias.
-pub fn trace_path<L: Layout>(
+pub fn trace_path<L: Layout, S: Sampler>(
     view: &SceneView<L>,
     mut ray: Ray,
-    rng: &mut Rng,
+    sampler: &mut S,
     stats: &mut TraceStats,
 ) -> Vec3 {
     let mut radiance = Vec3::ZERO;
@@ -170,12 +183,15 @@ pub fn trace_path<L: Layout>(
         }
         // Only a vertex the path continues from needs the hit point's error bound.
         let err = point_error(view.geometry, &hit, s.p);
+        let dimension = 1 + depth * BOUNCE_DIMENSIONS;
         if sample_lights && material.samples_lights() {
+            sampler.seek(dimension + LIGHT_DIMENSION);
             radiance +=
-                throughput * direct_light(view, &s, err, ray.direction, material, rng, stats);
+                throughput * direct_light(view, &s, err, ray.direction, material, sampler, stats);
         }
+        sampler.seek(dimension + BSDF_DIMENSION);
         let Some(scatter) =
-            material.scatter(ray.direction, shading_normal(&s, material), s.uv, rng)
+            material.scatter(ray.direction, shading_normal(&s, material), s.uv, sampler)
         else {
             break;
         };
@@ -189,7 +205,8 @@ pub fn trace_path<L: Layout>(
         }
         if view.roulette && depth >= ROULETTE_DEPTH {
             let survive = throughput.max_element().min(1.0);
-            if rng.next_f32() >= survive {
+            sampler.seek(dimension + ROULETTE_DIMENSION);
+            if sampler.next_1d() >= survive {
                 break;
             }
             throughput /= survive;
@@ -229,12 +246,12 @@ fn direct_light<L: Layout>(
     err: Vec3,
     d: Vec3,
     material: &Material,
-    rng: &mut Rng,
+    sampler: &mut impl Sampler,
     stats: &mut TraceStats,
 ) -> Vec3 {
-    let u_select = rng.next_f32();
-    let u = Vec2::new(rng.next_f32(), rng.next_f32());
-    let Some(light) = view.lights.sample(view.geometry, s.p, u_select, u) else {
+    // One 2D sample picks the emitter and the point on it, so both are stratified together.
+    let u = sampler.next_2d();
+    let Some(light) = view.lights.sample(view.geometry, s.p, u.x, u) else {
         return Vec3::ZERO;
     };
     let to_light = light.p - s.p;
@@ -289,11 +306,31 @@ fn direct_light<L: Layout>(
 
 /// Adds samples `samples` of every pixel to `film`, in parallel over bands of rows.
 ///
-/// Each sample draws from its own generator seeded by (seed, pixel, sample index) and is added
-/// to its pixel's sum in sample order, so the film is bit-identical whatever the thread count
-/// and however the samples are split into passes. `progress(rows)` is called as bands finish.
-/// If `cancel` becomes true, remaining bands are skipped and `Err(Cancelled)` is returned.
+/// Each sample draws from its own generator (the view's [`SamplerKind`]) seeded by (seed,
+/// pixel, sample index) and is added to its pixel's sum in sample order, so the film is
+/// bit-identical whatever the thread count and however the samples are split into passes.
+/// `progress(rows)` is called as bands finish. If `cancel` becomes true, remaining bands are
+/// skipped and `Err(Cancelled)` is returned.
 pub fn render_pass<L: Layout>(
+    view: &SceneView<L>,
+    film: &mut Film,
+    seed: u64,
+    samples: Range<u32>,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<TraceStats, Cancelled> {
+    // Matched once per pass, like the layout: each sampler gets its own copy of the loop.
+    match view.sampler {
+        SamplerKind::Independent => {
+            render_pass_with::<L, Rng>(view, film, seed, samples, cancel, progress)
+        }
+        SamplerKind::Sobol => {
+            render_pass_with::<L, SobolSampler>(view, film, seed, samples, cancel, progress)
+        }
+    }
+}
+
+fn render_pass_with<L: Layout, S: Sampler>(
     view: &SceneView<L>,
     film: &mut Film,
     seed: u64,
@@ -319,10 +356,10 @@ pub fn render_pass<L: Layout>(
                     (index / width as usize) as f32,
                 );
                 for sample in samples.clone() {
-                    let mut rng = Rng::for_sample(seed, index as u64, u64::from(sample));
-                    let (jx, jy) = (rng.next_f32(), rng.next_f32());
-                    let ray = view.camera.ray(x + jx, y + jy, width, height);
-                    let l = trace_path(view, ray, &mut rng, &mut stats);
+                    let mut sampler = S::start(seed, index as u64, sample);
+                    let j = sampler.next_2d();
+                    let ray = view.camera.ray(x + j.x, y + j.y, width, height);
+                    let l = trace_path(view, ray, &mut sampler, &mut stats);
                     if l.is_finite() {
                         sum.add(l);
                     } else {

@@ -175,7 +175,7 @@ fn bench_accuracy_smoke_run_writes_its_csv_chart_and_summary() {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next(),
-        Some("method,spp,seed,seconds,rmse,rel_mse,mae")
+        Some("method,spp,seed,seconds,rmse,rel_mse,mae,sampler")
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 6, "{csv}");
@@ -195,7 +195,7 @@ fn bench_accuracy_smoke_run_writes_its_csv_chart_and_summary() {
     let svg = std::fs::read_to_string(results.join("accuracy.svg")).expect("svg");
     assert!(svg.starts_with("<svg") && svg.contains("slope"), "{svg}");
     let summary = std::fs::read_to_string(results.join("summary.md")).expect("summary");
-    assert!(summary.contains("| mis |"), "{summary}");
+    assert!(summary.contains("| mis sobol |"), "{summary}");
 
     // A reference of another size than the scene's is fine (the renders take its size), but
     // a missing reference is an error naming it.

@@ -12,6 +12,7 @@ use std::f64::consts::PI;
 use common::{point_estimate, temp_dir, write_scene};
 use glam::Vec3;
 use rondo::scene::format::Method;
+use rondo::shading::sampler::SamplerKind;
 use rondo::{Overrides, PassPlan, Renderer};
 
 fn render_with(
@@ -21,10 +22,23 @@ fn render_with(
     seed: u64,
     roulette: bool,
 ) -> Renderer {
+    render_sampled(path, method, None, spp, seed, roulette)
+}
+
+/// [`render_with`] with a sampler (`None`: the default).
+fn render_sampled(
+    path: &std::path::Path,
+    method: Method,
+    sampler: Option<SamplerKind>,
+    spp: u32,
+    seed: u64,
+    roulette: bool,
+) -> Renderer {
     let mut r = Renderer::new(None, PassPlan::Single).expect("pool");
     r.set_roulette(roulette);
     r.set_overrides(Overrides {
         method: Some(method),
+        sampler,
         spp: Some(spp),
         seed: Some(seed),
         ..Default::default()
@@ -93,13 +107,18 @@ fn diffuse_floor_under_a_square_lamp_matches_the_analytic_form_factor() {
         let f = form_factor(-0.5 - tx, 0.5 - tx, -0.5 - tz, 0.5 - tz, 1.0);
         // Lambertian: L = ρ/π · E = ρ · Le · F.
         let expected = f64::from(albedo) * f64::from(le) * f;
-        for method in [Method::Naive, Method::Nee, Method::Mis] {
-            let spp = if method == Method::Naive { 256 } else { 64 };
-            let (mean, se) = point_estimate(&render_with(&path, method, spp, 1, true));
-            assert!(
-                (mean - expected).abs() < 3.0 * se + 1e-4 * expected,
-                "{method} at {target}: {mean} ± {se}, analytic {expected}"
-            );
+        // Every pixel is an independent (randomised quasi-Monte Carlo) estimate under either
+        // sampler, so the pixels' spread gives the standard error of their mean.
+        for sampler in SamplerKind::ALL {
+            for method in [Method::Naive, Method::Nee, Method::Mis] {
+                let spp = if method == Method::Naive { 256 } else { 64 };
+                let r = render_sampled(&path, method, Some(sampler), spp, 1, true);
+                let (mean, se) = point_estimate(&r);
+                assert!(
+                    (mean - expected).abs() < 3.0 * se + 1e-4 * expected,
+                    "{method}, {sampler} at {target}: {mean} ± {se}, analytic {expected}"
+                );
+            }
         }
     }
 }
@@ -150,16 +169,23 @@ fn all_methods_and_russian_roulette_converge_to_the_same_radiance() {
     }
 }
 
-#[test]
-fn rmse_falls_as_one_over_the_square_root_of_the_sample_count() {
-    let dir = temp_dir("convergence");
+/// Least-squares slope of ln RMSE against ln spp on the analytic scene (MIS, spp 1 … 128), for
+/// one sampler: the error of every pixel against the closed form.
+fn error_slope(sampler: SamplerKind, dir: &std::path::Path) -> (f64, Vec<(f64, f64)>) {
     let target = Vec3::new(0.2, 0.0, 0.1);
-    let path = write_scene(&dir, "conv.ron", &form_factor_scene(target, 0.5, 2.0));
+    let path = write_scene(dir, "conv.ron", &form_factor_scene(target, 0.5, 2.0));
     let f = form_factor(-0.7, 0.3, -0.6, 0.4, 1.0);
     let exact = 0.5 * 2.0 * f;
     let mut points = Vec::new();
     for (k, spp) in [1u32, 2, 4, 8, 16, 32, 64, 128].into_iter().enumerate() {
-        let r = render_with(&path, Method::Mis, spp, 1000 + k as u64, true);
+        let r = render_sampled(
+            &path,
+            Method::Mis,
+            Some(sampler),
+            spp,
+            1000 + k as u64,
+            true,
+        );
         let px = r.film().mean();
         let mse = px
             .iter()
@@ -168,7 +194,6 @@ fn rmse_falls_as_one_over_the_square_root_of_the_sample_count() {
             / px.len() as f64;
         points.push((f64::from(spp).ln(), 0.5 * mse.ln()));
     }
-    // Least-squares slope of ln RMSE against ln spp.
     let n = points.len() as f64;
     let (mx, my) = (
         points.iter().map(|p| p.0).sum::<f64>() / n,
@@ -176,5 +201,49 @@ fn rmse_falls_as_one_over_the_square_root_of_the_sample_count() {
     );
     let slope = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>()
         / points.iter().map(|p| (p.0 - mx).powi(2)).sum::<f64>();
+    (slope, points)
+}
+
+#[test]
+fn rmse_falls_as_one_over_the_square_root_of_the_sample_count() {
+    let (slope, points) = error_slope(SamplerKind::Independent, &temp_dir("convergence"));
     assert!((slope + 0.5).abs() < 0.05, "slope {slope}: {points:?}");
+}
+
+#[test]
+fn sobol_error_falls_faster_than_monte_carlo() {
+    // Quasi-Monte Carlo: the 2D light and BSDF samples are stratified at every power of two,
+    // so on this smooth integrand the error falls faster than N^(-1/2).
+    let (slope, points) = error_slope(SamplerKind::Sobol, &temp_dir("convergence-sobol"));
+    assert!(slope <= -0.7, "slope {slope}: {points:?}");
+}
+
+#[test]
+fn sobol_furnace_is_unbiased() {
+    // The white furnace (scenes/furnace.ron) is 1 in every pixel; under NEE and MIS the
+    // samples vary, and their mean over the image must be 1 within 3 standard errors, over
+    // several seeds. Naive samples are exactly 1 whatever the sampler.
+    let path = common::scenes_dir().join("furnace.ron");
+    for (method, seed) in [(Method::Nee, 1), (Method::Mis, 2), (Method::Mis, 3)] {
+        let mut r = Renderer::new(None, PassPlan::Single).expect("pool");
+        r.set_overrides(Overrides {
+            method: Some(method),
+            sampler: Some(SamplerKind::Sobol),
+            width: Some(64),
+            height: Some(64),
+            spp: Some(4),
+            seed: Some(seed),
+            ..Default::default()
+        });
+        r.load(&path).unwrap_or_else(|e| panic!("{e}"));
+        r.render_to_completion();
+        let px: Vec<f64> = r.film().mean().iter().map(|p| f64::from(p.y)).collect();
+        let n = px.len() as f64;
+        let mean = px.iter().sum::<f64>() / n;
+        let se = (px.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+        assert!(
+            (mean - 1.0).abs() < 3.0 * se,
+            "{method} seed {seed}: {mean} ± {se}"
+        );
+    }
 }

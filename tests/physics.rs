@@ -472,6 +472,7 @@ fn nan_samples_are_counted_and_dropped() {
             max_depth: 4,
             method,
             roulette: true,
+            sampler: rondo::shading::sampler::SamplerKind::default(),
         };
         let mut film = Film::new(16, 16);
         let spp = 4u32;

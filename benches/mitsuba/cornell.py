@@ -2,6 +2,14 @@
 box pixel filter, rendered by Mitsuba and by rondo at a sweep of spp, interleaved, each
 timed; error of both against one converged reference.
 
+Several Mitsuba samplers (--mitsuba-samplers) and several rondo binaries or samplers
+(--rondo LABEL=PATH[:SAMPLER], repeatable) can be compared in one run: for each spp every
+configuration renders in turn. Errors are reported as RMSE over all pixels and as the
+"lamp-out" RMSE: pixels whose reference value exceeds 1 in some channel (the lamp and its
+antialiased edge, whose error is pixel-footprint noise only) are left out, and both images
+are clamped to [0, 1]. The efficiency E = (t_M e_M^2) / (t_R e_R^2) at each spp, against
+Mitsuba's default (independent) sampler and its best, uses the lamp-out error.
+
 Run through `benches/mitsuba/run.sh`, which installs mitsuba into a virtual environment.
 Never run by the tests.
 
@@ -78,7 +86,7 @@ def write_obj(path, quads):
             f.write("f %d %d %d\nf %d %d %d\n" % (b, b + 1, b + 2, b, b + 2, b + 3))
 
 
-def scene_dict(mi, tmp, size, max_depth):
+def scene_dict(mi, tmp, size, max_depth, sampler="independent"):
     shapes = {}
     for name, material, quads in QUADS:
         path = os.path.join(tmp, name + ".obj")
@@ -101,7 +109,7 @@ def scene_dict(mi, tmp, size, max_depth):
             "fov": 40.0,
             "fov_axis": "y",
             "to_world": look(origin=[278, 278, -800], target=[278, 278, 0], up=[0, 1, 0]),
-            "sampler": {"type": "independent", "sample_count": 1},
+            "sampler": {"type": sampler, "sample_count": 1},
             "film": {"type": "hdrfilm", "width": size, "height": size,
                      "rfilter": {"type": "box"}, "pixel_format": "rgb"},
         },
@@ -110,10 +118,15 @@ def scene_dict(mi, tmp, size, max_depth):
 
 
 def metrics(a, r):
-    d = a.astype(np.float64) - r.astype(np.float64)
+    """RMSE, relative MSE, MAE over all pixels, and the lamp-out clamped RMSE."""
+    a, r = a.astype(np.float64), r.astype(np.float64)
+    d = a - r
+    keep = np.all(r <= 1.0, axis=-1)
+    dc = (np.clip(a, 0, 1) - np.clip(r, 0, 1))[keep]
     return (math.sqrt(np.mean(d * d)),
-            float(np.mean(d * d / (r.astype(np.float64) ** 2 + 0.01))),
-            float(np.mean(np.abs(d))))
+            float(np.mean(d * d / (r ** 2 + 0.01))),
+            float(np.mean(np.abs(d))),
+            math.sqrt(np.mean(dc * dc)))
 
 
 def read_exr(mi, path):
@@ -127,12 +140,13 @@ def cpu_seconds(who):
     return r.ru_utime + r.ru_stime
 
 
-def rondo_render(rondo, scene, spp, seed, out, size, max_depth):
-    """Renders with rondo (method mis, the default); returns rondo's own render wall time and
-    the process's CPU time (scene loading included, a few ms)."""
+def rondo_render(rondo, scene, spp, seed, out, size, max_depth, sampler=None):
+    """Renders with rondo (method mis, the default; `sampler` if given, else the binary's
+    default); returns rondo's own render wall time and the process's CPU time (scene loading
+    included, a few ms)."""
     cmd = [rondo, "render", scene, "-o", out, "--spp", str(spp), "--seed", str(seed),
            "--width", str(size), "--height", str(size), "--max-depth", str(max_depth),
-           "--method", "mis"]
+           "--method", "mis"] + (["--sampler", sampler] if sampler else [])
     c = cpu_seconds(resource.RUSAGE_CHILDREN)
     p = subprocess.run(cmd, capture_output=True, text=True)
     cpu = cpu_seconds(resource.RUSAGE_CHILDREN) - c
@@ -147,7 +161,13 @@ def rondo_render(rondo, scene, spp, seed, out, size, max_depth):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--reference", required=True, help="converged reference .exr (512x512)")
-    ap.add_argument("--rondo", default="target/release/rondo")
+    ap.add_argument("--rondo", action="append", metavar="LABEL=PATH[:SAMPLER]",
+                    help="a rondo configuration (repeatable); default rondo=target/release/rondo")
+    ap.add_argument("--mitsuba-samplers", default="independent",
+                    help="Mitsuba samplers, comma-separated (independent, stratified, "
+                         "multijitter, orthogonal, ldsampler)")
+    ap.add_argument("--reference-sampler", default="independent",
+                    help="Mitsuba sampler of --make-reference")
     ap.add_argument("--scene", default="scenes/cornell.ron")
     ap.add_argument("--spp-list", default="4,16,64,256")
     ap.add_argument("--size", type=int, default=512)
@@ -170,9 +190,13 @@ def main():
     print("mitsuba %s, variant %s" % (mi.__version__, variant))
     os.makedirs(args.out, exist_ok=True)
     tmp = tempfile.mkdtemp(prefix="rondo-mitsuba-")
-    scene = mi.load_dict(scene_dict(mi, tmp, args.size, args.max_depth))
+    samplers = args.mitsuba_samplers.split(",")
+    if args.make_reference:
+        samplers = [args.reference_sampler]
+    scenes = {s: mi.load_dict(scene_dict(mi, tmp, args.size, args.max_depth, s)) for s in samplers}
+    scene = scenes[samplers[0]]
 
-    def render(spp, seed, with_cpu=False):
+    def render(spp, seed, with_cpu=False, scene=scene):
         c = cpu_seconds(resource.RUSAGE_SELF)
         t = time.perf_counter()
         img = mi.render(scene, spp=spp, seed=seed)
@@ -208,40 +232,50 @@ def main():
         if not (left[..., 0].mean() > left[..., 1].mean() and right[..., 1].mean() > right[..., 0].mean()):
             sys.exit("%s: red wall not on the left: camera conventions differ" % name)
 
+    configs = []
+    for spec in args.rondo or ["rondo=target/release/rondo"]:
+        label, _, rest = spec.partition("=")
+        path, _, sampler = rest.partition(":")
+        configs.append((label, path, sampler or None))
+
     rows = []
     spps = [int(s) for s in args.spp_list.split(",")]
     for k, spp in enumerate(spps):
-        # Mitsuba JIT-compiles its kernels; a first render at this spp (untimed) fills the
-        # kernel cache, so the timed one measures rendering only, as rondo's time does.
-        cold, _ = render(spp, 100 + k)
-        warm, cpu, img = render(spp, 200 + k, with_cpu=True)
-        m = metrics(img, ref)
-        rows.append(("mitsuba", spp, warm, cpu, cold) + m)
-        print("mitsuba %5d spp  %8.3f s  cpu %8.3f s (cold %.3f s)  rmse %.4e"
-              % (spp, warm, cpu, cold, m[0]), flush=True)
-        out = os.path.join(tmp, "rondo.exr")
-        t, cpu = rondo_render(args.rondo, args.scene, spp, 300 + k, out, args.size, args.max_depth)
-        m = metrics(read_exr(mi, out), ref)
-        rows.append(("rondo", spp, t, cpu, t) + m)
-        print("rondo   %5d spp  %8.3f s  cpu %8.3f s                rmse %.4e"
-              % (spp, t, cpu, m[0]), flush=True)
+        for sampler in samplers:
+            # Mitsuba JIT-compiles its kernels; a first render at this spp (untimed) fills the
+            # kernel cache, so the timed one measures rendering only, as rondo's time does.
+            cold, _ = render(spp, 100 + k, scene=scenes[sampler])
+            warm, cpu, img = render(spp, 200 + k, with_cpu=True, scene=scenes[sampler])
+            m = metrics(img, ref)
+            rows.append(("mitsuba-" + sampler, spp, warm, cpu, cold) + m)
+            print("%-22s %5d spp  %8.3f s  cpu %8.3f s (cold %.3f s)  rmse %.4e  lamp-out %.4e"
+                  % ("mitsuba-" + sampler, spp, warm, cpu, cold, m[0], m[3]), flush=True)
+        for label, path, sampler in configs:
+            out = os.path.join(tmp, "rondo.exr")
+            t, cpu = rondo_render(path, args.scene, spp, 300 + k, out, args.size,
+                                  args.max_depth, sampler)
+            m = metrics(read_exr(mi, out), ref)
+            rows.append((label, spp, t, cpu, t) + m)
+            print("%-22s %5d spp  %8.3f s  cpu %8.3f s                 rmse %.4e  lamp-out %.4e"
+                  % (label, spp, t, cpu, m[0], m[3]), flush=True)
 
     path = os.path.join(args.out, "mitsuba.csv")
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["renderer", "spp", "seconds", "cpu_seconds", "cold_seconds", "rmse",
-                    "rel_mse", "mae"])
+                    "rel_mse", "mae", "lamp_out_rmse"])
         w.writerows(rows)
-    # Equal-time comparison: RMSE falls as c / sqrt(t); c from the geometric mean.
-    for label, col in (("wall", 2), ("cpu", 3)):
-        c = {}
-        for who in ("mitsuba", "rondo"):
-            pts = [r for r in rows if r[0] == who]
-            c[who] = math.exp(sum(math.log(r[5]) + 0.5 * math.log(r[col]) for r in pts) / len(pts))
-            print("%s: RMSE x sqrt(%s seconds) = %.4e" % (who, label, c[who]))
-        print("variant %s; rondo error / mitsuba error at equal %s time: %.2f "
-              "(time ratio at equal error %.2f)" % (variant, label, c["rondo"] / c["mitsuba"],
-                                                     (c["rondo"] / c["mitsuba"]) ** 2))
+    by = {(r[0], r[1]): r for r in rows}
+    mitsubas = ["mitsuba-" + s for s in samplers]
+    for spp in spps:
+        # Mitsuba's best sampler at this spp: the lowest time x error^2.
+        cost = lambda who, col: by[(who, spp)][col] * by[(who, spp)][8] ** 2
+        best = min(mitsubas, key=lambda m: cost(m, 2))
+        for label, _, _ in configs:
+            print("%4d spp %-14s E vs %s: wall %.2f cpu %.2f | E vs best (%s): wall %.2f cpu %.2f"
+                  % (spp, label, mitsubas[0], cost(mitsubas[0], 2) / cost(label, 2),
+                     cost(mitsubas[0], 3) / cost(label, 3), best,
+                     cost(best, 2) / cost(label, 2), cost(best, 3) / cost(label, 3)))
     print("wrote", path)
 
 

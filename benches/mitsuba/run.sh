@@ -6,7 +6,7 @@
 #
 # Environment: MITSUBA_VENV (default ~/.cache/rondo-mitsuba-venv), REFERENCE (default
 # bench/mitsuba/reference.exr), REFERENCE_SPP (default 1024: a Mitsuba reference; see
-# BENCHMARKS.md for why), DRJIT_LIBLLVM_PATH.
+# BENCHMARKS.md for why), REFERENCE_SAMPLER (default independent), DRJIT_LIBLLVM_PATH.
 #
 # The llvm_* variants JIT-compile through the system's libLLVM. Dr.Jit 1.5 (mitsuba 3.9) emits
 # `llvm.minimum`, which LLVM 14 and 15 (Debian 12's default) cannot compile for x86 ("LLVM
@@ -31,6 +31,6 @@ cargo build --release --quiet
 mkdir -p "$(dirname "$REFERENCE")"
 if [ ! -f "$REFERENCE" ]; then
   "$VENV/bin/python" benches/mitsuba/cornell.py --reference "$REFERENCE" \
-    --make-reference "${REFERENCE_SPP:-1024}"
+    --make-reference "${REFERENCE_SPP:-1024}" --reference-sampler "${REFERENCE_SAMPLER:-independent}"
 fi
 exec "$VENV/bin/python" benches/mitsuba/cornell.py --reference "$REFERENCE" --rondo target/release/rondo "$@"

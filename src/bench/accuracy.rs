@@ -1,7 +1,7 @@
 //! `rondo bench accuracy`: error against a reference image as a function of render time, for
-//! each light-transport method over a sweep of samples per pixel. Writes `accuracy.csv`,
-//! `accuracy.svg` (log-log RMSE against seconds, one line per method, spp at each point, fitted
-//! slope in the legend), `accuracy_relative.svg` (the same for √relMSE) and `summary.md` (the
+//! each light-transport method and sampler over a sweep of samples per pixel. Writes
+//! `accuracy.csv`, `accuracy.svg` (log-log RMSE against seconds, one line per method and
+//! sampler, spp at each point, fitted slope in the legend), `accuracy_relative.svg` (the same for √relMSE) and `summary.md` (the
 //! equal-time comparison in both metrics).
 //!
 //! Why two metrics: RMSE weighs every pixel by its brightness, so a directly visible lamp of
@@ -9,7 +9,7 @@
 //! or a few caustic fireflies can decide it. √relMSE (relative MSE with ε = 0.01, see
 //! [`crate::metrics`]) weighs every pixel alike; both fall as 1/√t.
 //!
-//! Renders are interleaved (for each spp, every method in turn) so that a change in machine
+//! Renders are interleaved (for each spp, every method and sampler in turn) so that a change in machine
 //! load during the sweep hits every method alike. Each render uses its own seed, `seed + k`,
 //! never the reference's (the reference must be made with a seed outside that range, e.g. the
 //! scene's default 0), so a render is never correlated with the reference it is compared to.
@@ -24,6 +24,7 @@ use std::path::{Path, PathBuf};
 use crate::metrics::{ErrorMetrics, Image, MetricsError, compare};
 use crate::scene::error::SceneError;
 use crate::scene::format::Method;
+use crate::shading::sampler::SamplerKind;
 use crate::{Overrides, PassPlan, Renderer};
 
 /// What to measure.
@@ -39,6 +40,8 @@ pub struct AccuracyOptions {
     pub spp_list: Vec<u32>,
     /// Methods compared.
     pub methods: Vec<Method>,
+    /// Samplers compared (each with every method).
+    pub samplers: Vec<SamplerKind>,
     /// Worker threads (all cores if `None`).
     pub threads: Option<usize>,
     /// Rays per path (the scene's if `None`).
@@ -55,6 +58,8 @@ pub const DEFAULT_SEED: u64 = 1_000_000;
 pub struct AccuracyRow {
     /// Method.
     pub method: Method,
+    /// Sampler.
+    pub sampler: SamplerKind,
     /// Samples per pixel.
     pub spp: u32,
     /// Seed of the render.
@@ -96,11 +101,13 @@ impl Metric {
     }
 }
 
-/// The summary of one method's rows in one metric.
+/// The summary of one method's rows with one sampler in one metric.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MethodFit {
     /// Method.
     pub method: Method,
+    /// Sampler.
+    pub sampler: SamplerKind,
     /// Metric.
     pub metric: Metric,
     /// Least-squares slope of ln error against ln seconds (≈ −0.5 for Monte Carlo); `None`
@@ -120,8 +127,8 @@ pub struct AccuracyReport {
     pub height: u32,
     /// Every render, in the order made.
     pub rows: Vec<AccuracyRow>,
-    /// One summary per metric and method: the RMSE fits in the order the methods were asked,
-    /// then the √relMSE fits.
+    /// One summary per metric, method and sampler: the RMSE fits in the order the methods (then
+    /// samplers) were asked, then the √relMSE fits.
     pub fits: Vec<MethodFit>,
 }
 
@@ -135,7 +142,7 @@ pub enum AccuracyError {
     #[error(transparent)]
     Scene(#[from] SceneError),
     /// Nothing to do.
-    #[error("nothing to measure: give at least one spp value (all ≥ 1) and one method")]
+    #[error("nothing to measure: give at least one spp value (all ≥ 1), method and sampler")]
     Empty,
     /// The thread pool could not be built.
     #[error("cannot start the thread pool: {0}")]
@@ -168,31 +175,41 @@ pub fn measure(
     options: &AccuracyOptions,
     mut on_row: impl FnMut(&AccuracyRow),
 ) -> Result<AccuracyReport, AccuracyError> {
-    if options.methods.is_empty() || options.spp_list.is_empty() || options.spp_list.contains(&0) {
+    if options.methods.is_empty()
+        || options.samplers.is_empty()
+        || options.spp_list.is_empty()
+        || options.spp_list.contains(&0)
+    {
         return Err(AccuracyError::Empty);
     }
+    let curves: Vec<(Method, SamplerKind)> = options
+        .methods
+        .iter()
+        .flat_map(|&m| options.samplers.iter().map(move |&s| (m, s)))
+        .collect();
     let reference = Image::read(&options.reference)?;
     let mut renderer = Renderer::new(options.threads, PassPlan::Single)?;
-    let overrides = |method: Method, spp: u32, seed: u64| Overrides {
+    let overrides = |(method, sampler): (Method, SamplerKind), spp: u32, seed: u64| Overrides {
         width: Some(reference.width),
         height: Some(reference.height),
         spp: Some(spp),
         max_depth: options.max_depth,
         seed: Some(seed),
         method: Some(method),
+        sampler: Some(sampler),
     };
     // Warm-up, not recorded: builds the BVH and touches every page once.
-    renderer.set_overrides(overrides(options.methods[0], 1, options.seed));
+    renderer.set_overrides(overrides(curves[0], 1, options.seed));
     renderer.load(&options.scene)?;
     renderer.render_to_completion();
 
     let mut rows = Vec::new();
     let mut k = 0u64;
     for &spp in &options.spp_list {
-        for &method in &options.methods {
+        for &(method, sampler) in &curves {
             k += 1;
             let seed = options.seed.wrapping_add(k);
-            renderer.set_overrides(overrides(method, spp, seed));
+            renderer.set_overrides(overrides((method, sampler), spp, seed));
             renderer.load(&options.scene)?;
             let seconds = renderer.render_to_completion().as_secs_f64();
             let nonfinite = renderer.stats().nonfinite;
@@ -214,6 +231,7 @@ pub fn measure(
                 })?;
             let row = AccuracyRow {
                 method,
+                sampler,
                 spp,
                 seed,
                 seconds,
@@ -225,8 +243,8 @@ pub fn measure(
     }
     let fits = Metric::ALL
         .iter()
-        .flat_map(|&metric| options.methods.iter().map(move |&m| (metric, m)))
-        .map(|(metric, m)| fit(m, metric, &rows))
+        .flat_map(|&metric| curves.iter().map(move |&c| (metric, c)))
+        .map(|(metric, (m, s))| fit(m, s, metric, &rows))
         .collect::<Vec<_>>();
     Ok(AccuracyReport {
         width: reference.width,
@@ -249,9 +267,17 @@ pub fn slope(points: &[(f64, f64)]) -> Option<f64> {
     (sxx > 0.0).then(|| sxy / sxx)
 }
 
-/// The summary of `method`'s rows in `metric`.
-pub fn fit(method: Method, metric: Metric, rows: &[AccuracyRow]) -> MethodFit {
-    let mine: Vec<&AccuracyRow> = rows.iter().filter(|r| r.method == method).collect();
+/// The summary of the rows of `method` with `sampler` in `metric`.
+pub fn fit(
+    method: Method,
+    sampler: SamplerKind,
+    metric: Metric,
+    rows: &[AccuracyRow],
+) -> MethodFit {
+    let mine: Vec<&AccuracyRow> = rows
+        .iter()
+        .filter(|r| (r.method, r.sampler) == (method, sampler))
+        .collect();
     let logs: Vec<(f64, f64)> = mine
         .iter()
         .filter(|r| metric.of(&r.metrics) > 0.0 && r.seconds > 0.0)
@@ -266,6 +292,7 @@ pub fn fit(method: Method, metric: Metric, rows: &[AccuracyRow]) -> MethodFit {
     };
     MethodFit {
         method,
+        sampler,
         metric,
         slope: slope(&logs),
         at_one_second,
@@ -281,11 +308,19 @@ fn write_error(path: &Path) -> impl Fn(std::io::Error) -> AccuracyError + '_ {
 
 /// Writes `rows` as CSV with a header line.
 pub fn write_csv(path: &Path, rows: &[AccuracyRow]) -> Result<(), AccuracyError> {
-    let mut text = String::from("method,spp,seed,seconds,rmse,rel_mse,mae\n");
+    // The sampler comes last, so the columns of files written before it keep their places.
+    let mut text = String::from("method,spp,seed,seconds,rmse,rel_mse,mae,sampler\n");
     for r in rows {
         text += &format!(
-            "{},{},{},{:.6},{:.6e},{:.6e},{:.6e}\n",
-            r.method, r.spp, r.seed, r.seconds, r.metrics.rmse, r.metrics.rel_mse, r.metrics.mae
+            "{},{},{},{:.6},{:.6e},{:.6e},{:.6e},{}\n",
+            r.method,
+            r.spp,
+            r.seed,
+            r.seconds,
+            r.metrics.rmse,
+            r.metrics.rel_mse,
+            r.metrics.mae,
+            r.sampler
         );
     }
     std::fs::write(path, text).map_err(write_error(path))
@@ -304,7 +339,7 @@ pub fn summary_markdown(report: &AccuracyReport) -> String {
             .min_by(|a, b| a.at_one_second.total_cmp(&b.at_one_second));
         let name = metric.name();
         s += &format!(
-            "| method | slope of ln {name} vs ln t | {name} · √s | error ÷ best, equal time | time ÷ best, equal error |\n|---|---|---|---|---|\n"
+            "| method, sampler | slope of ln {name} vs ln t | {name} · √s | error ÷ best, equal time | time ÷ best, equal error |\n|---|---|---|---|---|\n"
         );
         for f in &fits {
             let slope = f.slope.map_or("–".to_string(), |v| format!("{v:.2}"));
@@ -318,7 +353,8 @@ pub fn summary_markdown(report: &AccuracyReport) -> String {
             };
             s += &format!(
                 "| {} | {slope} | {:.4e} | {ratio} | {time} |\n",
-                f.method, f.at_one_second
+                curve_name(f),
+                f.at_one_second
             );
         }
         s += "\n";
@@ -326,13 +362,23 @@ pub fn summary_markdown(report: &AccuracyReport) -> String {
     s
 }
 
-/// Colour of a method's line.
-fn colour(method: Method) -> plotters::style::RGBColor {
+/// A curve's name in tables and legends: `mis sobol`.
+fn curve_name(f: &MethodFit) -> String {
+    format!("{} {}", f.method, f.sampler)
+}
+
+/// Colour of a curve: one hue per method, paler for the independent sampler.
+fn colour(method: Method, sampler: SamplerKind) -> plotters::style::RGBColor {
     use plotters::style::RGBColor;
-    match method {
+    let RGBColor(r, g, b) = match method {
         Method::Naive => RGBColor(214, 39, 40),
         Method::Nee => RGBColor(31, 119, 180),
         Method::Mis => RGBColor(44, 160, 44),
+    };
+    let pale = |c: u8| ((u16::from(c) + 2 * 255) / 3) as u8;
+    match sampler {
+        SamplerKind::Independent => RGBColor(pale(r), pale(g), pale(b)),
+        SamplerKind::Sobol => RGBColor(r, g, b),
     }
 }
 
@@ -400,19 +446,21 @@ fn draw_chart(
         .y_label_formatter(&|y| short(10f64.powf(*y)))
         .draw()?;
     for f in report.fits.iter().filter(|f| f.metric == metric) {
-        let c = colour(f.method);
+        let c = colour(f.method, f.sampler);
+        let name = curve_name(f);
+        let mine = |r: &AccuracyRow| (r.method, r.sampler) == (f.method, f.sampler);
         let mut points: Vec<(f64, f64, u32)> = drawable
             .iter()
-            .filter(|r| r.method == f.method)
+            .filter(|r| mine(r))
             .map(|r| (r.seconds, metric.of(&r.metrics), r.spp))
             .collect();
         points.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let all = report.rows.iter().filter(|r| r.method == f.method).count();
+        let all = report.rows.iter().filter(|r| mine(r)).count();
         let exact = all - points.len();
         let mut label = match f.slope {
-            _ if f.at_one_second == 0.0 => format!("{}: exact (error 0, not drawn)", f.method),
-            Some(s) => format!("{}: slope {s:.2}", f.method),
-            None => format!("{}", f.method),
+            _ if f.at_one_second == 0.0 => format!("{name}: exact (error 0, not drawn)"),
+            Some(s) => format!("{name}: slope {s:.2}"),
+            None => name,
         };
         if exact > 0 && f.at_one_second > 0.0 {
             label += &format!(" ({exact} of {all} renders exact, not drawn)");
@@ -509,6 +557,7 @@ mod tests {
     fn row(method: Method, seconds: f64, rmse: f64) -> AccuracyRow {
         AccuracyRow {
             method,
+            sampler: SamplerKind::Sobol,
             spp: 1,
             seed: 0,
             seconds,
@@ -525,7 +574,7 @@ mod tests {
             .iter()
             .map(|&t: &f64| row(Method::Mis, t, 0.3 / t.sqrt()))
             .collect();
-        let f = fit(Method::Mis, Metric::Rmse, &rows);
+        let f = fit(Method::Mis, SamplerKind::Sobol, Metric::Rmse, &rows);
         assert!((f.slope.expect("slope") + 0.5).abs() < 1e-9);
         assert!((f.at_one_second - 0.3).abs() < 1e-9);
     }
@@ -542,21 +591,21 @@ mod tests {
     #[test]
     fn an_exact_method_is_reported_as_exact() {
         let rows = [row(Method::Naive, 1.0, 0.0), row(Method::Nee, 1.0, 0.1)];
-        let f = fit(Method::Naive, Metric::Rmse, &rows);
+        let f = fit(Method::Naive, SamplerKind::Sobol, Metric::Rmse, &rows);
         assert_eq!((f.slope, f.at_one_second), (None, 0.0));
         let report = AccuracyReport {
             width: 1,
             height: 1,
-            fits: vec![f, fit(Method::Nee, Metric::Rmse, &rows)],
+            fits: vec![f, fit(Method::Nee, SamplerKind::Sobol, Metric::Rmse, &rows)],
             rows: rows.to_vec(),
         };
         let md = summary_markdown(&report);
         assert!(
-            md.contains("| naive | – | 0.0000e0 | 1 (exact) | 1 |"),
+            md.contains("| naive sobol | – | 0.0000e0 | 1 (exact) | 1 |"),
             "{md}"
         );
         assert!(
-            md.contains("| nee | – | 1.0000e-1 | ∞ (best is exact) | ∞ |"),
+            md.contains("| nee sobol | – | 1.0000e-1 | ∞ (best is exact) | ∞ |"),
             "{md}"
         );
     }

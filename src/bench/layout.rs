@@ -47,6 +47,7 @@ use crate::render::{SceneView, render_pass};
 use crate::scene::format::Method;
 use crate::shading::material::Material;
 use crate::shading::rng::Rng;
+use crate::shading::sampler::SamplerKind;
 use crate::shading::texture::Texture;
 use crate::systems::world_primitives;
 
@@ -661,6 +662,7 @@ impl RenderBench {
             max_depth: 4,
             method: Method::default(),
             roulette: true,
+            sampler: SamplerKind::default(),
         };
         let mut film = Film::new(self.size, self.size);
         let cancel = AtomicBool::new(false);

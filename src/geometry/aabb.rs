@@ -1,6 +1,6 @@
 //! Ray queries and the robust ray–box slab test.
 
-use glam::{Mat3, Vec3, Vec3A};
+use glam::{Mat3, Vec3, Vec3A, Vec4};
 
 use super::ray::Ray;
 
@@ -96,6 +96,45 @@ impl RayQuery {
         (near <= far).then_some(near)
     }
 
+    /// [`RayQuery::enter_box`] for four boxes at once, given as `[min_x, min_y, min_z, max_x,
+    /// max_y, max_z]` lanes: bit `k` of the returned mask is set if the ray enters box `k` before
+    /// `t_max`, and lane `k` of the vector is then its entry distance. Each lane performs exactly
+    /// the operations of `enter_box`, so the answers are the same bits.
+    #[inline(always)]
+    pub fn enter_boxes(&self, b: &[Vec4; 6], t_max: f32) -> (u32, Vec4) {
+        if self.axis_parallel {
+            return self.enter_boxes_axis_parallel(b, t_max);
+        }
+        let (o, inv) = (self.origin, self.inv_dir);
+        let slab = |lo: Vec4, hi: Vec4, o: f32, inv: f32| {
+            let t0 = (lo - Vec4::splat(o)) * Vec4::splat(inv);
+            let t1 = (hi - Vec4::splat(o)) * Vec4::splat(inv);
+            (t0.min(t1), t0.max(t1))
+        };
+        let (nx, fx) = slab(b[0], b[3], o.x, inv.x);
+        let (ny, fy) = slab(b[1], b[4], o.y, inv.y);
+        let (nz, fz) = slab(b[2], b[5], o.z, inv.z);
+        let near = nx.max(ny).max(nz).max(Vec4::ZERO);
+        let far = (fx.min(fy).min(fz) * (1.0 + 2.0 * GAMMA3)).min(Vec4::splat(t_max));
+        (near.cmple(far).bitmask(), near)
+    }
+
+    /// [`RayQuery::enter_boxes`] for rays with a zero direction component: box by box.
+    #[cold]
+    fn enter_boxes_axis_parallel(&self, b: &[Vec4; 6], t_max: f32) -> (u32, Vec4) {
+        let mut mask = 0;
+        let mut near = [0.0f32; 4];
+        for (k, t) in near.iter_mut().enumerate() {
+            let min = Vec3A::new(b[0][k], b[1][k], b[2][k]);
+            let max = Vec3A::new(b[3][k], b[4][k], b[5][k]);
+            if let Some(t_enter) = self.enter_box_axis_parallel(min, max, t_max) {
+                mask |= 1 << k;
+                *t = t_enter;
+            }
+        }
+        (mask, Vec4::from_array(near))
+    }
+
     /// The slab test for rays with a zero direction component. A ray lying in a slab plane makes
     /// `0 · ∞ = NaN`; the comparisons are written so a NaN bound is ignored (the ray is inside
     /// that slab), as pbrt does.
@@ -163,6 +202,43 @@ mod tests {
             q.enter_box(Vec3A::ZERO, Vec3A::ONE, f32::INFINITY),
             Some(1.0)
         );
+    }
+
+    #[test]
+    fn four_boxes_at_once_give_the_single_box_answers() {
+        let mut rng = crate::shading::rng::Rng::new(3, 8);
+        let mut f = || rng.next_f32() * 4.0 - 2.0;
+        for k in 0..2000 {
+            let mut d = Vec3::new(f(), f(), f());
+            if k % 7 == 0 {
+                d.x = 0.0;
+            }
+            let q = query(Vec3::new(f(), f(), f()), d);
+            let mut lanes = [Vec4::ZERO; 6];
+            let mut boxes = [(Vec3A::ZERO, Vec3A::ZERO); 4];
+            for (j, bx) in boxes.iter_mut().enumerate() {
+                let a = Vec3A::new(f(), f(), f());
+                let b = a + Vec3A::new(f(), f(), f()).abs() * if j == 3 { 0.0 } else { 1.0 };
+                *bx = (a, b);
+                for axis in 0..3 {
+                    lanes[axis][j] = a[axis];
+                    lanes[3 + axis][j] = b[axis];
+                }
+            }
+            let t_max = if k % 3 == 0 {
+                f32::INFINITY
+            } else {
+                f().abs() * 2.0
+            };
+            let (mask, near) = q.enter_boxes(&lanes, t_max);
+            for (j, &(a, b)) in boxes.iter().enumerate() {
+                let single = q.enter_box(a, b, t_max);
+                assert_eq!(mask & (1 << j) != 0, single.is_some(), "ray {k} box {j}");
+                if let Some(t) = single {
+                    assert_eq!(near[j].to_bits(), t.to_bits());
+                }
+            }
+        }
     }
 
     #[test]

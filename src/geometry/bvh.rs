@@ -1,13 +1,18 @@
-//! A thin wrapper over obvhs's binary BVH: build presets and robust closure traversal.
+//! A 4-wide BVH collapsed from obvhs's binary BVH, with robust closure traversal.
 //!
-//! obvhs builds the tree (PLOC + reinsertion + leaf collapse). Traversal is ours, because it must
-//! use the robust slab test of [`RayQuery::enter_box`]: obvhs's own box test is not conservative
-//! for grazing rays. Leaves hand a contiguous range of primitive slots to a closure; the caller
-//! stores its primitives in BVH order (see [`Bvh::build`], which returns the order) so that range indexes them directly.
+//! obvhs builds the binary tree (PLOC + reinsertion + leaf collapse); [`Bvh::build`] then
+//! collapses it into nodes of up to four children (each inner node absorbs the children of its
+//! largest inner children, as in Wald et al.'s "Getting Rid of Packets", 2008), whose boxes are
+//! stored lane by lane so one SIMD slab test ([`RayQuery::enter_boxes`]) tests all four. The
+//! leaves are the binary tree's leaves, unchanged. Traversal is ours, because it must use the
+//! robust slab test of [`RayQuery::enter_box`]: obvhs's own box test is not conservative for
+//! grazing rays. Leaves hand a contiguous range of primitive slots to a closure; the caller
+//! stores its primitives in BVH order (see [`Bvh::build`], which returns the order) so that range
+//! indexes them directly.
 
 use std::ops::Range;
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2};
 
 use super::aabb::RayQuery;
@@ -15,11 +20,86 @@ use super::aabb::RayQuery;
 /// Traversal stack size that needs no heap allocation; deeper trees fall back to a `Vec`.
 const INLINE_STACK: usize = 64;
 
+/// Children per wide node.
+const WIDTH: usize = 4;
+
+/// A wide node: the boxes of up to four children lane by lane (`[min_x, min_y, min_z, max_x,
+/// max_y, max_z]`), and what each child is.
+#[derive(Clone, Copy, Debug)]
+struct WideNode {
+    bounds: [Vec4; 6],
+    /// Per child: a wide node index (`count == 0`) or the first slot of a leaf.
+    child: [u32; WIDTH],
+    /// Per child: primitives in the leaf, 0 for an inner child.
+    count: [u32; WIDTH],
+    /// Bit `k` set if child `k` exists.
+    valid: u32,
+}
+
 /// A bounding volume hierarchy over primitives stored in BVH order.
 #[derive(Clone, Default)]
 pub struct Bvh {
     bvh: Bvh2,
+    /// Levels of the wide tree.
     depth: usize,
+    /// The 4-wide tree traversal runs over; node 0 is the root.
+    wide: Vec<WideNode>,
+}
+
+/// Collapses binary node `n` of `bvh` (an inner node) into wide nodes appended to `wide`;
+/// returns the index of the node made for `n` and the depth of its wide subtree.
+fn collapse(bvh: &Bvh2, n: usize, wide: &mut Vec<WideNode>) -> (u32, usize) {
+    let nodes = &bvh.nodes;
+    let first = nodes[n].first_index as usize;
+    let mut children = vec![first, first + 1];
+    // Open the inner child of largest area until four children (or only leaves) remain.
+    while children.len() < WIDTH {
+        let Some((k, _)) = children
+            .iter()
+            .enumerate()
+            .filter(|&(_, &c)| !nodes[c].is_leaf())
+            .max_by(|a, b| {
+                nodes[*a.1]
+                    .aabb()
+                    .half_area()
+                    .total_cmp(&nodes[*b.1].aabb().half_area())
+            })
+        else {
+            break;
+        };
+        let c = children.swap_remove(k);
+        let f = nodes[c].first_index as usize;
+        children.extend([f, f + 1]);
+    }
+    // Children in binary-tree order, so slot order and traversal stay close to the binary tree's.
+    children.sort_unstable();
+    let index = wide.len();
+    wide.push(WideNode {
+        bounds: [Vec4::ZERO; 6],
+        child: [0; WIDTH],
+        count: [0; WIDTH],
+        valid: 0,
+    });
+    let mut node = wide[index];
+    let mut depth = 1;
+    for (k, &c) in children.iter().enumerate() {
+        let b = nodes[c].aabb();
+        for axis in 0..3 {
+            node.bounds[axis][k] = b.min[axis];
+            node.bounds[3 + axis][k] = b.max[axis];
+        }
+        node.valid |= 1 << k;
+        if nodes[c].is_leaf() {
+            node.child[k] = nodes[c].first_index;
+            node.count[k] = nodes[c].prim_count;
+        } else {
+            let (child, d) = collapse(bvh, c, wide);
+            node.child[k] = child;
+            depth = depth.max(d + 1);
+        }
+    }
+    wide[index] = node;
+    (index as u32, depth)
 }
 
 /// An axis-aligned box as `(min, max)`.
@@ -40,12 +120,13 @@ impl Bvh {
         let bvh =
             obvhs::bvh2::builder::build_bvh2(&aabbs, BvhBuildParams::medium_build(), &mut unused);
         let order = bvh.primitive_indices.clone();
-        let depth = if bvh.nodes.is_empty() {
-            0
+        let mut wide = Vec::new();
+        let depth = if bvh.nodes.first().is_some_and(|root| !root.is_leaf()) {
+            collapse(&bvh, 0, &mut wide).1
         } else {
-            bvh.depth(0)
+            0
         };
-        (Self { bvh, depth }, order)
+        (Self { bvh, depth, wide }, order)
     }
 
     /// Number of nodes (0 for an empty BVH).
@@ -71,75 +152,85 @@ impl Bvh {
         t_max: &mut f32,
         mut leaf: impl FnMut(Range<usize>, &mut f32) -> bool,
     ) {
-        if self.depth < INLINE_STACK {
+        let nodes = &self.bvh.nodes;
+        let Some(root) = nodes.first() else { return };
+        let b = root.aabb();
+        if q.enter_box(b.min, b.max, *t_max).is_none() {
+            return;
+        }
+        if root.is_leaf() {
+            let first = root.first_index as usize;
+            leaf(first..first + root.prim_count as usize, t_max);
+            return;
+        }
+        // Each level pushes at most four children after popping one.
+        let needed = (WIDTH - 1) * self.depth + 1;
+        if needed <= INLINE_STACK {
             let mut stack = [0u32; INLINE_STACK];
-            self.traverse_with(&mut stack, q, t_max, &mut leaf);
+            self.traverse_wide(&mut stack, q, t_max, &mut leaf);
         } else {
-            let mut stack = vec![0u32; self.depth + 1];
-            self.traverse_with(&mut stack, q, t_max, &mut leaf);
+            let mut stack = vec![0u32; needed];
+            self.traverse_wide(&mut stack, q, t_max, &mut leaf);
         }
     }
 
+    /// Traversal of the wide tree from its root. A node popped from `stack` tests its children
+    /// against the `t_max` of that moment, which culls what a closer hit has put out of reach.
     #[inline(always)]
-    fn traverse_with(
+    fn traverse_wide(
         &self,
         stack: &mut [u32],
         q: &RayQuery,
         t_max: &mut f32,
         leaf: &mut impl FnMut(Range<usize>, &mut f32) -> bool,
     ) {
-        let nodes = &self.bvh.nodes;
-        let Some(root) = nodes.first() else { return };
-        let enter = |i: usize, t_max: f32| {
-            let b = nodes[i].aabb();
-            q.enter_box(b.min, b.max, t_max)
-        };
-        if enter(0, *t_max).is_none() {
-            return;
-        }
-        let range = |i: usize| {
-            let n = &nodes[i];
-            n.first_index as usize..(n.first_index + n.prim_count) as usize
-        };
-        if root.is_leaf() {
-            leaf(range(0), t_max);
-            return;
-        }
         let mut top = 0usize;
-        let mut current = root.first_index as usize;
+        let mut current = 0usize;
         loop {
-            let (mut near, mut far) = (current, current + 1);
-            let mut t_near = enter(near, *t_max);
-            let mut t_far = enter(far, *t_max);
-            if t_far.unwrap_or(f32::INFINITY) < t_near.unwrap_or(f32::INFINITY) {
-                std::mem::swap(&mut near, &mut far);
-                std::mem::swap(&mut t_near, &mut t_far);
+            let node = &self.wide[current];
+            let (mask, near) = q.enter_boxes(&node.bounds, *t_max);
+            let mut hits = mask & node.valid;
+            // The entered children, nearest first (insertion sort of at most four).
+            let mut order = [(0usize, 0.0f32); WIDTH];
+            let mut n = 0;
+            while hits != 0 {
+                let k = hits.trailing_zeros() as usize;
+                hits &= hits - 1;
+                let t = near[k];
+                let mut j = n;
+                while j > 0 && order[j - 1].1 > t {
+                    order[j] = order[j - 1];
+                    j -= 1;
+                }
+                order[j] = (k, t);
+                n += 1;
             }
-            let mut next = None;
-            for (child, entered) in [(near, t_near), (far, t_far)] {
-                let Some(t_enter) = entered else { continue };
-                if t_enter > *t_max {
+            // Leaves at once, nearest first; inner children onto the stack, farthest deepest.
+            let mut inner = [0u32; WIDTH];
+            let mut m = 0;
+            for &(k, t) in &order[..n] {
+                if t > *t_max {
                     continue;
                 }
-                if nodes[child].is_leaf() {
-                    if !leaf(range(child), t_max) {
+                if node.count[k] > 0 {
+                    let first = node.child[k] as usize;
+                    if !leaf(first..first + node.count[k] as usize, t_max) {
                         return;
                     }
-                } else if next.is_none() {
-                    next = Some(nodes[child].first_index as usize);
                 } else {
-                    stack[top] = nodes[child].first_index;
-                    top += 1;
+                    inner[m] = node.child[k];
+                    m += 1;
                 }
             }
-            current = match next {
-                Some(n) => n,
-                None if top > 0 => {
-                    top -= 1;
-                    stack[top] as usize
-                }
-                None => return,
-            };
+            for &entry in inner[..m].iter().rev() {
+                stack[top] = entry;
+                top += 1;
+            }
+            if top == 0 {
+                return;
+            }
+            top -= 1;
+            current = stack[top] as usize;
         }
     }
 }
@@ -162,6 +253,91 @@ mod tests {
         sorted.sort_unstable();
         assert_eq!(sorted, (0..1000).collect::<Vec<u32>>());
         assert!(bvh.node_count() > 1);
+    }
+
+    /// Boxes of random size scattered in a cube, and random rays through it.
+    fn random_boxes_and_rays(n: usize) -> (Vec<Bounds>, Vec<Ray>) {
+        let mut rng = crate::shading::rng::Rng::new(9, 4);
+        let mut v = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+        let boxes = (0..n)
+            .map(|_| {
+                let c = v() * 20.0;
+                (c, c + v() * 2.0)
+            })
+            .collect();
+        let rays = (0..500)
+            .map(|k| {
+                let mut d = v() * 2.0 - Vec3::ONE;
+                if k % 10 == 0 {
+                    d.y = 0.0; // axis-parallel rays take the slab test's NaN-aware path
+                }
+                Ray::new(v() * 24.0 - Vec3::splat(2.0), d.normalize())
+            })
+            .collect();
+        (boxes, rays)
+    }
+
+    #[test]
+    fn wide_traversal_visits_exactly_the_leaves_the_ray_enters() {
+        // Brute force over the binary tree's leaves: a leaf must be visited iff the ray enters its
+        // box (its ancestors' boxes contain it, and the slab test is monotone in the bounds).
+        let (boxes, rays) = random_boxes_and_rays(1000);
+        let (bvh, _) = Bvh::build(&boxes);
+        assert!(bvh.depth > 1 && bvh.wide.len() * 2 < bvh.node_count());
+        for ray in rays {
+            let q = RayQuery::new(ray);
+            let mut visited = Vec::new();
+            let mut t = f32::INFINITY;
+            bvh.traverse(&q, &mut t, |slots, _| {
+                visited.push(slots.start);
+                true
+            });
+            let mut expected: Vec<usize> = bvh
+                .bvh
+                .nodes
+                .iter()
+                .filter(|n| n.is_leaf())
+                .filter(|n| {
+                    q.enter_box(n.aabb().min, n.aabb().max, f32::INFINITY)
+                        .is_some()
+                })
+                .map(|n| n.first_index as usize)
+                .collect();
+            visited.sort_unstable();
+            expected.sort_unstable();
+            assert_eq!(visited, expected, "{ray:?}");
+        }
+    }
+
+    #[test]
+    fn wide_traversal_finds_the_nearest_box_hit_and_stops_when_asked() {
+        // Closest "hit" = the nearest entry into a leaf box (leaves of one primitive each).
+        let (boxes, rays) = random_boxes_and_rays(300);
+        let (bvh, order) = Bvh::build(&boxes);
+        for ray in rays {
+            let q = RayQuery::new(ray);
+            let expected = boxes
+                .iter()
+                .filter_map(|&(a, b)| q.enter_box(a.into(), b.into(), f32::INFINITY))
+                .fold(f32::INFINITY, f32::min);
+            let mut t = f32::INFINITY;
+            bvh.traverse(&q, &mut t, |slots, t| {
+                for s in slots {
+                    let (a, b) = boxes[order[s] as usize];
+                    if let Some(e) = q.enter_box(a.into(), b.into(), *t) {
+                        *t = t.min(e);
+                    }
+                }
+                true
+            });
+            assert_eq!(t, expected, "{ray:?}");
+            let (mut calls, mut t) = (0, f32::INFINITY);
+            bvh.traverse(&q, &mut t, |_, _| {
+                calls += 1;
+                false
+            });
+            assert!(calls <= 1);
+        }
     }
 
     #[test]

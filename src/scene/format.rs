@@ -10,6 +10,7 @@ use serde::de::{DeserializeOwned, Error as _};
 use serde::{Deserialize, Deserializer};
 
 use crate::ecs::components::Shape;
+use crate::shading::sampler::SamplerKind;
 use crate::scene::error::{SceneError, VALUE};
 
 /// Parses the RON text `source` of the scene or prefab file `path`. RON's `implicit_some` is on,
@@ -265,7 +266,8 @@ impl std::fmt::Display for Method {
     }
 }
 
-/// `Settings(width, height, spp, max_depth, background, seed, method)`; every field optional.
+/// `Settings(width, height, spp, max_depth, background, seed, method, sampler)`; every field
+/// optional.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Settings", try_from = "RawSettings")]
 pub struct SettingsDesc {
@@ -283,6 +285,8 @@ pub struct SettingsDesc {
     pub seed: u64,
     /// Light-transport method.
     pub method: Method,
+    /// Sample generator.
+    pub sampler: SamplerKind,
 }
 
 impl Default for SettingsDesc {
@@ -295,6 +299,7 @@ impl Default for SettingsDesc {
             background: Vec3::ZERO,
             seed: 0,
             method: Method::Mis,
+            sampler: SamplerKind::default(),
         }
     }
 }
@@ -309,6 +314,7 @@ struct RawSettings {
     background: Option<Color>,
     seed: Option<u64>,
     method: Option<Method>,
+    sampler: Option<SamplerKind>,
 }
 
 impl TryFrom<RawSettings> for SettingsDesc {
@@ -323,6 +329,7 @@ impl TryFrom<RawSettings> for SettingsDesc {
             background: raw.background.map_or(d.background, |c| c.0),
             seed: raw.seed.unwrap_or(d.seed),
             method: raw.method.unwrap_or(d.method),
+            sampler: raw.sampler.unwrap_or(d.sampler),
         };
         s.validate()?;
         Ok(s)

@@ -9,7 +9,7 @@ use glam::{Vec2, Vec3};
 use super::microfacet::{
     alpha_from_roughness, cos2_sin2, distribution, lambda, sample_visible_normal, schlick_rgb,
 };
-use super::rng::Rng;
+use super::sampler::Sampler;
 use super::sampling::{Frame, cosine_hemisphere, uniform_ball};
 use super::texture::Texture;
 
@@ -203,12 +203,18 @@ impl Material {
     /// Samples the continuation of a ray travelling along unit `d` that hit a surface with unit
     /// geometric normal `n`. `None` if the path ends here (absorbed, or an emitter).
     #[inline]
-    pub fn scatter(&self, d: Vec3, n: Vec3, uv: Vec2, rng: &mut Rng) -> Option<Scatter> {
+    pub fn scatter(
+        &self,
+        d: Vec3,
+        n: Vec3,
+        uv: Vec2,
+        sampler: &mut impl Sampler,
+    ) -> Option<Scatter> {
         // Surfaces are two-sided: shade with the normal on the side the ray came from.
         let facing = if d.dot(n) < 0.0 { n } else { -n };
         match self {
             Self::Diffuse { albedo } => {
-                let local = cosine_hemisphere(Vec2::new(rng.next_f32(), rng.next_f32()));
+                let local = cosine_hemisphere(sampler.next_2d());
                 let direction = Frame::from_normal(facing).to_world(local).normalize();
                 Some(Scatter {
                     direction,
@@ -217,7 +223,8 @@ impl Material {
                 })
             }
             Self::Metal { albedo, roughness } => {
-                let fuzz = uniform_ball(Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()));
+                let u = sampler.next_2d();
+                let fuzz = uniform_ball(u.extend(sampler.next_1d()));
                 let r = reflect(d, facing) + *roughness * fuzz;
                 if r.dot(facing) <= 0.0 {
                     return None;
@@ -235,7 +242,7 @@ impl Material {
                 let cos_o = wo.dot(facing);
                 let wo_local =
                     Vec3::new(wo.dot(frame.s), wo.dot(frame.t), cos_o.max(1e-6)).normalize();
-                let u = Vec2::new(rng.next_f32(), rng.next_f32());
+                let u = sampler.next_2d();
                 let h = frame.to_world(sample_visible_normal(wo_local, alpha, u));
                 let direction = reflect(d, h).normalize();
                 if direction.dot(facing) <= 0.0 || cos_o <= 0.0 {
@@ -261,7 +268,7 @@ impl Material {
                 // reaching the camera side (index n1) from the far side (n2) is scaled by
                 // (n1/n2)² (Veach 1997, §5.2; pbrt-v4's `DielectricBxDF` in radiance mode).
                 let (direction, scale) = match refract(d, facing, n1 / n2) {
-                    Some(t) if rng.next_f32() >= r => (t, (n1 / n2) * (n1 / n2)),
+                    Some(t) if sampler.next_1d() >= r => (t, (n1 / n2) * (n1 / n2)),
                     _ => (reflect(d, facing).normalize(), 1.0),
                 };
                 Some(Scatter {
@@ -278,6 +285,7 @@ impl Material {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shading::rng::Rng;
 
     #[test]
     fn schlick_at_normal_incidence_is_r0() {

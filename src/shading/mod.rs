@@ -1,7 +1,8 @@
-//! Shading kernels: random numbers, sampling, textures and materials. No ECS here.
+//! Shading kernels: random numbers, samplers, sampling, textures and materials. No ECS here.
 
 pub mod material;
 pub mod microfacet;
 pub mod rng;
+pub mod sampler;
 pub mod sampling;
 pub mod texture;

@@ -101,6 +101,7 @@ pub fn render_frame(
                 max_depth: s.max_depth,
                 method: s.method,
                 roulette: control.roulette,
+                sampler: s.sampler,
             };
             if preview {
                 render_preview(

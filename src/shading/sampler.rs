@@ -1,0 +1,391 @@
+//! Sample generators for the integrator: independent PCG32 numbers, or Owen-scrambled Sobol'
+//! points with a fixed dimension layout.
+//!
+//! A path asks its [`Sampler`] for 1D and 2D values; the integrator [`Sampler::seek`]s to a fixed
+//! dimension before each use (pixel, then per bounce: light choice, light point, BSDF, roulette),
+//! so a dimension means the same decision in every sample of a pixel whatever the path did
+//! before. The independent sampler ignores `seek` and draws the next numbers of its stream.
+//!
+//! # The Sobol' sampler
+//!
+//! Every dimension of the layout is a *padded* 1D or 2D Sobol' pattern (Burley, "Practical
+//! Hash-based Owen Scrambling", JCGT 9(4), 2020): the first two Sobol' dimensions (van der
+//! Corput and the Pascal-matrix dimension), with the sample index shuffled and both coordinates
+//! Owen-scrambled by seeds hashed from (seed, pixel, dimension). So:
+//!
+//! - each pixel and each dimension gets its own independent randomisation (no structure between
+//!   pixels, no correlation between dimensions), and every single sample is uniform over the
+//!   whole hypercube: estimates are unbiased;
+//! - the index shuffle is a nested permutation that maps `[0, 2ᵏ)` onto itself for every `k`, so
+//!   the first 2ᵏ samples of a pixel are the first 2ᵏ Sobol' points, a (0, k, 2)-net in every 2D
+//!   dimension (one point in each elementary interval of area 2⁻ᵏ), and stratified into 2ᵏ
+//!   intervals in every 1D dimension; Owen scrambling keeps both properties;
+//! - a sample's values depend only on (seed, pixel, sample index, dimension): images are
+//!   bit-identical for any thread count and any split of the samples into passes.
+//!
+//! Owen scrambling is the hash-based nested uniform scramble of Laine and Karras (2011), with the
+//! improved hash constants of Vegdahl ("Building a Better LK Hash", 2021): every operation of the
+//! hash changes a bit only as a function of the bits below it, which is what makes it a nested
+//! scramble once the bits are reversed.
+
+use std::fmt;
+use std::str::FromStr;
+
+use glam::Vec2;
+use serde::Deserialize;
+
+use super::rng::{Rng, mix64};
+
+/// Which sample generator a render uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize)]
+pub enum SamplerKind {
+    /// Independent uniform numbers (PCG32 per sample): error falls as N^(−1/2).
+    #[serde(alias = "independent")]
+    Independent,
+    /// Owen-scrambled Sobol' points, padded per dimension (the default): stratified at every
+    /// power-of-two sample count.
+    #[default]
+    #[serde(alias = "sobol")]
+    Sobol,
+}
+
+impl SamplerKind {
+    /// Every sampler, in the order reports list them.
+    pub const ALL: [SamplerKind; 2] = [SamplerKind::Independent, SamplerKind::Sobol];
+
+    /// The name `--sampler` accepts and reports print.
+    pub const fn name(self) -> &'static str {
+        match self {
+            SamplerKind::Independent => "independent",
+            SamplerKind::Sobol => "sobol",
+        }
+    }
+}
+
+impl fmt::Display for SamplerKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for SamplerKind {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let s = s.to_ascii_lowercase();
+        Self::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| format!("unknown sampler {s:?} (independent or sobol)"))
+    }
+}
+
+/// A source of sample values for one path.
+pub trait Sampler {
+    /// The generator for sample `sample` of pixel `pixel` under `seed`.
+    fn start(seed: u64, pixel: u64, sample: u32) -> Self
+    where
+        Self: Sized;
+    /// Moves to dimension `dimension` of the layout; the next value comes from there.
+    fn seek(&mut self, dimension: u32);
+    /// A value uniform in `[0, 1)` from the current dimension; moves to the next one.
+    fn next_1d(&mut self) -> f32;
+    /// A point uniform in `[0, 1)²` from the current dimension; moves to the next one.
+    fn next_2d(&mut self) -> Vec2;
+}
+
+impl Sampler for Rng {
+    #[inline]
+    fn start(seed: u64, pixel: u64, sample: u32) -> Self {
+        Rng::for_sample(seed, pixel, u64::from(sample))
+    }
+
+    /// Independent numbers need no layout: the stream just goes on.
+    #[inline]
+    fn seek(&mut self, _dimension: u32) {}
+
+    #[inline]
+    fn next_1d(&mut self) -> f32 {
+        self.next_f32()
+    }
+
+    #[inline]
+    fn next_2d(&mut self) -> Vec2 {
+        let x = self.next_f32();
+        let y = self.next_f32();
+        Vec2::new(x, y)
+    }
+}
+
+/// Padded Owen-scrambled Sobol' samples (see the module docs).
+#[derive(Clone, Copy, Debug)]
+pub struct SobolSampler {
+    /// Hash of (seed, pixel): the root of every dimension's scrambling seeds.
+    pixel_seed: u64,
+    /// Sample index within the pixel.
+    index: u32,
+    /// The next dimension to draw from.
+    dimension: u32,
+}
+
+/// Direction numbers of Sobol' dimension 1 (generator matrix: Pascal's triangle mod 2), column
+/// `j` for bit `j` of the index, most significant output bit first: `v₀ = 1`, `vⱼ = vⱼ₋₁ ⊕ (vⱼ₋₁ ≫ 1)`.
+const PASCAL: [u32; 32] = {
+    let mut v = [0u32; 32];
+    v[0] = 1 << 31;
+    let mut j = 1;
+    while j < 32 {
+        v[j] = v[j - 1] ^ (v[j - 1] >> 1);
+        j += 1;
+    }
+    v
+};
+
+/// Sobol' dimension 1 of `index`, as a 32-bit fraction.
+#[inline]
+fn sobol_pascal(mut index: u32) -> u32 {
+    let mut x = 0;
+    while index != 0 {
+        x ^= PASCAL[index.trailing_zeros() as usize];
+        index &= index - 1;
+    }
+    x
+}
+
+/// Laine–Karras permutation with Vegdahl's constants: bit `j` of the result depends only on
+/// bits `0..=j` of `x`, so applied to bit-reversed values it is a nested uniform scramble.
+#[inline]
+fn laine_karras(mut x: u32, seed: u32) -> u32 {
+    x ^= x.wrapping_mul(0x3d20_adea);
+    x = x.wrapping_add(seed);
+    x = x.wrapping_mul((seed >> 16) | 1);
+    x ^= x.wrapping_mul(0x0552_6c56);
+    x ^= x.wrapping_mul(0x53a2_2864);
+    x
+}
+
+/// Owen scrambling of the 32-bit fraction `x`: each bit flipped by a hash of the bits above it.
+#[inline]
+fn owen(x: u32, seed: u32) -> u32 {
+    laine_karras(x.reverse_bits(), seed).reverse_bits()
+}
+
+/// A nested permutation of sample indices that maps `[0, 2ᵏ)` onto itself for every `k`: the
+/// Owen scramble of the index (bit `j` flipped by a hash of the bits above it), with the flips
+/// that do not depend on the index (those of the zero bits above its top bit) taken back out.
+#[inline]
+fn shuffle(index: u32, seed: u32) -> u32 {
+    (laine_karras(index.reverse_bits(), seed) ^ laine_karras(0, seed)).reverse_bits()
+}
+
+/// The top 24 bits of a 32-bit fraction as an `f32` in `[0, 1)` (exact, never 1).
+#[inline]
+fn to_unit(x: u32) -> f32 {
+    (x >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+}
+
+impl SobolSampler {
+    /// Three 32-bit seeds for the current dimension (index shuffle, x scramble, y scramble),
+    /// then moves to the next dimension.
+    #[inline]
+    fn dimension_seeds(&mut self) -> (u32, u32, u32) {
+        let a =
+            mix64(self.pixel_seed ^ u64::from(self.dimension).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+        let b = mix64(a);
+        self.dimension += 1;
+        (a as u32, (a >> 32) as u32, b as u32)
+    }
+}
+
+impl Sampler for SobolSampler {
+    #[inline]
+    fn start(seed: u64, pixel: u64, sample: u32) -> Self {
+        Self {
+            pixel_seed: mix64(seed ^ mix64(pixel.wrapping_add(0xd1b5_4a32_d192_ed03))),
+            index: sample,
+            dimension: 0,
+        }
+    }
+
+    #[inline]
+    fn seek(&mut self, dimension: u32) {
+        self.dimension = dimension;
+    }
+
+    #[inline]
+    fn next_1d(&mut self) -> f32 {
+        let (s, sx, _) = self.dimension_seeds();
+        let i = shuffle(self.index, s);
+        // Van der Corput is the bit reversal of the index; owen(reverse(i)) = reverse(lk(i)).
+        to_unit(laine_karras(i, sx).reverse_bits())
+    }
+
+    #[inline]
+    fn next_2d(&mut self) -> Vec2 {
+        let (s, sx, sy) = self.dimension_seeds();
+        let i = shuffle(self.index, s);
+        Vec2::new(
+            to_unit(laine_karras(i, sx).reverse_bits()),
+            to_unit(owen(sobol_pascal(i), sy)),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Whether `points` (n = 2ᵐ of them) have exactly one point in every elementary interval
+    /// `[a/2ᵏ, (a+1)/2ᵏ) × [b/2ᵐ⁻ᵏ, (b+1)/2ᵐ⁻ᵏ)`, for every k in 0..=m: a (0, m, 2)-net.
+    fn is_net(points: &[Vec2]) -> bool {
+        let n = points.len();
+        let m = n.trailing_zeros();
+        assert!(n.is_power_of_two());
+        (0..=m).all(|k| {
+            let (cols, rows) = (1usize << k, 1usize << (m - k));
+            let mut seen = vec![false; n];
+            points.iter().all(|p| {
+                let (x, y) = (p.x * cols as f32, p.y * rows as f32);
+                let cell = (y as usize).min(rows - 1) * cols + (x as usize).min(cols - 1);
+                !std::mem::replace(&mut seen[cell], true)
+            })
+        })
+    }
+
+    /// Whether the n values fall one into each of n equal intervals.
+    fn is_stratified(values: &[f32]) -> bool {
+        let n = values.len();
+        let mut seen = vec![false; n];
+        values
+            .iter()
+            .all(|&v| !std::mem::replace(&mut seen[((v * n as f32) as usize).min(n - 1)], true))
+    }
+
+    fn draw_2d<S: Sampler>(seed: u64, pixel: u64, dimension: u32, n: u32) -> Vec<Vec2> {
+        (0..n)
+            .map(|i| {
+                let mut s = S::start(seed, pixel, i);
+                s.seek(dimension);
+                s.next_2d()
+            })
+            .collect()
+    }
+
+    fn draw_1d<S: Sampler>(seed: u64, pixel: u64, dimension: u32, n: u32) -> Vec<f32> {
+        (0..n)
+            .map(|i| {
+                let mut s = S::start(seed, pixel, i);
+                s.seek(dimension);
+                s.next_1d()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn pascal_directions_are_the_binomial_coefficients_mod_2() {
+        // Column j, output bit k (from the top): C(j, k) mod 2 = 1 iff k ⊆ j (Lucas).
+        for (j, &v) in PASCAL.iter().enumerate() {
+            for k in 0..32 {
+                assert_eq!((v >> (31 - k)) & 1 == 1, k & j == k, "j {j} k {k}");
+            }
+        }
+    }
+
+    #[test]
+    fn shuffle_permutes_every_power_of_two_prefix() {
+        for seed in [0u32, 1, 0xdead_beef, 12345] {
+            for m in 0..=10 {
+                let n = 1u32 << m;
+                let mut seen = vec![false; n as usize];
+                for i in 0..n {
+                    let j = shuffle(i, seed);
+                    assert!(j < n, "seed {seed}: {i} -> {j} outside [0, {n})");
+                    assert!(!std::mem::replace(&mut seen[j as usize], true));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn every_power_of_two_prefix_is_a_net_in_2d_and_stratified_in_1d() {
+        for (seed, pixel, dimension) in [(0, 0, 0), (7, 123, 1), (99, 4095, 6), (1, 77, 37)] {
+            for m in 0..=10 {
+                let n = 1 << m;
+                let p = draw_2d::<SobolSampler>(seed, pixel, dimension, n);
+                assert!(
+                    is_net(&p),
+                    "2D seed {seed} pixel {pixel} dim {dimension}, n {n}"
+                );
+                let v = draw_1d::<SobolSampler>(seed, pixel, dimension, n);
+                assert!(
+                    is_stratified(&v),
+                    "1D seed {seed} pixel {pixel} dim {dimension}, n {n}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_net_check_rejects_independent_points() {
+        // The check can fail: independent points are not nets beyond a handful of samples.
+        let failures = (0..20)
+            .filter(|&pixel| !is_net(&draw_2d::<Rng>(3, pixel, 0, 64)))
+            .count();
+        assert_eq!(failures, 20);
+        assert!(!is_stratified(&draw_1d::<Rng>(3, 0, 0, 64)));
+    }
+
+    #[test]
+    fn values_are_uniform_and_dimensions_and_pixels_independent() {
+        // Over many pixels (independent randomisations), sample 5 of two different dimensions:
+        // E[x] = 1/2, E[x·y] = 1/4 across dimensions and across the two axes of one dimension.
+        let n = 20_000;
+        let (mut sx, mut sxy, mut sab) = (0.0f64, 0.0f64, 0.0f64);
+        for pixel in 0..n {
+            let mut s = SobolSampler::start(42, pixel, 5);
+            s.seek(3);
+            let a = s.next_2d();
+            s.seek(9);
+            let b = s.next_1d();
+            sx += f64::from(a.x);
+            sxy += f64::from(a.x * a.y);
+            sab += f64::from(a.y * b);
+        }
+        let n = n as f64;
+        // Standard errors: √(1/12 / n) for the mean, √(7/144 / n) for the products; 5σ.
+        assert!(
+            (sx / n - 0.5).abs() < 5.0 * (1.0 / 12.0 / n).sqrt(),
+            "{}",
+            sx / n
+        );
+        let se = (7.0 / 144.0 / n).sqrt();
+        assert!((sxy / n - 0.25).abs() < 5.0 * se, "{}", sxy / n);
+        assert!((sab / n - 0.25).abs() < 5.0 * se, "{}", sab / n);
+    }
+
+    #[test]
+    fn neighbouring_pixels_and_dimensions_are_scrambled_differently() {
+        let a = draw_2d::<SobolSampler>(0, 10, 0, 4);
+        assert_ne!(a, draw_2d::<SobolSampler>(0, 11, 0, 4));
+        assert_ne!(a, draw_2d::<SobolSampler>(0, 10, 1, 4));
+        assert_ne!(a, draw_2d::<SobolSampler>(1, 10, 0, 4));
+    }
+
+    #[test]
+    fn independent_sampler_draws_its_stream_in_order() {
+        let mut rng = Rng::for_sample(5, 6, 7);
+        let mut s = <Rng as Sampler>::start(5, 6, 7);
+        s.seek(40);
+        let (x, y, z) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
+        assert_eq!(s.next_2d(), Vec2::new(x, y));
+        assert_eq!(s.next_1d(), z);
+    }
+
+    #[test]
+    fn names_round_trip() {
+        for k in SamplerKind::ALL {
+            assert_eq!(k.name().parse::<SamplerKind>(), Ok(k));
+        }
+        assert!("halton".parse::<SamplerKind>().is_err());
+    }
+}
