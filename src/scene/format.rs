@@ -10,8 +10,8 @@ use serde::de::{DeserializeOwned, Error as _};
 use serde::{Deserialize, Deserializer};
 
 use crate::ecs::components::Shape;
-use crate::shading::sampler::SamplerKind;
 use crate::scene::error::{SceneError, VALUE};
+use crate::shading::sampler::SamplerKind;
 
 /// Parses the RON text `source` of the scene or prefab file `path`. RON's `implicit_some` is on,
 /// so optional fields are written bare. An error names the field at fault and the entity or
