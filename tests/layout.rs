@@ -447,10 +447,10 @@ fn renders_are_bit_identical_in_every_layout_for_every_shipped_scene() {
 
 #[test]
 fn switching_layout_between_renders_keeps_the_image() {
-    // One renderer, the layout changed between renders of the same scene. Reloading an
-    // unchanged scene renders nothing new (the film is complete), so the sample count
-    // alternates between 1 and 2: every render is a fresh one (its pass is checked to run in
-    // the layout asked for), and each layout renders both counts.
+    // One renderer, the layout changed between renders of the same scene. The sample count
+    // alternates between 1 and 2, so every render is a fresh one even if a layout change did
+    // not restart it (an unchanged reload keeps a complete film); each pass is checked to run
+    // in the layout asked for, and each layout renders both counts.
     let scene = scenes_dir().join("cornell.ron");
     let mut r = Renderer::new(Some(1), PassPlan::Single).expect("thread pool");
     let mut films: [Vec<_>; 2] = Default::default();
