@@ -105,8 +105,8 @@ impl Renderer {
             plan,
             progress: None,
             roulette: true,
-            // A 2×2-block preview costs a quarter of a 1-spp pass: the first image of a live
-            // edit comes that much sooner.
+            // A 2×2-block preview costs a quarter of a 1-spp pass (large images take larger
+            // blocks): the first image of a live edit comes that much sooner.
             preview_block: match plan {
                 PassPlan::Progressive { .. } => 2,
                 PassPlan::Single => 1,
@@ -255,6 +255,17 @@ impl Renderer {
     /// The accumulated film.
     pub fn film(&self) -> &Film {
         &self.world.resource::<Accumulation>().film
+    }
+
+    /// The accumulated film, to add to it or to take it.
+    pub fn film_mut(&mut self) -> &mut Film {
+        &mut self.world.resource_mut::<Accumulation>().into_inner().film
+    }
+
+    /// Makes the next render hold samples `first..spp` of every pixel instead of `0..spp`
+    /// (a render of a sample range, see [`crate::farm`]). Call after loading.
+    pub fn set_first_sample(&mut self, first: u32) {
+        self.world.resource_mut::<Accumulation>().first_sample = first;
     }
 
     /// Trace counters of the current render.

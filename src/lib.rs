@@ -9,13 +9,17 @@
 pub mod app;
 pub mod bench;
 pub mod camera;
+pub mod cli;
 pub mod ecs;
+pub mod farm;
 pub mod film;
 pub mod geometry;
 pub mod lights;
 pub mod metrics;
+pub mod partial;
 pub mod render;
 pub mod scene;
+pub mod serve;
 pub mod shading;
 pub mod systems;
 pub mod watch;

@@ -8,9 +8,10 @@ use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use rondo::bench::layout;
+use rondo::cli::{EXIT_INPUT, check_output_dir, check_output_file};
 use rondo::film::OutputKind;
 use rondo::geometry::layout::LayoutKind;
-use rondo::scene::format::Method;
+use rondo::scene::format::{MAX_DEPTH, MAX_SIDE, MAX_SPP, Method};
 use rondo::watch::{Report, Watch, WatchOptions, WatchSession};
 use rondo::{Overrides, PassPlan, Renderer};
 
@@ -32,21 +33,55 @@ enum Command {
         /// Scene file (.ron).
         scene: PathBuf,
         /// Output image (.png or .exr).
-        #[arg(short, long)]
+        #[arg(short, long, value_parser = image_path)]
         output: PathBuf,
+        /// Render only samples A..B of every pixel into a partial (.exr) for `rondo merge`
+        /// (docs/farm.md). The range's end takes the place of --spp.
+        #[arg(long, value_name = "A..B", value_parser = rondo::partial::parse_range, conflicts_with = "resume")]
+        samples: Option<std::ops::Range<u32>>,
+        /// Continue the partial PATH (from --samples or `rondo merge`) with the samples after its
+        /// last one, up to --spp; the output holds them all.
+        #[arg(long, value_name = "PATH")]
+        resume: Option<PathBuf>,
         #[command(flatten)]
         options: RenderArgs,
+    },
+    /// Merge partials (from `render --samples`) in any order into one image: .png, or .exr,
+    /// which is a partial again (merges compose, `render --resume` continues it). Refuses
+    /// overlapping samples and partials of different renders; reports missing samples.
+    Merge {
+        /// Partials (.exr).
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        /// Merged image (.exr or .png).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// The merge must hold samples 0..N (missing ones at the end are reported too).
+        #[arg(long)]
+        spp: Option<u32>,
+        /// Merge even with samples missing: the image averages the samples present.
+        #[arg(long)]
+        allow_gaps: bool,
+    },
+    /// Split a render over a cluster's scheduler.
+    Farm {
+        #[command(subcommand)]
+        what: FarmCommand,
     },
     /// Render a scene, then re-render it on every save of the scene or its textures: a quick
     /// first pass, then passes doubling the samples, rewriting the image after each. Ctrl-C stops.
     Watch {
         /// Scene file (.ron).
         scene: PathBuf,
-        /// Output image (.png or .exr).
-        #[arg(short, long)]
-        output: PathBuf,
+        /// Output image (.png or .exr); optional with --serve.
+        #[arg(short, long, value_parser = image_path, required_unless_present = "serve")]
+        output: Option<PathBuf>,
+        /// Show every pass in a browser: serve a live viewer on ADDR (HOST:PORT or a port;
+        /// default 127.0.0.1:8730, or a free port if that one is taken).
+        #[arg(long, value_name = "ADDR")]
+        serve: Option<Option<String>>,
         /// Samples per pixel of the first pass.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, value_parser = at_least_one_u32())]
         first_spp: u32,
         #[command(flatten)]
         options: RenderArgs,
@@ -59,7 +94,7 @@ enum Command {
         /// Reference image, of the same size.
         reference: PathBuf,
         /// Write a false-colour picture of the per-pixel error here (.png).
-        #[arg(long)]
+        #[arg(long, value_parser = png_path)]
         error_image: Option<PathBuf>,
     },
     /// Load a scene and list what looks wrong without rendering it: overlapping coplanar
@@ -74,6 +109,33 @@ enum Command {
     Bench {
         #[command(subcommand)]
         what: BenchCommand,
+    },
+}
+
+#[derive(Subcommand)]
+enum FarmCommand {
+    /// Print an sbatch script (to stdout) that renders the scene as a Slurm job array of
+    /// --tasks sample ranges and merges them after the array succeeded.
+    Slurm {
+        /// Scene file (.ron).
+        scene: PathBuf,
+        /// Merged image (.exr or .png); partials go to <output without extension>.parts/.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Array tasks (sample ranges).
+        #[arg(long)]
+        tasks: u32,
+        /// CPUs, and render threads, per task.
+        #[arg(long, default_value_t = 1)]
+        cpus_per_task: u32,
+        /// Slurm partition.
+        #[arg(long)]
+        partition: Option<String>,
+        /// Time limit per task (Slurm's --time).
+        #[arg(long)]
+        time: Option<String>,
+        #[command(flatten)]
+        options: RenderArgs,
     },
 }
 
@@ -121,7 +183,7 @@ enum BenchCommand {
         #[arg(long)]
         smoke: bool,
         /// Run only this workload (kernel, traverse, render, extract, pack); repeatable.
-        #[arg(long = "workload")]
+        #[arg(long = "workload", value_parser = workload_names())]
         workloads: Vec<String>,
     },
     /// Error against a reference image as a function of render time, for each light-transport
@@ -138,16 +200,16 @@ enum BenchCommand {
         #[arg(long, default_value = "bench/acc")]
         out: PathBuf,
         /// Samples per pixel of the sweep, comma-separated.
-        #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32,64")]
+        #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32,64", value_parser = at_most_u32(MAX_SPP))]
         spp_list: Vec<u32>,
         /// Methods compared, comma-separated.
         #[arg(long, value_delimiter = ',', default_value = "naive,nee,mis")]
         methods: Vec<Method>,
         /// Rays per path, camera ray included (overrides the scene).
-        #[arg(long)]
+        #[arg(long, value_parser = at_most_u32(MAX_DEPTH))]
         max_depth: Option<u32>,
         /// Worker threads (default: all cores).
-        #[arg(long)]
+        #[arg(long, value_parser = thread_count())]
         threads: Option<usize>,
         /// First seed of the sweep (render k uses seed + k).
         #[arg(long, default_value_t = rondo::bench::accuracy::DEFAULT_SEED)]
@@ -183,7 +245,7 @@ enum BenchCommand {
         #[arg(long, default_value_t = 5)]
         runs: usize,
         /// Samples per pixel of the first pass.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, value_parser = at_least_one_u32())]
         first_spp: u32,
         #[command(flatten)]
         options: RenderArgs,
@@ -193,22 +255,22 @@ enum BenchCommand {
 #[derive(Args)]
 struct RenderArgs {
     /// Samples per pixel (overrides the scene).
-    #[arg(long)]
+    #[arg(long, value_parser = at_most_u32(MAX_SPP))]
     spp: Option<u32>,
     /// Image width (overrides the scene).
-    #[arg(long)]
+    #[arg(long, value_parser = at_most_u32(MAX_SIDE))]
     width: Option<u32>,
     /// Image height (overrides the scene).
-    #[arg(long)]
+    #[arg(long, value_parser = at_most_u32(MAX_SIDE))]
     height: Option<u32>,
     /// Rays per path, camera ray included (overrides the scene).
-    #[arg(long)]
+    #[arg(long, value_parser = at_most_u32(MAX_DEPTH))]
     max_depth: Option<u32>,
     /// Random seed (overrides the scene).
     #[arg(long)]
     seed: Option<u64>,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = thread_count())]
     threads: Option<usize>,
     /// Light-transport method: naive, nee or mis (overrides the scene).
     #[arg(long)]
@@ -232,9 +294,6 @@ impl RenderArgs {
     }
 
     fn renderer(&self) -> Result<Renderer> {
-        if self.threads == Some(0) {
-            bail!("--threads must be at least 1");
-        }
         let mut r = Renderer::new(self.threads, PassPlan::Single)?;
         r.set_overrides(self.overrides());
         r.set_layout(self.layout);
@@ -242,11 +301,51 @@ impl RenderArgs {
     }
 }
 
+/// Parses the command line (clap exits with status 2 on a usage error) and runs it; any other
+/// error exits with status 1.
 fn main() {
     if let Err(e) = run(Cli::parse()) {
-        eprintln!("error: {e:#}");
-        std::process::exit(1);
+        eprintln!("error: {}", rondo::cli::error_text(e.as_ref()));
+        std::process::exit(EXIT_INPUT);
     }
+}
+
+/// `--spp`, `--width`, … : a whole number from 1 to `max`.
+fn at_most_u32(max: u32) -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..=i64::from(max))
+}
+
+/// A whole number ≥ 1.
+fn at_least_one_u32() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..)
+}
+
+/// `--threads`: at least one.
+fn thread_count() -> clap::builder::RangedU64ValueParser<usize> {
+    clap::builder::RangedU64ValueParser::<usize>::new().range(1..)
+}
+
+/// An image output path: `.png` or `.exr`.
+fn image_path(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    match OutputKind::from_path(&path) {
+        Some(_) => Ok(path),
+        None => Err("must end in .png or .exr".into()),
+    }
+}
+
+/// A `.png` output path.
+fn png_path(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    match OutputKind::from_path(&path) {
+        Some(OutputKind::Png) => Ok(path),
+        _ => Err("must end in .png".into()),
+    }
+}
+
+/// The workloads `bench layout` knows.
+fn workload_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(layout::WORKLOADS.iter().map(|w| w.0))
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -255,8 +354,50 @@ fn run(cli: Cli) -> Result<()> {
         Command::Render {
             scene,
             output,
+            samples,
+            resume,
             options,
-        } => render(&scene, &output, &options),
+        } => {
+            let part = match (samples, resume) {
+                (Some(range), _) => Some(rondo::farm::Samples::Range(range)),
+                (None, Some(path)) => Some(rondo::farm::Samples::Resume(path)),
+                (None, None) => None,
+            };
+            render(&scene, &output, &options, part)
+        }
+        Command::Merge {
+            inputs,
+            output,
+            spp,
+            allow_gaps,
+        } => merge(&inputs, &output, spp, allow_gaps),
+        Command::Farm {
+            what:
+                FarmCommand::Slurm {
+                    scene,
+                    output,
+                    tasks,
+                    cpus_per_task,
+                    partition,
+                    time,
+                    options,
+                },
+        } => farm_slurm(
+            &scene,
+            &output,
+            rondo::farm::SlurmJob {
+                rondo: PathBuf::new(),
+                scene: PathBuf::new(),
+                output: PathBuf::new(),
+                spp: 0,
+                tasks,
+                cpus_per_task,
+                partition,
+                time,
+                render_flags: Vec::new(),
+            },
+            &options,
+        ),
         Command::Bench {
             what:
                 BenchCommand::Instances {
@@ -322,9 +463,18 @@ fn run(cli: Cli) -> Result<()> {
         Command::Watch {
             scene,
             output,
+            serve,
             first_spp,
             options,
-        } => watch(options.watch_options(&scene, &output, first_spp)?),
+        } => {
+            let mut watch_options = options.watch_options(
+                &scene,
+                output.as_deref().unwrap_or(Path::new("")),
+                first_spp,
+            )?;
+            watch_options.output = output;
+            watch(watch_options, serve)
+        }
         Command::Bench {
             what:
                 BenchCommand::Watch {
@@ -344,12 +494,7 @@ fn bench_layout(
     smoke: bool,
     workloads: Vec<String>,
 ) -> Result<()> {
-    if let Some(w) = workloads
-        .iter()
-        .find(|w| !layout::WORKLOADS.iter().any(|k| k.0 == w.as_str()))
-    {
-        bail!("unknown workload {w:?} (expected kernel, traverse, render, extract or pack)");
-    }
+    check_output_dir(&out)?;
     let mut options = if smoke {
         layout::Options::smoke(out)
     } else {
@@ -365,13 +510,31 @@ fn bench_layout(
     Ok(())
 }
 
-fn render(scene: &Path, output: &Path, options: &RenderArgs) -> Result<()> {
-    if OutputKind::from_path(output).is_none() {
-        bail!("{}: output must end in .png or .exr", output.display());
-    }
+fn render(
+    scene: &Path,
+    output: &Path,
+    options: &RenderArgs,
+    part: Option<rondo::farm::Samples>,
+) -> Result<()> {
+    check_output_file(output)?;
     let mut r = options.renderer()?;
-    let s = r.load(scene)?.settings;
-    r.set_output(Some(output), false);
+    let part = match &part {
+        Some(p) => Some(rondo::farm::prepare(
+            &mut r,
+            options.overrides(),
+            scene,
+            output,
+            p,
+        )?),
+        None => None,
+    };
+    let s = match &part {
+        Some(p) => p.settings,
+        None => r.load(scene)?.settings,
+    };
+    if part.is_none() {
+        r.set_output(Some(output), false);
+    }
     let bar =
         ProgressBar::with_draw_target(Some(u64::from(s.height)), ProgressDrawTarget::stderr());
     bar.set_style(
@@ -384,7 +547,82 @@ fn render(scene: &Path, output: &Path, options: &RenderArgs) -> Result<()> {
     if let Some(e) = &r.output().last_error {
         bail!("{e}");
     }
+    if let Some(part) = part {
+        let ranges = rondo::partial::format_ranges(part.ranges());
+        part.finish(&mut r)?;
+        eprintln!("{} holds samples {ranges}", output.display());
+    }
     eprintln!("{}", summary(&r, wall));
+    Ok(())
+}
+
+/// `rondo merge`: checks the partials, reports missing samples, merges and writes.
+fn merge(inputs: &[PathBuf], output: &Path, spp: Option<u32>, allow_gaps: bool) -> Result<()> {
+    if OutputKind::from_path(output).is_none() {
+        bail!("{}: output must end in .png or .exr", output.display());
+    }
+    check_output_file(output)?;
+    let plan = rondo::partial::plan_merge(inputs, spp)?;
+    if !plan.missing.is_empty() {
+        let missing = rondo::partial::format_ranges(&plan.missing).replace(',', ", ");
+        if !allow_gaps {
+            bail!(
+                "missing samples {missing} (render them, or merge what is there with --allow-gaps)"
+            );
+        }
+        eprintln!("warning: missing samples {missing}; the image averages the samples present");
+    }
+    let start = std::time::Instant::now();
+    let sum = rondo::partial::merge(inputs, &plan)?;
+    rondo::partial::write_output(output, &plan.meta, &sum)
+        .with_context(|| format!("{}: cannot write", output.display()))?;
+    eprintln!(
+        "merged {} partials ({}x{}, samples {}) into {} in {:.2} s",
+        inputs.len(),
+        plan.meta.width,
+        plan.meta.height,
+        rondo::partial::format_ranges(&plan.meta.ranges),
+        output.display(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// `rondo farm slurm`: prints the sbatch script; `job` carries the Slurm options.
+fn farm_slurm(
+    scene: &Path,
+    output: &Path,
+    mut job: rondo::farm::SlurmJob,
+    options: &RenderArgs,
+) -> Result<()> {
+    if OutputKind::from_path(output).is_none() {
+        bail!("{}: output must end in .png or .exr", output.display());
+    }
+    check_output_file(output)?;
+    if options.threads.is_some() {
+        bail!("--threads: each task renders with --cpus-per-task threads");
+    }
+    let loaded =
+        rondo::scene::load::load_scene(scene, &mut rondo::scene::load::AssetCache::default())?;
+    let mut settings = loaded.settings;
+    options
+        .overrides()
+        .apply(&mut settings)
+        .map_err(|m| anyhow::anyhow!("{}: {m}", scene.display()))?;
+    job.rondo = std::env::current_exe().context("locating the rondo binary")?;
+    job.scene = std::path::absolute(scene)?;
+    job.output = std::path::absolute(output)?;
+    job.spp = settings.spp;
+    let mut overrides = options.overrides();
+    overrides.spp = None;
+    job.render_flags = rondo::farm::render_flags(&overrides, options.layout);
+    print!("{}", rondo::farm::slurm_script(&job)?);
+    eprintln!(
+        "{} tasks, {} spp; partials in {}; submit with `sbatch <this script>`",
+        job.tasks,
+        job.spp,
+        rondo::farm::parts_dir(&job.output).display()
+    );
     Ok(())
 }
 
@@ -496,12 +734,6 @@ fn summary_from(r: &Renderer, wall: Duration, rays: u64) -> String {
 
 impl RenderArgs {
     fn watch_options(&self, scene: &Path, output: &Path, first_spp: u32) -> Result<WatchOptions> {
-        if self.threads == Some(0) {
-            bail!("--threads must be at least 1");
-        }
-        if first_spp == 0 {
-            bail!("--first-spp must be at least 1");
-        }
         let mut options = WatchOptions::new(scene, output);
         options.threads = self.threads;
         options.first_pass = first_spp;
@@ -511,9 +743,30 @@ impl RenderArgs {
     }
 }
 
-/// `rondo watch`: runs until Ctrl-C, one line per reload on stderr.
-fn watch(options: WatchOptions) -> Result<()> {
-    let watch = Watch::new(options)?;
+/// `rondo watch`: runs until Ctrl-C, one line per reload on stderr; with `serve`, also serves
+/// the live viewer.
+fn watch(options: WatchOptions, serve: Option<Option<String>>) -> Result<()> {
+    if let Some(output) = &options.output {
+        check_output_file(output)?;
+    }
+    let mut watch = Watch::new(options)?;
+    // Viewer hook: start the server and feed it every reload, pass and report.
+    let viewer = match serve {
+        Some(addr) => {
+            let fall_back = addr.is_none();
+            let addr =
+                rondo::serve::parse_addr(addr.as_deref().unwrap_or(rondo::serve::DEFAULT_ADDR))?;
+            let (viewer, feed) = rondo::serve::Viewer::start(addr, fall_back)?;
+            if let Some(warning) = viewer.exposure_warning() {
+                eprintln!("warning: {warning}");
+            }
+            eprintln!("viewer: {}", viewer.url());
+            watch.set_observer(feed.observer());
+            watch.set_progress(feed.progress_bar());
+            Some(viewer)
+        }
+        None => None,
+    };
     let stop = watch.stop_handle();
     ctrlc::set_handler(move || stop.stop()).context("cannot install the Ctrl-C handler")?;
     watch.run(|report| {
@@ -521,6 +774,7 @@ fn watch(options: WatchOptions) -> Result<()> {
             eprintln!("{line}");
         }
     });
+    drop(viewer);
     eprintln!("stopped");
     Ok(())
 }
@@ -563,7 +817,7 @@ fn bench_watch(scene: &Path, runs: usize, first_spp: u32, options: &RenderArgs) 
         format!("{:8.1} ms (min {:8.1})", ms(v[v.len() / 2]), ms(v[0]))
     };
     println!(
-        "watch latency, save -> image written, {} (debounce {} ms, first pass {first_spp} spp), median of {} edits:",
+        "watch latency, save -> image written, {} (loaded when the save completes, else after {} ms quiet; first pass {first_spp} spp), median of {} edits:",
         scene.display(),
         rondo::watch::DEBOUNCE.as_millis(),
         runs.max(1)
@@ -638,6 +892,9 @@ fn time_edits(
 
 /// `rondo diff`: prints the metrics of `image` against `reference`, one per line.
 fn diff(image: &Path, reference: &Path, error_image: Option<&Path>) -> Result<()> {
+    if let Some(path) = error_image {
+        check_output_file(path)?;
+    }
     let d = rondo::metrics::diff_files(image, reference, error_image)?;
     let m = d.metrics;
     println!("rmse     {:.6e}", m.rmse);
@@ -658,9 +915,7 @@ fn diff(image: &Path, reference: &Path, error_image: Option<&Path>) -> Result<()
 
 /// `rondo bench accuracy`: runs the sweep, printing a line per render, then the summary.
 fn bench_accuracy(options: &rondo::bench::accuracy::AccuracyOptions) -> Result<()> {
-    if options.threads == Some(0) {
-        bail!("--threads must be at least 1");
-    }
+    check_output_dir(&options.out)?;
     let report = rondo::bench::accuracy::run(options, |r| {
         eprintln!(
             "{:>5} {:>6} spp  {:9.4} s  rmse {:.4e}  rel_mse {:.4e}  mae {:.4e}",

@@ -246,10 +246,7 @@ pub fn parse_scene(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
 }
 
 fn parse<T: serde::de::DeserializeOwned>(path: &Path, source: &str) -> Result<T, SceneError> {
-    ron::Options::default()
-        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
-        .from_str(source)
-        .map_err(|e| SceneError::from_ron(path, &e))
+    crate::scene::format::parse(path, source)
 }
 
 /// What an error points at, resolved only when the error is made.
