@@ -76,7 +76,7 @@ pub enum WarningKind {
 /// Tolerance of [`WarningKind::CoplanarOverlap`], relative to the larger surface's size.
 pub const COPLANAR_TOLERANCE: f32 = 1e-5;
 /// Mesh triangles, summed over placements, that [`WarningKind::CoplanarOverlap`] compares.
-pub const MESH_TRIANGLE_BUDGET: usize = 1 << 21;
+pub const MESH_TRIANGLE_BUDGET: usize = 1 << 20;
 /// Tolerance of [`WarningKind::NonPlanarQuad`], relative to the quad's longest diagonal.
 pub const NON_PLANAR_TOLERANCE: f32 = 1e-4;
 
