@@ -105,8 +105,8 @@ impl Renderer {
             plan,
             progress: None,
             roulette: true,
-            // A 2×2-block preview costs a quarter of a 1-spp pass: the first image of a live
-            // edit comes that much sooner.
+            // A 2×2-block preview costs a quarter of a 1-spp pass (large images take larger
+            // blocks): the first image of a live edit comes that much sooner.
             preview_block: match plan {
                 PassPlan::Progressive { .. } => 2,
                 PassPlan::Single => 1,
@@ -163,7 +163,11 @@ impl Renderer {
     /// Sets the geometry layout the renderer traces (default: [`LayoutKind::default`]). Images
     /// are bit-identical in every layout; only speed differs.
     pub fn set_layout(&mut self, layout: LayoutKind) {
-        self.world.resource_mut::<RenderControl>().layout = layout;
+        let mut control = self.world.resource_mut::<RenderControl>();
+        if control.layout != layout {
+            control.layout = layout;
+            self.restart_render();
+        }
     }
 
     /// Places meshes as instances of a shared BVH (`true`, the default) or copies their
@@ -174,7 +178,20 @@ impl Renderer {
 
     /// Turns Russian roulette on or off (on by default; both are unbiased).
     pub fn set_roulette(&mut self, on: bool) {
-        self.world.resource_mut::<RenderControl>().roulette = on;
+        let mut control = self.world.resource_mut::<RenderControl>();
+        if control.roulette != on {
+            control.roulette = on;
+            self.restart_render();
+        }
+    }
+
+    /// Starts the loaded scene's render over (a reload of an unchanged scene keeps the film, so
+    /// a change of how it is traced must say so).
+    fn restart_render(&mut self) {
+        let mut version = self.world.resource_mut::<SceneVersion>();
+        if version.0 > 0 {
+            version.0 += 1;
+        }
     }
 
     /// Attaches a progress bar advanced by rendered rows.
@@ -238,6 +255,17 @@ impl Renderer {
     /// The accumulated film.
     pub fn film(&self) -> &Film {
         &self.world.resource::<Accumulation>().film
+    }
+
+    /// The accumulated film, to add to it or to take it.
+    pub fn film_mut(&mut self) -> &mut Film {
+        &mut self.world.resource_mut::<Accumulation>().into_inner().film
+    }
+
+    /// Makes the next render hold samples `first..spp` of every pixel instead of `0..spp`
+    /// (a render of a sample range, see [`crate::farm`]). Call after loading.
+    pub fn set_first_sample(&mut self, first: u32) {
+        self.world.resource_mut::<Accumulation>().first_sample = first;
     }
 
     /// Trace counters of the current render.

@@ -1,9 +1,25 @@
 //! Emitters as a sampling distribution, for next-event estimation. No ECS here.
 //!
-//! Every sphere and triangle whose material is a `Light` is an emitter. One is chosen with
-//! probability proportional to its power (area × intensity × mean emitted colour), then a point
-//! is chosen uniformly by area on it. Infinite planes are never light-sampled: their emission is
-//! only found by BSDF sampling, at full weight.
+//! Every sphere and triangle whose material is a `Light` is an emitter, and so is every triangle
+//! of an emissive instanced mesh (placed through its instance transform, with its area in world
+//! space). One is chosen with probability proportional to its power (area × intensity × mean
+//! emitted colour), then a point on it:
+//! - on a sphere, uniformly in the cone of directions it subtends from the shading point (only
+//!   the visible cap), or uniformly by area from inside it;
+//! - on a triangle, uniformly in the solid angle it subtends (a spherical triangle, Arvo 1995)
+//!   when it is near (area ≥ 0.3 × squared distance) and that angle is neither tiny nor near a
+//!   hemisphere, else uniformly by area.
+//!
+//! [`LightSet::sample`] and [`LightSet::pdf`] decide the strategy by the same rule, so the
+//! density a BSDF-sampled hit is weighted with is the one the light sample would have had.
+//! Infinite planes are never light-sampled: their emission is only found by BSDF sampling, at
+//! full weight.
+//!
+//! The selection table holds cumulative counts out of 2²⁴, the resolution of the random numbers
+//! (`Rng::next_f32`): an emitter's probability is its count / 2²⁴, exactly the frequency with
+//! which a 24-bit `u_select` picks it, within 2⁻²⁴ of its share of the power (the running sum is
+//! taken in f64). An emitter whose count rounds to 0 is never picked and has density 0, so it is
+//! left to BSDF sampling at full weight.
 
 use glam::{Vec2, Vec3};
 
@@ -12,10 +28,25 @@ use crate::geometry::packed::{Geometry, HitKind};
 use crate::geometry::ray::gamma;
 use crate::geometry::sphere::sphere_uv;
 use crate::shading::material::Material;
+use crate::shading::sampling::{
+    cone_one_minus_cos, sample_sphere_cone, sample_spherical_triangle, triangle_solid_angle,
+};
 use crate::shading::texture::Texture;
 
 /// Marks a primitive slot that is not an emitter.
 const NONE: u32 = u32::MAX;
+
+/// Resolution of the selection table: cumulative counts out of 2²⁴.
+const SELECT_SCALE: u32 = 1 << 24;
+
+/// Solid angles (sr) between which a triangle is sampled by solid angle; outside, by area.
+/// Below the lower bound the spherical triangle's angles lose precision in f32 and area
+/// sampling is as good; near 2π the construction breaks down (pbrt-v4's bounds).
+const SPHERICAL_MIN: f32 = 3e-4;
+const SPHERICAL_MAX: f32 = 6.22;
+/// Triangles with area below this times their squared distance from the shading point are
+/// sampled by area, without computing their solid angle.
+const SPHERICAL_MIN_AREA_RATIO: f32 = 0.3;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Emitter {
@@ -36,24 +67,37 @@ pub struct LightSample {
     pub uv: Vec2,
     /// Material index of the emitter.
     pub material: u32,
-    /// Probability density of the choice per unit area (emitter selection included).
-    pub pdf_area: f32,
+    /// Probability density of the direction from the shading point to `p`, per steradian
+    /// (emitter selection included): what [`LightSet::pdf`] gives for the same point.
+    pub pdf: f32,
     /// Absolute error bound of `p`, per component.
     pub err: Vec3,
+}
+
+/// How a point is chosen on one emitter from one shading point.
+#[derive(Clone, Copy, Debug)]
+enum Strategy {
+    /// Uniformly by area.
+    Area,
+    /// Uniformly in a sphere's visible cone; `2π` times this is its solid angle.
+    Cone { one_minus_cos: f32 },
+    /// Uniformly in a triangle's solid angle.
+    Spherical { solid_angle: f32 },
 }
 
 /// The emitters of a scene with their selection probabilities.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LightSet {
     emitters: Vec<Emitter>,
-    /// Selection probability per emitter.
-    pmf: Vec<f32>,
-    /// Running sum of `pmf`, ending at 1.
-    cdf: Vec<f32>,
+    /// Cumulative selection counts out of [`SELECT_SCALE`], ending at it.
+    cdf: Vec<u32>,
     /// Emitter index per sphere slot, or `NONE`.
     sphere_emitter: Vec<u32>,
     /// Emitter index per triangle slot, or `NONE`.
     triangle_emitter: Vec<u32>,
+    /// Emitter index of triangle 0 of each instance slot (its triangles follow in order), or
+    /// `NONE` if the instance does not emit.
+    instance_emitter: Vec<u32>,
 }
 
 /// Mean of a texture's colour, estimated from a few texture coordinates (exact for constants).
@@ -68,8 +112,15 @@ fn mean_colour(t: &Texture) -> f32 {
     (sum / 16.0).element_sum() / 3.0
 }
 
+/// Area of triangle `[a, b, c]`.
+#[inline]
+fn triangle_area([a, b, c]: [Vec3; 3]) -> f32 {
+    0.5 * (b - a).cross(c - a).length()
+}
+
 impl LightSet {
-    /// Collects the emitters of `geometry` given each owner's material.
+    /// Collects the emitters of `geometry` given each owner's material: cost linear in the
+    /// number of primitives and emitting mesh triangles.
     pub fn build<L: Layout>(
         geometry: &Geometry<L>,
         materials: &[Material],
@@ -87,68 +138,70 @@ impl LightSet {
         let mut set = Self {
             sphere_emitter: vec![NONE; geometry.sphere_owner.len()],
             triangle_emitter: vec![NONE; geometry.triangle_owner.len()],
+            instance_emitter: vec![NONE; geometry.instances.len()],
             ..Self::default()
         };
-        let mut powers = Vec::new();
-        let mut add = |set: &mut Self, kind: HitKind, i: usize, area: f32, (material, power)| {
-            let slot = match kind {
-                HitKind::Sphere => &mut set.sphere_emitter[i],
-                _ => &mut set.triangle_emitter[i],
+        let mut powers: Vec<f64> = Vec::new();
+        // Adds an emitter, returning its index; one of no (or no finite) power is never picked.
+        let mut add =
+            |set: &mut Self, kind: HitKind, index: usize, area: f32, (material, power)| {
+                let p = f64::from(area) * f64::from(power);
+                powers.push(if p > 0.0 && p.is_finite() { p } else { 0.0 });
+                set.emitters.push(Emitter {
+                    kind,
+                    index: index as u32,
+                    area,
+                    material,
+                });
+                (set.emitters.len() - 1) as u32
             };
-            *slot = set.emitters.len() as u32;
-            set.emitters.push(Emitter {
-                kind,
-                index: i as u32,
-                area,
-                material,
-            });
-            powers.push(area * power);
-        };
         for (i, &owner) in geometry.sphere_owner.iter().enumerate() {
             if let Some(emission) = power_of(owner) {
                 let (_, r) = geometry.spheres.get(i);
-                add(
-                    &mut set,
-                    HitKind::Sphere,
-                    i,
-                    4.0 * std::f32::consts::PI * r * r,
-                    emission,
-                );
+                let area = 4.0 * std::f32::consts::PI * r * r;
+                set.sphere_emitter[i] = add(&mut set, HitKind::Sphere, i, area, emission);
             }
         }
         for (i, &owner) in geometry.triangle_owner.iter().enumerate() {
             if let Some(emission) = power_of(owner) {
-                let [a, b, c] = geometry.triangles.get(i);
-                add(
-                    &mut set,
-                    HitKind::Triangle,
-                    i,
-                    0.5 * (b - a).cross(c - a).length(),
-                    emission,
-                );
+                let area = triangle_area(geometry.triangles.get(i));
+                set.triangle_emitter[i] = add(&mut set, HitKind::Triangle, i, area, emission);
             }
         }
-        let total: f32 = powers.iter().sum();
+        for i in 0..geometry.instances.len() {
+            let inst = geometry.instances.get(i);
+            let Some(emission) = power_of(inst.owner) else {
+                continue;
+            };
+            // The instance's triangles take consecutive emitter indices, so a hit finds its
+            // emitter by offset.
+            set.instance_emitter[i] = set.emitters.len() as u32;
+            for t in 0..inst.blas.len() as u32 {
+                let area = triangle_area(geometry.instances.world_triangle(i as u32, t));
+                let kind = HitKind::Instance { triangle: t };
+                add(&mut set, kind, i, area, emission);
+            }
+        }
+        let total: f64 = powers.iter().sum();
         if !(total > 0.0 && total.is_finite()) {
             // Emitters with zero power (or none at all): nothing worth sampling.
             return Self {
                 sphere_emitter: vec![NONE; set.sphere_emitter.len()],
                 triangle_emitter: vec![NONE; set.triangle_emitter.len()],
+                instance_emitter: vec![NONE; set.instance_emitter.len()],
                 ..Self::default()
             };
         }
-        set.pmf = powers.iter().map(|p| p / total).collect();
-        let mut acc = 0.0;
-        set.cdf = set
-            .pmf
+        let mut acc = 0.0f64;
+        set.cdf = powers
             .iter()
             .map(|p| {
                 acc += p;
-                acc
+                ((acc / total) * f64::from(SELECT_SCALE)).round() as u32
             })
             .collect();
         if let Some(last) = set.cdf.last_mut() {
-            *last = 1.0;
+            *last = SELECT_SCALE;
         }
         set
     }
@@ -163,71 +216,191 @@ impl LightSet {
         self.emitters.len()
     }
 
-    /// Samples a point: `u_select` picks the emitter, `u` the point on it.
+    /// Probability that [`LightSet::select`] picks emitter `k` (0 for an index out of range).
+    #[inline]
+    pub fn selection_pmf(&self, k: usize) -> f32 {
+        let Some(&hi) = self.cdf.get(k) else {
+            return 0.0;
+        };
+        let lo = if k == 0 { 0 } else { self.cdf[k - 1] };
+        (hi - lo) as f32 * (1.0 / SELECT_SCALE as f32)
+    }
+
+    /// The emitter that `u_select` ∈ [0, 1) picks, read at 24-bit resolution, with its
+    /// selection probability; `None` if there are no emitters.
+    #[inline]
+    pub fn select(&self, u_select: f32) -> Option<(usize, f32)> {
+        if self.cdf.is_empty() {
+            return None;
+        }
+        let g = ((u_select * SELECT_SCALE as f32) as u32).min(SELECT_SCALE - 1);
+        let k = self.cdf.partition_point(|&c| c <= g);
+        Some((k, self.selection_pmf(k)))
+    }
+
+    /// How emitter `e` is sampled from shading point `p_ref`.
+    #[inline]
+    fn strategy<L: Layout>(geometry: &Geometry<L>, e: &Emitter, p_ref: Vec3) -> Strategy {
+        let i = e.index as usize;
+        match e.kind {
+            HitKind::Sphere => {
+                let (c, r) = geometry.spheres.get(i);
+                let dc2 = (c - p_ref).length_squared();
+                if dc2 > r * r {
+                    Strategy::Cone {
+                        one_minus_cos: cone_one_minus_cos(r * r / dc2),
+                    }
+                } else {
+                    Strategy::Area
+                }
+            }
+            HitKind::Triangle | HitKind::Instance { .. } => {
+                let v = Self::vertices(geometry, e);
+                // Far from the shading point (area / distance² small), area sampling's density
+                // hardly varies over the triangle: the spherical construction would cost more
+                // than it saves.
+                let centroid = (v[0] + v[1] + v[2]) * (1.0 / 3.0);
+                if e.area < SPHERICAL_MIN_AREA_RATIO * (centroid - p_ref).length_squared() {
+                    return Strategy::Area;
+                }
+                let solid_angle = triangle_solid_angle(v, p_ref);
+                if (SPHERICAL_MIN..=SPHERICAL_MAX).contains(&solid_angle) {
+                    Strategy::Spherical { solid_angle }
+                } else {
+                    Strategy::Area
+                }
+            }
+            HitKind::Plane => Strategy::Area,
+        }
+    }
+
+    /// World-space vertices of a triangle emitter.
+    #[inline]
+    fn vertices<L: Layout>(geometry: &Geometry<L>, e: &Emitter) -> [Vec3; 3] {
+        match e.kind {
+            HitKind::Instance { triangle } => geometry.instances.world_triangle(e.index, triangle),
+            _ => geometry.triangles.get(e.index as usize),
+        }
+    }
+
+    /// Density per steradian, at `p_ref`, of the point `p` (unit normal `n`) on emitter `e`
+    /// sampled by `strategy`, selection excluded.
+    #[inline]
+    fn density(e: &Emitter, strategy: Strategy, p_ref: Vec3, p: Vec3, n: Vec3) -> f32 {
+        match strategy {
+            Strategy::Area => {
+                let to = p - p_ref;
+                let dist2 = to.length_squared();
+                let cos = (to.dot(n) / dist2.sqrt()).abs();
+                dist2 / (e.area * cos)
+            }
+            Strategy::Cone { one_minus_cos } => 1.0 / (2.0 * std::f32::consts::PI * one_minus_cos),
+            Strategy::Spherical { solid_angle } => 1.0 / solid_angle,
+        }
+    }
+
+    /// Samples a point seen from shading point `p_ref`: `u_select` picks the emitter, `u` the
+    /// point on it.
     #[inline]
     pub fn sample<L: Layout>(
         &self,
         geometry: &Geometry<L>,
+        p_ref: Vec3,
         u_select: f32,
         u: Vec2,
     ) -> Option<LightSample> {
-        let k = self
-            .cdf
-            .partition_point(|&c| c <= u_select)
-            .min(self.emitters.len().checked_sub(1)?);
+        let (k, pmf) = self.select(u_select)?;
         let e = self.emitters[k];
         let i = e.index as usize;
+        let strategy = Self::strategy(geometry, &e, p_ref);
         let (p, n, uv, err) = match e.kind {
             HitKind::Sphere => {
                 let (c, r) = geometry.spheres.get(i);
-                let z = 1.0 - 2.0 * u.x;
-                let s = (1.0 - z * z).max(0.0).sqrt();
-                let phi = 2.0 * std::f32::consts::PI * u.y;
-                let n = Vec3::new(s * phi.cos(), s * phi.sin(), z);
+                let n = match strategy {
+                    Strategy::Cone { .. } => sample_sphere_cone(c, r, p_ref, u).1,
+                    _ => {
+                        let z = 1.0 - 2.0 * u.x;
+                        let s = (1.0 - z * z).max(0.0).sqrt();
+                        let phi = 2.0 * std::f32::consts::PI * u.y;
+                        Vec3::new(s * phi.cos(), s * phi.sin(), z)
+                    }
+                };
                 let uv = sphere_uv(geometry.sphere_frame[i].transpose() * n);
                 (c + r * n, n, uv, gamma(6.0) * (c.abs() + Vec3::splat(r)))
             }
-            HitKind::Triangle => {
-                let [a, b, c] = geometry.triangles.get(i);
-                let su = u.x.sqrt();
-                let (b0, b1) = (1.0 - su, u.y * su);
-                let b2 = 1.0 - b0 - b1;
-                let [ta, tb, tc] = geometry.triangle_uv[i];
-                let n = (b - a).cross(c - a).normalize();
-                let err = gamma(7.0) * ((b0 * a).abs() + (b1 * b).abs() + (b2 * c).abs());
-                (
-                    b0 * a + b1 * b + b2 * c,
-                    n,
-                    b0 * ta + b1 * tb + b2 * tc,
-                    err,
-                )
+            HitKind::Triangle | HitKind::Instance { .. } => {
+                let [b0, b1, b2] = match strategy {
+                    Strategy::Spherical { .. } => {
+                        sample_spherical_triangle(Self::vertices(geometry, &e), p_ref, u)?
+                    }
+                    _ => {
+                        let su = u.x.sqrt();
+                        let (b0, b1) = (1.0 - su, u.y * su);
+                        [b0, b1, 1.0 - b0 - b1]
+                    }
+                };
+                if let HitKind::Instance { triangle } = e.kind {
+                    let s = geometry.instances.surface(e.index, triangle, b1, b2);
+                    let err = geometry.instances.point_error(e.index, triangle, b1, b2);
+                    (s.p, s.n, s.uv, err)
+                } else {
+                    let [a, b, c] = geometry.triangles.get(i);
+                    let [ta, tb, tc] = geometry.triangle_uv[i];
+                    let n = (b - a).cross(c - a).normalize();
+                    let err = gamma(7.0) * ((b0 * a).abs() + (b1 * b).abs() + (b2 * c).abs());
+                    (
+                        b0 * a + b1 * b + b2 * c,
+                        n,
+                        b0 * ta + b1 * tb + b2 * tc,
+                        err,
+                    )
+                }
             }
-            HitKind::Plane | HitKind::Instance { .. } => return None,
+            HitKind::Plane => return None,
         };
         Some(LightSample {
             p,
             n,
             uv,
             material: e.material,
-            pdf_area: self.pmf[k] / e.area,
+            pdf: pmf * Self::density(&e, strategy, p_ref, p, n),
             err,
         })
     }
 
-    /// Density per unit area with which [`LightSet::sample`] picks a point on primitive
-    /// `(kind, index)`; 0 if it is not an emitter.
+    /// Density per steradian with which [`LightSet::sample`], called at `p_ref`, picks the
+    /// point `p` (unit geometric normal `n`) of primitive `(kind, index)`, as a BSDF-sampled
+    /// ray from `p_ref` finds it; 0 if it is not a sampled emitter.
     #[inline]
-    pub fn pdf_area(&self, kind: HitKind, index: u32) -> f32 {
+    pub fn pdf<L: Layout>(
+        &self,
+        geometry: &Geometry<L>,
+        kind: HitKind,
+        index: u32,
+        p_ref: Vec3,
+        p: Vec3,
+        n: Vec3,
+    ) -> f32 {
         let k = match kind {
-            HitKind::Sphere => self.sphere_emitter.get(index as usize),
-            HitKind::Triangle => self.triangle_emitter.get(index as usize),
-            // Planes are infinite; instanced meshes are found by BSDF sampling only.
-            HitKind::Plane | HitKind::Instance { .. } => None,
+            HitKind::Sphere => self.sphere_emitter.get(index as usize).copied(),
+            HitKind::Triangle => self.triangle_emitter.get(index as usize).copied(),
+            HitKind::Instance { triangle } => self
+                .instance_emitter
+                .get(index as usize)
+                .filter(|&&base| base != NONE)
+                .map(|&base| base + triangle),
+            // Planes are infinite.
+            HitKind::Plane => None,
         };
-        match k {
-            Some(&k) if k != NONE => self.pmf[k as usize] / self.emitters[k as usize].area,
-            _ => 0.0,
+        let Some(k) = k.filter(|&k| k != NONE) else {
+            return 0.0;
+        };
+        let pmf = self.selection_pmf(k as usize);
+        if pmf == 0.0 {
+            return 0.0;
         }
+        let e = &self.emitters[k as usize];
+        pmf * Self::density(e, Self::strategy(geometry, e, p_ref), p_ref, p, n)
     }
 }
 
@@ -277,15 +450,25 @@ mod tests {
         let set = LightSet::build(&g, &materials, &[0, 1, 2]);
         assert_eq!(set.len(), 3);
         let total = 1.0 + 2.0 * std::f32::consts::PI;
-        // ∫ pdf_area dA over each emitter = its selection probability; they sum to 1.
-        let sphere_pdf = set.pdf_area(HitKind::Sphere, 0) * std::f32::consts::PI;
-        let tri_pdf: f32 = (0..2)
-            .map(|i| set.pdf_area(HitKind::Triangle, i) * 0.5)
-            .sum();
-        assert!((sphere_pdf - 2.0 * std::f32::consts::PI / total).abs() < 1e-6);
-        assert!((tri_pdf - 1.0 / total).abs() < 1e-6);
+        // Selection probabilities (spheres first, then triangles) are the power shares and
+        // sum to 1.
+        let pmf: Vec<f32> = (0..3).map(|k| set.selection_pmf(k)).collect();
+        assert!(
+            (pmf[0] - 2.0 * std::f32::consts::PI / total).abs() < 1e-6,
+            "{pmf:?}"
+        );
+        assert!((pmf[1] + pmf[2] - 1.0 / total).abs() < 1e-6);
+        assert_eq!(pmf.iter().sum::<f32>(), 1.0);
+        let far = Vec3::new(0.0, 0.0, 100.0);
         assert_eq!(
-            set.pdf_area(HitKind::Sphere, 1),
+            set.pdf(
+                &g,
+                HitKind::Sphere,
+                1,
+                far,
+                Vec3::new(9.0, 0.0, 1.0),
+                Vec3::Z
+            ),
             0.0,
             "glass is not an emitter"
         );
@@ -296,6 +479,7 @@ mod tests {
             let s = set
                 .sample(
                     &g,
+                    Vec3::new(0.5, 0.5, 3.0),
                     rng.next_f32(),
                     Vec2::new(rng.next_f32(), rng.next_f32()),
                 )
@@ -325,6 +509,6 @@ mod tests {
         )]);
         let set = LightSet::build(&g, &[light(1.0)], &[0]);
         assert!(set.is_empty());
-        assert!(set.sample(&g, 0.5, Vec2::splat(0.5)).is_none());
+        assert!(set.sample(&g, Vec3::ONE, 0.5, Vec2::splat(0.5)).is_none());
     }
 }

@@ -7,9 +7,9 @@ use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::camera::Camera;
-use crate::film::Film;
+use crate::film::{Film, Pixel};
 use crate::geometry::layout::{DefaultLayout, Layout, SphereStore, TriangleStore};
-use crate::geometry::packed::{Geometry, Hit, HitKind, Surface};
+use crate::geometry::packed::{Geometry, Hit, HitKind, LayoutKind, Surface};
 use crate::geometry::ray::{Ray, gamma, spawn_origin};
 use crate::lights::LightSet;
 use crate::scene::format::Method;
@@ -50,6 +50,9 @@ pub struct TraceStats {
     pub rays: u64,
     /// Samples whose radiance was NaN or infinite; they are dropped, never written.
     pub nonfinite: u64,
+    /// Passes traced in each layout, in the order of [`LayoutKind::ALL`]: which monomorphised
+    /// code really ran.
+    pub layout_passes: [u64; 4],
 }
 
 impl std::ops::Add for TraceStats {
@@ -58,6 +61,7 @@ impl std::ops::Add for TraceStats {
         Self {
             rays: self.rays + o.rays,
             nonfinite: self.nonfinite + o.nonfinite,
+            layout_passes: std::array::from_fn(|k| self.layout_passes[k] + o.layout_passes[k]),
         }
     }
 }
@@ -146,14 +150,14 @@ pub fn trace_path<L: Layout>(
             let emitted = material.emitted(ray.direction, s.n, s.uv);
             let weight = match previous {
                 Some((p_prev, pdf_bsdf)) if sample_lights => {
-                    let pdf_area = view.lights.pdf_area(hit.kind, hit.index);
-                    if pdf_area == 0.0 {
+                    let pdf_light =
+                        view.lights
+                            .pdf(view.geometry, hit.kind, hit.index, p_prev, s.p, s.n);
+                    if pdf_light == 0.0 {
                         1.0
                     } else if view.method == Method::Nee {
                         0.0
                     } else {
-                        let cos = ray.direction.dot(s.n).abs();
-                        let pdf_light = pdf_area * (s.p - p_prev).length_squared() / cos;
                         power_heuristic(pdf_bsdf, pdf_light)
                     }
                 }
@@ -230,7 +234,7 @@ fn direct_light<L: Layout>(
 ) -> Vec3 {
     let u_select = rng.next_f32();
     let u = Vec2::new(rng.next_f32(), rng.next_f32());
-    let Some(light) = view.lights.sample(view.geometry, u_select, u) else {
+    let Some(light) = view.lights.sample(view.geometry, s.p, u_select, u) else {
         return Vec3::ZERO;
     };
     let to_light = light.p - s.p;
@@ -252,8 +256,7 @@ fn direct_light<L: Layout>(
     if f_cos == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    let cos_light = wi.dot(light.n).abs();
-    let pdf_light = light.pdf_area * dist2 / cos_light;
+    let pdf_light = light.pdf;
     if !(pdf_light > 0.0 && pdf_light.is_finite()) {
         return Vec3::ZERO;
     }
@@ -321,7 +324,7 @@ pub fn render_pass<L: Layout>(
                     let ray = view.camera.ray(x + jx, y + jy, width, height);
                     let l = trace_path(view, ray, &mut rng, &mut stats);
                     if l.is_finite() {
-                        *sum += l.as_dvec3();
+                        sum.add(l);
                     } else {
                         stats.nonfinite += 1;
                     }
@@ -335,6 +338,10 @@ pub fn render_pass<L: Layout>(
         return Err(Cancelled);
     }
     film.samples = samples.end;
+    let mut stats = stats;
+    if let Some(slot) = LayoutKind::ALL.iter().position(|&k| k == L::KIND) {
+        stats.layout_passes[slot] += 1;
+    }
     Ok(stats)
 }
 
@@ -372,10 +379,10 @@ pub fn render_preview<L: Layout>(
                         .ray(cx as f32 + jx, cy as f32 + jy, width as u32, height as u32);
                 let l = trace_path(view, ray, &mut rng, &mut stats);
                 let value = if l.is_finite() {
-                    l.as_dvec3()
+                    Pixel::from_radiance(l)
                 } else {
                     stats.nonfinite += 1;
-                    DVec3::ZERO
+                    Pixel::ZERO
                 };
                 for line in 0..lines {
                     rows[line * width + bx..line * width + bx + cols].fill(value);
@@ -393,6 +400,6 @@ pub fn render_preview<L: Layout>(
 
 /// Mean of a film's pixels, a convenience for tests and reports.
 pub fn film_mean(film: &Film) -> DVec3 {
-    let n = f64::from(film.samples.max(1)) * film.sum.len().max(1) as f64;
-    film.sum.iter().copied().sum::<DVec3>() / n
+    let n = film.sum.len().max(1) as f64;
+    film.mean().iter().map(|m| m.as_dvec3()).sum::<DVec3>() / n
 }

@@ -170,6 +170,7 @@ fn sweep_geometry(kind: Kind, shape: &Shape, t: &Placement) -> Geometry {
     let mesh = MeshData {
         positions: vec![a, b, c, d],
         normals: None,
+        uvs: None,
         triangles: vec![[0, 1, 2], [0, 2, 3]],
     };
     let instance = Primitive::Instance {

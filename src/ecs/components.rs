@@ -105,6 +105,8 @@ pub struct MeshData {
     pub positions: Vec<Vec3>,
     /// Per-vertex shading normals, if the file has them.
     pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates, if the file has them.
+    pub uvs: Option<Vec<glam::Vec2>>,
     /// Triangles as vertex indices (validated to be in range).
     pub triangles: Vec<[u32; 3]>,
 }

@@ -152,8 +152,8 @@ pub struct RenderControl {
     pub progress: Option<indicatif::ProgressBar>,
     /// Russian roulette on (the default; off only to test that it is unbiased).
     pub roulette: bool,
-    /// Progressive renders start with a preview of one sample per `preview_block`² pixels
-    /// (1 = no preview).
+    /// Progressive renders start with a preview of one sample per `preview_block`² pixels, or
+    /// larger blocks for large images (see [`crate::systems::preview_block`]); 1 = no preview.
     pub preview_block: u32,
     /// Layout of the geometry the render reads; images are bit-identical in every layout.
     pub layout: LayoutKind,
@@ -182,17 +182,17 @@ pub struct Accumulation {
     pub complete: bool,
     /// Live-preview state.
     pub preview: Preview,
+    /// First sample index a reset film starts at (0 but for a render of a sample range).
+    pub first_sample: u32,
 }
 
 impl Accumulation {
     /// Clears the film for a `width` × `height` image, reusing its memory when the size holds.
     pub fn reset(&mut self, width: u32, height: u32) {
-        if self.film.width == width && self.film.height == height {
-            self.film.sum.fill(glam::DVec3::ZERO);
-            self.film.samples = 0;
-        } else {
+        if self.film.width != width || self.film.height != height {
             self.film = Film::new(width, height);
         }
+        self.film.clear(self.first_sample);
         self.stats = TraceStats::default();
         self.complete = false;
     }

@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use glam::{Affine3A, Vec3};
+use glam::{Affine3A, Vec2, Vec3};
 
 use super::aabb::RayQuery;
 use super::bvh::{Bounds, Bvh};
@@ -22,6 +22,8 @@ pub struct MeshBlas {
     triangles: Vec<[Vec3; 3]>,
     /// Vertex normals per triangle (BVH order), when the mesh file has them.
     normals: Option<Vec<[Vec3; 3]>>,
+    /// Texture coordinates per triangle vertex (BVH order), when the mesh file has them.
+    uvs: Option<Vec<[Vec2; 3]>>,
     bvh: Bvh,
     bounds: Bounds,
 }
@@ -62,9 +64,16 @@ impl MeshBlas {
                 .map(|&k| mesh.triangles[k as usize].map(|v| n[v as usize]))
                 .collect()
         });
+        let uvs = mesh.uvs.as_ref().map(|t| {
+            order
+                .iter()
+                .map(|&k| mesh.triangles[k as usize].map(|v| t[v as usize]))
+                .collect()
+        });
         Self {
             triangles: order.iter().map(|&i| tris[i as usize]).collect(),
             normals,
+            uvs,
             bvh,
             bounds: all,
         }
@@ -213,6 +222,13 @@ impl InstanceSet {
         &self.instances[i]
     }
 
+    /// The vertices of `triangle` of instance `instance` in world space.
+    #[inline]
+    pub fn world_triangle(&self, instance: u32, triangle: u32) -> [Vec3; 3] {
+        let inst = &self.instances[instance as usize];
+        inst.blas.triangles[triangle as usize].map(|v| inst.world_from_object.transform_point3(v))
+    }
+
     /// The world ray in an instance's object space, with a unit direction (the triangle test's
     /// error bound assumes one), and the factor `s` that turns world distances into object
     /// distances: `t_object = s · t_world`.
@@ -301,7 +317,8 @@ impl InstanceSet {
     /// Local geometry of a hit on `triangle` of instance `instance` with barycentrics
     /// `(b1, b2)`. The point is interpolated in object space and transformed; normals go through
     /// the inverse transpose. The shading normal interpolates the mesh's vertex normals (when
-    /// it has them), turned to the side of the geometric normal.
+    /// it has them), turned to the side of the geometric normal; texture coordinates interpolate
+    /// the mesh's (0 when it has none).
     #[inline]
     pub fn surface(&self, instance: u32, triangle: u32, b1: f32, b2: f32) -> Surface {
         let inst = &self.instances[instance as usize];
@@ -325,11 +342,15 @@ impl InstanceSet {
             })
             .filter(|ns| *ns != Vec3::ZERO)
             .map_or(n, |ns| if ns.dot(n) < 0.0 { -ns } else { ns });
+        let uv = inst.blas.uvs.as_ref().map_or(Vec2::ZERO, |uvs| {
+            let [ta, tb, tc] = uvs[k];
+            b0 * ta + b1 * tb + b2 * tc
+        });
         Surface {
             p: inst.world_from_object.transform_point3(p_obj),
             n,
             ns,
-            uv: glam::Vec2::ZERO,
+            uv,
             owner: inst.owner,
         }
     }

@@ -3,12 +3,13 @@
 
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use crate::ecs::components::MeshData;
 
 /// Reads an OBJ file. Faces are triangulated; all its objects are merged into one mesh. Vertex
-/// normals are kept when every object has one per vertex. Malformed files, out-of-range
+/// normals and texture coordinates (`vt`) are each kept when every object has one per vertex.
+/// Malformed files, out-of-range
 /// indices, non-finite coordinates and empty meshes are errors, never panics.
 pub fn load_obj(path: &Path) -> Result<MeshData, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read OBJ: {e}"))?;
@@ -29,6 +30,7 @@ pub fn parse_obj(bytes: &[u8]) -> Result<MeshData, String> {
     .map_err(|e| format!("cannot read OBJ: {e}"))?;
     let mut mesh = MeshData::default();
     let mut normals = Some(Vec::new());
+    let mut uvs = Some(Vec::new());
     for model in &models {
         let m = &model.mesh;
         if m.positions.len() % 3 != 0 || m.indices.len() % 3 != 0 {
@@ -54,6 +56,21 @@ pub fn parse_obj(bytes: &[u8]) -> Result<MeshData, String> {
             ),
             _ => normals = None,
         }
+        match (&mut uvs, m.texcoords.len() == 2 * count) {
+            (Some(t), true) => {
+                for c in m.texcoords.chunks_exact(2) {
+                    let uv = Vec2::new(c[0], c[1]);
+                    if !uv.is_finite() {
+                        return Err(format!(
+                            "object \"{}\": non-finite texture coordinate {uv}",
+                            model.name
+                        ));
+                    }
+                    t.push(uv);
+                }
+            }
+            _ => uvs = None,
+        }
         for f in m.indices.chunks_exact(3) {
             if f.iter().any(|&i| i as usize >= count) {
                 return Err(format!(
@@ -69,5 +86,6 @@ pub fn parse_obj(bytes: &[u8]) -> Result<MeshData, String> {
         return Err("the file has no faces".into());
     }
     mesh.normals = normals.filter(|n| n.len() == mesh.positions.len());
+    mesh.uvs = uvs.filter(|t| t.len() == mesh.positions.len());
     Ok(mesh)
 }

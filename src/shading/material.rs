@@ -40,6 +40,8 @@ pub enum Material {
         roughness: f32,
     },
     /// Smooth glass: Fresnel (Schlick) reflection, Snell refraction, total internal reflection.
+    /// Refracted radiance is scaled by (n1/n2)², n1 the index on the side the camera path
+    /// comes from.
     Dielectric {
         /// Index of refraction relative to the outside medium.
         ior: f32,
@@ -255,13 +257,16 @@ impl Material {
                 let (n1, n2) = if entering { (1.0, *ior) } else { (*ior, 1.0) };
                 let cos_i = (-d.dot(facing)).clamp(0.0, 1.0);
                 let r = schlick(cos_i, n1, n2);
-                let direction = match refract(d, facing, n1 / n2) {
-                    Some(t) if rng.next_f32() >= r => t,
-                    _ => reflect(d, facing).normalize(),
+                // Radiance crossing an interface is compressed with the solid angle: light
+                // reaching the camera side (index n1) from the far side (n2) is scaled by
+                // (n1/n2)² (Veach 1997, §5.2; pbrt-v4's `DielectricBxDF` in radiance mode).
+                let (direction, scale) = match refract(d, facing, n1 / n2) {
+                    Some(t) if rng.next_f32() >= r => (t, (n1 / n2) * (n1 / n2)),
+                    _ => (reflect(d, facing).normalize(), 1.0),
                 };
                 Some(Scatter {
                     direction,
-                    attenuation: Vec3::ONE,
+                    attenuation: Vec3::splat(scale),
                     pdf: None,
                 })
             }
@@ -316,6 +321,27 @@ mod tests {
             .count();
         let fraction = reflected as f64 / n as f64;
         assert!((fraction - 0.04).abs() < 0.001, "{fraction}");
+    }
+
+    #[test]
+    fn refraction_scales_radiance_by_the_squared_index_ratio() {
+        // Along the camera path, entering glass (1 → 1.5) carries (1/1.5)², leaving it 1.5²;
+        // reflection carries 1.
+        let glass = Material::Dielectric { ior: 1.5 };
+        let mut rng = Rng::new(4, 4);
+        for (d, refracted) in [(-Vec3::Z, 1.0 / 2.25), (Vec3::Z, 2.25)] {
+            for _ in 0..200 {
+                let s = glass
+                    .scatter(d, Vec3::Z, Vec2::ZERO, &mut rng)
+                    .expect("scatters");
+                let expected = if s.direction.dot(d) > 0.0 {
+                    refracted
+                } else {
+                    1.0
+                };
+                assert!((s.attenuation - Vec3::splat(expected)).abs().max_element() < 1e-6);
+            }
+        }
     }
 
     #[test]

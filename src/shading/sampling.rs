@@ -1,4 +1,5 @@
-//! Sampling routines: directions on hemispheres and spheres, orthonormal frames.
+//! Sampling routines: directions on hemispheres and spheres, orthonormal frames, and the
+//! solid-angle samplers of lights (the cone a sphere subtends, spherical triangles).
 
 use glam::{Vec2, Vec3};
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
@@ -62,6 +63,136 @@ impl Frame {
     pub fn to_world(&self, v: Vec3) -> Vec3 {
         v.x * self.s + v.y * self.t + v.z * self.n
     }
+}
+
+/// `1 − cos θmax` of the cone that a sphere subtends from a point outside it, given
+/// `sin² θmax = r² / d²`. Small cones use the Taylor form `sin² θmax / 2`, which keeps its
+/// precision where `1 − √(1 − s)` would cancel (pbrt-v4, `Sphere::Sample`). The cone's solid
+/// angle is `2π` times this; [`sample_sphere_cone`] uses the same value.
+#[inline]
+pub fn cone_one_minus_cos(sin2_max: f32) -> f32 {
+    if sin2_max < SMALL_CONE_SIN2 {
+        0.5 * sin2_max
+    } else {
+        1.0 - (1.0 - sin2_max).max(0.0).sqrt()
+    }
+}
+
+/// sin² of 1.5°: below it the cone is sampled by its Taylor expansion.
+const SMALL_CONE_SIN2: f32 = 0.000_685_23;
+
+/// A point on the part of the sphere (centre `c`, radius `r`) visible from `p`, which must lie
+/// outside it, chosen uniformly in the solid angle of the cone the sphere subtends (pbrt-v4,
+/// `Sphere::Sample`): density `1 / (2π · cone_one_minus_cos(r²/|c − p|²))` per steradian.
+/// Returns the point and the sphere's outward unit normal there.
+#[inline]
+pub fn sample_sphere_cone(c: Vec3, r: f32, p: Vec3, u: Vec2) -> (Vec3, Vec3) {
+    let to_centre = c - p;
+    let dc2 = to_centre.length_squared();
+    let sin2_max = r * r / dc2;
+    let sin_max = sin2_max.sqrt();
+    let sin2_t = if sin2_max < SMALL_CONE_SIN2 {
+        sin2_max * u.x
+    } else {
+        let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+        let cos_t = (cos_max - 1.0) * u.x + 1.0;
+        1.0 - cos_t * cos_t
+    };
+    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
+    // Angle at the centre between the axis and the sampled point.
+    let cos_alpha = sin2_t / sin_max + cos_t * (1.0 - sin2_t / sin2_max).max(0.0).sqrt();
+    let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    let frame = Frame::from_normal(to_centre / dc2.sqrt());
+    let n = frame
+        .to_world(-Vec3::new(
+            sin_alpha * phi.cos(),
+            sin_alpha * phi.sin(),
+            cos_alpha,
+        ))
+        .normalize();
+    (c + r * n, n)
+}
+
+/// The angle between unit vectors, accurate at both ends of its range (pbrt-v4).
+#[inline]
+fn angle_between(a: Vec3, b: Vec3) -> f32 {
+    if a.dot(b) < 0.0 {
+        PI - 2.0 * (0.5 * (a + b).length()).min(1.0).asin()
+    } else {
+        2.0 * (0.5 * (b - a).length()).min(1.0).asin()
+    }
+}
+
+/// The part of `v` orthogonal to unit `w`.
+#[inline]
+fn gram_schmidt(v: Vec3, w: Vec3) -> Vec3 {
+    v - v.dot(w) * w
+}
+
+/// Solid angle of triangle `v` seen from `p` (Van Oosterom & Strackee, 1983).
+#[inline]
+pub fn triangle_solid_angle(v: [Vec3; 3], p: Vec3) -> f32 {
+    let [a, b, c] = v.map(|x| (x - p).normalize_or_zero());
+    2.0 * a
+        .dot(b.cross(c))
+        .abs()
+        .atan2(1.0 + a.dot(b) + a.dot(c) + b.dot(c))
+        .abs()
+}
+
+/// Barycentric coordinates of a point of triangle `v` chosen uniformly in the solid angle it
+/// subtends from `p` (Arvo, "Stratified Sampling of Spherical Triangles", 1995; as in pbrt-v4's
+/// `SampleSphericalTriangle`). The density is `1 / triangle_solid_angle(v, p)` per steradian.
+/// `None` when the triangle is degenerate as seen from `p`.
+#[inline]
+pub fn sample_spherical_triangle(v: [Vec3; 3], p: Vec3, u: Vec2) -> Option<[f32; 3]> {
+    let [a, b, c] = v.map(|x| (x - p).normalize_or_zero());
+    let (n_ab, n_bc, n_ca) = (a.cross(b), b.cross(c), c.cross(a));
+    if [n_ab, n_bc, n_ca].iter().any(|n| n.length_squared() == 0.0) {
+        return None;
+    }
+    let (n_ab, n_bc, n_ca) = (n_ab.normalize(), n_bc.normalize(), n_ca.normalize());
+    // The spherical triangle's angles at a, b and c; its area is their sum minus π.
+    let alpha = angle_between(n_ab, -n_ca);
+    let beta = angle_between(n_bc, -n_ab);
+    let gamma = angle_between(n_ca, -n_bc);
+    // The sub-triangle (a, b, c') of area u.x times the whole fixes c' on the arc a–c.
+    let area_pi = PI + u.x * (alpha + beta + gamma - PI);
+    let (sin_alpha, cos_alpha) = alpha.sin_cos();
+    let (sin_area, cos_area) = area_pi.sin_cos();
+    let sin_phi = sin_area * cos_alpha - cos_area * sin_alpha;
+    let cos_phi = cos_area * cos_alpha + sin_area * sin_alpha;
+    let k1 = cos_phi + cos_alpha;
+    let k2 = sin_phi - sin_alpha * a.dot(b);
+    let cos_bp = (k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha)
+        / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha);
+    if cos_bp.is_nan() {
+        return None;
+    }
+    let cos_bp = cos_bp.clamp(-1.0, 1.0);
+    let sin_bp = (1.0 - cos_bp * cos_bp).max(0.0).sqrt();
+    let cp = cos_bp * a + sin_bp * gram_schmidt(c, a).normalize();
+    // Then a direction on the arc b–c', uniform in the sub-triangle's area.
+    let cos_t = 1.0 - u.y * (1.0 - cp.dot(b));
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let w = cos_t * b + sin_t * gram_schmidt(cp, b).normalize_or_zero();
+    // Where the direction meets the triangle's plane, in barycentrics.
+    let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
+    let s1 = w.cross(e2);
+    let divisor = s1.dot(e1);
+    if divisor == 0.0 || !divisor.is_finite() {
+        return None;
+    }
+    let s = p - v[0];
+    let b1 = (s.dot(s1) / divisor).clamp(0.0, 1.0);
+    let b2 = (w.dot(s.cross(e1)) / divisor).clamp(0.0, 1.0);
+    let (b1, b2) = if b1 + b2 > 1.0 {
+        (b1 / (b1 + b2), b2 / (b1 + b2))
+    } else {
+        (b1, b2)
+    };
+    Some([1.0 - b1 - b2, b1, b2])
 }
 
 #[cfg(test)]

@@ -53,14 +53,15 @@ impl ImageTexture {
         }
     }
 
-    /// The texel at `uv` by the thesis's mapping `i = ⌊u(Nx−1)⌋`, `j = ⌊(1−v)(Ny−1)⌋` (v = 0 is
-    /// the bottom row), with u and v clamped to [0, 1].
+    /// The texel at `uv`: `i = min(⌊u·W⌋, W−1)`, `j = min(⌊(1−v)·H⌋, H−1)` (v = 0 is the
+    /// bottom row), with u and v clamped to [0, 1], so every texel covers an equal square of
+    /// texture space (the thesis's `⌊u(W−1)⌋` never reaches the last column and row).
     #[inline]
     pub fn lookup(&self, uv: Vec2) -> Vec3 {
         let u = uv.x.clamp(0.0, 1.0);
         let v = uv.y.clamp(0.0, 1.0);
-        let i = (u * (self.width - 1) as f32) as usize;
-        let j = ((1.0 - v) * (self.height - 1) as f32) as usize;
+        let i = ((u * self.width as f32) as usize).min(self.width as usize - 1);
+        let j = (((1.0 - v) * self.height as f32) as usize).min(self.height as usize - 1);
         self.texels[j * self.width as usize + i]
     }
 }
@@ -145,6 +146,26 @@ mod tests {
         assert_eq!(img.lookup(Vec2::new(0.0, 0.0)), Vec3::Z); // bottom-left
         assert_eq!(img.lookup(Vec2::new(1.0, 1.0)), Vec3::Y); // top-right
         assert_eq!(img.lookup(Vec2::new(7.0, -3.0)), Vec3::ONE); // clamped bottom-right
+    }
+
+    #[test]
+    fn every_texel_of_a_2x2_image_covers_a_quarter_of_texture_space() {
+        // Top row red, green; bottom row blue, white. The centre of each quarter of the unit
+        // square, and points just inside its corners, read that quarter's texel.
+        let px = [255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255];
+        let img = ImageTexture::from_srgb8(2, 2, &px);
+        let quarters = [
+            (Vec2::new(0.25, 0.75), Vec3::X),
+            (Vec2::new(0.75, 0.75), Vec3::Y),
+            (Vec2::new(0.25, 0.25), Vec3::Z),
+            (Vec2::new(0.75, 0.25), Vec3::ONE),
+        ];
+        for (centre, texel) in quarters {
+            for offset in [Vec2::ZERO, Vec2::splat(0.24), Vec2::splat(-0.24)] {
+                let uv = centre + offset;
+                assert_eq!(img.lookup(uv), texel, "uv {uv}");
+            }
+        }
     }
 
     #[test]

@@ -109,10 +109,14 @@ pub fn world_primitives(shape: &Shape, transform: &Transform) -> Vec<Primitive> 
         Shape::Box { min, max } => box_quads(min, max).into_iter().flat_map(quad).collect(),
         Shape::Mesh(ref mesh) => {
             let p = &mesh.data.positions;
+            let uv = |t: &[u32; 3]| match &mesh.data.uvs {
+                Some(uvs) => t.map(|i| uvs[i as usize]),
+                None => [Vec2::ZERO, Vec2::X, Vec2::Y],
+            };
             mesh.data
                 .triangles
                 .iter()
-                .map(|t| tri(t.map(|i| p[i as usize]), [Vec2::ZERO, Vec2::X, Vec2::Y]))
+                .map(|t| tri(t.map(|i| p[i as usize]), uv(t)))
                 .collect()
         }
     }
