@@ -109,8 +109,8 @@ impl Renderer {
             plan,
             progress: None,
             roulette: true,
-            // A 2×2-block preview costs a quarter of a 1-spp pass: the first image of a live
-            // edit comes that much sooner.
+            // A 2×2-block preview costs a quarter of a 1-spp pass (large images take larger
+            // blocks): the first image of a live edit comes that much sooner.
             preview_block: match plan {
                 PassPlan::Progressive { .. } => 2,
                 PassPlan::Single => 1,

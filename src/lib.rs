@@ -9,6 +9,7 @@
 pub mod app;
 pub mod bench;
 pub mod camera;
+pub mod cli;
 pub mod ecs;
 pub mod film;
 pub mod geometry;
@@ -16,6 +17,7 @@ pub mod lights;
 pub mod metrics;
 pub mod render;
 pub mod scene;
+pub mod serve;
 pub mod shading;
 pub mod systems;
 pub mod watch;

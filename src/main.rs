@@ -8,9 +8,10 @@ use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use rondo::bench::layout;
+use rondo::cli::{EXIT_INPUT, check_output_dir, check_output_file};
 use rondo::film::OutputKind;
 use rondo::geometry::layout::LayoutKind;
-use rondo::scene::format::Method;
+use rondo::scene::format::{MAX_DEPTH, MAX_SIDE, MAX_SPP, Method};
 use rondo::shading::sampler::SamplerKind;
 use rondo::watch::{Report, Watch, WatchOptions, WatchSession};
 use rondo::{Overrides, PassPlan, Renderer};
@@ -33,7 +34,7 @@ enum Command {
         /// Scene file (.ron).
         scene: PathBuf,
         /// Output image (.png or .exr).
-        #[arg(short, long)]
+        #[arg(short, long, value_parser = image_path)]
         output: PathBuf,
         #[command(flatten)]
         options: RenderArgs,
@@ -43,11 +44,15 @@ enum Command {
     Watch {
         /// Scene file (.ron).
         scene: PathBuf,
-        /// Output image (.png or .exr).
-        #[arg(short, long)]
-        output: PathBuf,
+        /// Output image (.png or .exr); optional with --serve.
+        #[arg(short, long, value_parser = image_path, required_unless_present = "serve")]
+        output: Option<PathBuf>,
+        /// Show every pass in a browser: serve a live viewer on ADDR (HOST:PORT or a port;
+        /// default 127.0.0.1:8730, or a free port if that one is taken).
+        #[arg(long, value_name = "ADDR")]
+        serve: Option<Option<String>>,
         /// Samples per pixel of the first pass.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, value_parser = at_least_one_u32())]
         first_spp: u32,
         #[command(flatten)]
         options: RenderArgs,
@@ -60,7 +65,7 @@ enum Command {
         /// Reference image, of the same size.
         reference: PathBuf,
         /// Write a false-colour picture of the per-pixel error here (.png).
-        #[arg(long)]
+        #[arg(long, value_parser = png_path)]
         error_image: Option<PathBuf>,
     },
     /// Load a scene and list what looks wrong without rendering it: overlapping coplanar
@@ -122,12 +127,12 @@ enum BenchCommand {
         #[arg(long)]
         smoke: bool,
         /// Run only this workload (kernel, traverse, render, extract, pack); repeatable.
-        #[arg(long = "workload")]
+        #[arg(long = "workload", value_parser = workload_names())]
         workloads: Vec<String>,
     },
     /// Error against a reference image as a function of render time, for each light-transport
-    /// method and sampler over a sweep of spp (renders interleaved); writes accuracy.csv, accuracy.svg (log-log
-    /// RMSE against time) and summary.md (equal-time comparison) in --out.
+    /// method and sampler over a sweep of spp (renders interleaved); writes accuracy.csv,
+    /// accuracy.svg (log-log RMSE against time) and summary.md (equal-time comparison) in --out.
     Accuracy {
         /// Scene file (.ron).
         scene: PathBuf,
@@ -139,7 +144,7 @@ enum BenchCommand {
         #[arg(long, default_value = "bench/acc")]
         out: PathBuf,
         /// Samples per pixel of the sweep, comma-separated.
-        #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32,64")]
+        #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32,64", value_parser = at_most_u32(MAX_SPP))]
         spp_list: Vec<u32>,
         /// Methods compared, comma-separated.
         #[arg(long, value_delimiter = ',', default_value = "naive,nee,mis")]
@@ -148,14 +153,34 @@ enum BenchCommand {
         #[arg(long, value_delimiter = ',', default_value = "sobol")]
         samplers: Vec<SamplerKind>,
         /// Rays per path, camera ray included (overrides the scene).
-        #[arg(long)]
+        #[arg(long, value_parser = at_most_u32(MAX_DEPTH))]
         max_depth: Option<u32>,
         /// Worker threads (default: all cores).
-        #[arg(long)]
+        #[arg(long, value_parser = thread_count())]
         threads: Option<usize>,
         /// First seed of the sweep (render k uses seed + k).
         #[arg(long, default_value_t = rondo::bench::accuracy::DEFAULT_SEED)]
         seed: u64,
+    },
+    /// Load, first image and `check` of generated scenes over sizes, stage by stage.
+    Load {
+        /// Scene kinds (flat, unnamed, materials, meshes, textures, placements, prefab, tiles).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "flat,unnamed,materials,meshes,textures,placements,prefab,tiles"
+        )]
+        kinds: Vec<String>,
+        /// Sizes (what grows in each kind).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "1000,10000,100000,1000000"
+        )]
+        sizes: Vec<usize>,
+        /// Also time watch mode on the flat scene of this size (cold start, one-entity edits).
+        #[arg(long)]
+        watch: Option<usize>,
     },
     /// Latency of `watch`: from a saved edit to the first and to the full-quality image, for a
     /// material edit and a geometry edit of the Cornell box (edited in a temporary copy).
@@ -167,7 +192,7 @@ enum BenchCommand {
         #[arg(long, default_value_t = 5)]
         runs: usize,
         /// Samples per pixel of the first pass.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, value_parser = at_least_one_u32())]
         first_spp: u32,
         #[command(flatten)]
         options: RenderArgs,
@@ -177,22 +202,22 @@ enum BenchCommand {
 #[derive(Args)]
 struct RenderArgs {
     /// Samples per pixel (overrides the scene).
-    #[arg(long)]
+    #[arg(long, value_parser = at_most_u32(MAX_SPP))]
     spp: Option<u32>,
     /// Image width (overrides the scene).
-    #[arg(long)]
+    #[arg(long, value_parser = at_most_u32(MAX_SIDE))]
     width: Option<u32>,
     /// Image height (overrides the scene).
-    #[arg(long)]
+    #[arg(long, value_parser = at_most_u32(MAX_SIDE))]
     height: Option<u32>,
     /// Rays per path, camera ray included (overrides the scene).
-    #[arg(long)]
+    #[arg(long, value_parser = at_most_u32(MAX_DEPTH))]
     max_depth: Option<u32>,
     /// Random seed (overrides the scene).
     #[arg(long)]
     seed: Option<u64>,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = thread_count())]
     threads: Option<usize>,
     /// Light-transport method: naive, nee or mis (overrides the scene).
     #[arg(long)]
@@ -220,9 +245,6 @@ impl RenderArgs {
     }
 
     fn renderer(&self) -> Result<Renderer> {
-        if self.threads == Some(0) {
-            bail!("--threads must be at least 1");
-        }
         let mut r = Renderer::new(self.threads, PassPlan::Single)?;
         r.set_overrides(self.overrides());
         r.set_layout(self.layout);
@@ -230,11 +252,51 @@ impl RenderArgs {
     }
 }
 
+/// Parses the command line (clap exits with status 2 on a usage error) and runs it; any other
+/// error exits with status 1.
 fn main() {
     if let Err(e) = run(Cli::parse()) {
-        eprintln!("error: {e:#}");
-        std::process::exit(1);
+        eprintln!("error: {}", rondo::cli::error_text(e.as_ref()));
+        std::process::exit(EXIT_INPUT);
     }
+}
+
+/// `--spp`, `--width`, … : a whole number from 1 to `max`.
+fn at_most_u32(max: u32) -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..=i64::from(max))
+}
+
+/// A whole number ≥ 1.
+fn at_least_one_u32() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..)
+}
+
+/// `--threads`: at least one.
+fn thread_count() -> clap::builder::RangedU64ValueParser<usize> {
+    clap::builder::RangedU64ValueParser::<usize>::new().range(1..)
+}
+
+/// An image output path: `.png` or `.exr`.
+fn image_path(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    match OutputKind::from_path(&path) {
+        Some(_) => Ok(path),
+        None => Err("must end in .png or .exr".into()),
+    }
+}
+
+/// A `.png` output path.
+fn png_path(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    match OutputKind::from_path(&path) {
+        Some(OutputKind::Png) => Ok(path),
+        _ => Err("must end in .png".into()),
+    }
+}
+
+/// The workloads `bench layout` knows.
+fn workload_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(layout::WORKLOADS.iter().map(|w| w.0))
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -272,6 +334,14 @@ fn run(cli: Cli) -> Result<()> {
                     workloads,
                 },
         } => bench_layout(out, max_count, reps, smoke, workloads),
+        Command::Bench {
+            what:
+                BenchCommand::Load {
+                    kinds,
+                    sizes,
+                    watch,
+                },
+        } => rondo::bench::load::main(&kinds, &sizes, watch).map_err(anyhow::Error::msg),
         Command::Diff {
             image,
             reference,
@@ -304,9 +374,18 @@ fn run(cli: Cli) -> Result<()> {
         Command::Watch {
             scene,
             output,
+            serve,
             first_spp,
             options,
-        } => watch(options.watch_options(&scene, &output, first_spp)?),
+        } => {
+            let mut watch_options = options.watch_options(
+                &scene,
+                output.as_deref().unwrap_or(Path::new("")),
+                first_spp,
+            )?;
+            watch_options.output = output;
+            watch(watch_options, serve)
+        }
         Command::Bench {
             what:
                 BenchCommand::Watch {
@@ -326,12 +405,7 @@ fn bench_layout(
     smoke: bool,
     workloads: Vec<String>,
 ) -> Result<()> {
-    if let Some(w) = workloads
-        .iter()
-        .find(|w| !layout::WORKLOADS.iter().any(|k| k.0 == w.as_str()))
-    {
-        bail!("unknown workload {w:?} (expected kernel, traverse, render, extract or pack)");
-    }
+    check_output_dir(&out)?;
     let mut options = if smoke {
         layout::Options::smoke(out)
     } else {
@@ -348,9 +422,7 @@ fn bench_layout(
 }
 
 fn render(scene: &Path, output: &Path, options: &RenderArgs) -> Result<()> {
-    if OutputKind::from_path(output).is_none() {
-        bail!("{}: output must end in .png or .exr", output.display());
-    }
+    check_output_file(output)?;
     let mut r = options.renderer()?;
     let s = r.load(scene)?.settings;
     r.set_output(Some(output), false);
@@ -376,7 +448,7 @@ fn check(scene: &Path) -> Result<()> {
         rondo::scene::load::load_scene(scene, &mut rondo::scene::load::AssetCache::default())?;
     let warnings = rondo::scene::check::check_scene(&loaded);
     for w in &warnings {
-        println!("warning: {}: {w}", scene.display());
+        println!("warning: {w}");
     }
     match warnings.len() {
         0 => println!("{}: no warnings", scene.display()),
@@ -478,12 +550,6 @@ fn summary_from(r: &Renderer, wall: Duration, rays: u64) -> String {
 
 impl RenderArgs {
     fn watch_options(&self, scene: &Path, output: &Path, first_spp: u32) -> Result<WatchOptions> {
-        if self.threads == Some(0) {
-            bail!("--threads must be at least 1");
-        }
-        if first_spp == 0 {
-            bail!("--first-spp must be at least 1");
-        }
         let mut options = WatchOptions::new(scene, output);
         options.threads = self.threads;
         options.first_pass = first_spp;
@@ -493,9 +559,30 @@ impl RenderArgs {
     }
 }
 
-/// `rondo watch`: runs until Ctrl-C, one line per reload on stderr.
-fn watch(options: WatchOptions) -> Result<()> {
-    let watch = Watch::new(options)?;
+/// `rondo watch`: runs until Ctrl-C, one line per reload on stderr; with `serve`, also serves
+/// the live viewer.
+fn watch(options: WatchOptions, serve: Option<Option<String>>) -> Result<()> {
+    if let Some(output) = &options.output {
+        check_output_file(output)?;
+    }
+    let mut watch = Watch::new(options)?;
+    // Viewer hook: start the server and feed it every reload, pass and report.
+    let viewer = match serve {
+        Some(addr) => {
+            let fall_back = addr.is_none();
+            let addr =
+                rondo::serve::parse_addr(addr.as_deref().unwrap_or(rondo::serve::DEFAULT_ADDR))?;
+            let (viewer, feed) = rondo::serve::Viewer::start(addr, fall_back)?;
+            if let Some(warning) = viewer.exposure_warning() {
+                eprintln!("warning: {warning}");
+            }
+            eprintln!("viewer: {}", viewer.url());
+            watch.set_observer(feed.observer());
+            watch.set_progress(feed.progress_bar());
+            Some(viewer)
+        }
+        None => None,
+    };
     let stop = watch.stop_handle();
     ctrlc::set_handler(move || stop.stop()).context("cannot install the Ctrl-C handler")?;
     watch.run(|report| {
@@ -503,6 +590,7 @@ fn watch(options: WatchOptions) -> Result<()> {
             eprintln!("{line}");
         }
     });
+    drop(viewer);
     eprintln!("stopped");
     Ok(())
 }
@@ -545,7 +633,7 @@ fn bench_watch(scene: &Path, runs: usize, first_spp: u32, options: &RenderArgs) 
         format!("{:8.1} ms (min {:8.1})", ms(v[v.len() / 2]), ms(v[0]))
     };
     println!(
-        "watch latency, save -> image written, {} (debounce {} ms, first pass {first_spp} spp), median of {} edits:",
+        "watch latency, save -> image written, {} (loaded when the save completes, else after {} ms quiet; first pass {first_spp} spp), median of {} edits:",
         scene.display(),
         rondo::watch::DEBOUNCE.as_millis(),
         runs.max(1)
@@ -620,6 +708,9 @@ fn time_edits(
 
 /// `rondo diff`: prints the metrics of `image` against `reference`, one per line.
 fn diff(image: &Path, reference: &Path, error_image: Option<&Path>) -> Result<()> {
+    if let Some(path) = error_image {
+        check_output_file(path)?;
+    }
     let d = rondo::metrics::diff_files(image, reference, error_image)?;
     let m = d.metrics;
     println!("rmse     {:.6e}", m.rmse);
@@ -640,9 +731,7 @@ fn diff(image: &Path, reference: &Path, error_image: Option<&Path>) -> Result<()
 
 /// `rondo bench accuracy`: runs the sweep, printing a line per render, then the summary.
 fn bench_accuracy(options: &rondo::bench::accuracy::AccuracyOptions) -> Result<()> {
-    if options.threads == Some(0) {
-        bail!("--threads must be at least 1");
-    }
+    check_output_dir(&options.out)?;
     let report = rondo::bench::accuracy::run(options, |r| {
         eprintln!(
             "{:>5} {:>11} {:>6} spp  {:9.4} s  rmse {:.4e}  rel_mse {:.4e}  mae {:.4e}",

@@ -39,8 +39,9 @@
 //! reported only if none come ([`Report::Deferred`] says that it waits). A half-written save is
 //! therefore never rendered on Linux (its close has not happened) and never reported as an
 //! error that the complete save then replaces. A newer event cancels the pass in flight and
-//! starts over; a metadata-only event (`touch`, `chmod`) reloads without cancelling, and a
-//! reload that changes nothing keeps the render going.
+//! starts over. A metadata-only event (`touch`, the `chmod` at the end of a vim save) neither
+//! cancels nor reloads, unless the last load failed (a `chmod +r` may fix it); and a reload that
+//! changes nothing keeps the render going.
 //!
 //! # The event point
 //!
@@ -133,7 +134,8 @@ pub enum WatchError {
 /// What an event says about a file's contents.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Effect {
-    /// Attributes only (times, permissions): worth a reload, not worth cancelling a pass.
+    /// Attributes only (times, permissions): never cancels a pass; reloads only a scene whose
+    /// last load failed.
     Metadata,
     /// The contents may be in the middle of changing: a write, a truncation, a creation, a
     /// removal or a rename away.
@@ -456,8 +458,9 @@ impl FileWatcher {
 pub struct WatchOptions {
     /// The scene file.
     pub scene: PathBuf,
-    /// The output image (`.png` or `.exr`), rewritten atomically after every pass.
-    pub output: PathBuf,
+    /// The output image (`.png` or `.exr`), rewritten atomically after every pass; `None` to
+    /// write no file (when an [`Observer`] shows the images instead: `watch --serve`).
+    pub output: Option<PathBuf>,
     /// Render threads (all cores if `None`).
     pub threads: Option<usize>,
     /// Settings overrides applied to every load.
@@ -468,24 +471,20 @@ pub struct WatchOptions {
     pub first_pass: u32,
     /// The quiet window (see [`DEBOUNCE`]).
     pub debounce: Duration,
-    /// Load a save as soon as it is complete (the default). `false` waits for the quiet window
-    /// after every save, as rondo did before (kept to measure the difference).
-    pub eager: bool,
 }
 
 impl WatchOptions {
     /// Defaults: all cores, no overrides, the default layout, a first pass of 1 sample, the
-    /// [`DEBOUNCE`] window, eager loads.
+    /// [`DEBOUNCE`] window.
     pub fn new(scene: impl Into<PathBuf>, output: impl Into<PathBuf>) -> Self {
         Self {
             scene: scene.into(),
-            output: output.into(),
+            output: Some(output.into()),
             threads: None,
             overrides: Overrides::default(),
             layout: LayoutKind::default(),
             first_pass: 1,
             debounce: DEBOUNCE,
-            eager: true,
         }
     }
 }
@@ -535,6 +534,31 @@ pub struct ReloadReport {
 }
 
 impl ReloadReport {
+    /// The report of reload `number` of a scene of `spp` samples, before anything happened.
+    fn started(number: u64, trigger: Vec<PathBuf>, spp: u32) -> Self {
+        Self {
+            number,
+            trigger,
+            applied: false,
+            changes: ChangeSummary::default(),
+            bvh_rebuilt: false,
+            primitives: 0,
+            materials_synced: false,
+            textures_decoded: 0,
+            parse: Duration::ZERO,
+            ecs: Duration::ZERO,
+            bvh: Duration::ZERO,
+            first_pass: None,
+            preview: false,
+            first_image: None,
+            full: None,
+            samples: 0,
+            spp,
+            restarts: 0,
+            counters: Counters::default(),
+        }
+    }
+
     /// Whether the render reached the scene's spp (not superseded).
     pub fn completed(&self) -> bool {
         self.full.is_some()
@@ -684,6 +708,8 @@ pub enum Report {
         preview: bool,
         /// Samples per pixel the scene asks for.
         spp: u32,
+        /// What the reload changed in the world.
+        changes: ChangeSummary,
         /// When the write finished.
         at: Instant,
     },
@@ -801,6 +827,8 @@ struct Pending {
     unfinished: HashSet<PathBuf>,
     /// Whether an event completed a file.
     completed: bool,
+    /// Whether anything but metadata may have changed (always, for the first load).
+    content: bool,
     /// Whether events were lost.
     overflow: bool,
     /// Whether the watched directories must be set up afresh.
@@ -817,6 +845,7 @@ impl Pending {
             last: Instant::now(),
             unfinished: HashSet::new(),
             completed: true,
+            content: true,
             overflow: false,
             rearm: false,
             failed: None,
@@ -828,15 +857,18 @@ impl Pending {
         self.failed = None;
         self.overflow |= change.overflow;
         self.rearm |= change.rearm;
+        self.content |= change.overflow;
         for (path, effect) in change.paths {
             match effect {
                 Effect::Metadata => {}
                 Effect::Partial => {
                     self.unfinished.insert(path.clone());
+                    self.content = true;
                 }
                 Effect::Complete => {
                     self.unfinished.remove(&path);
                     self.completed = true;
+                    self.content = true;
                 }
             }
             if !self.paths.contains(&path) {
@@ -847,12 +879,10 @@ impl Pending {
 
     /// When to act: report a failure, load now (every file complete), or load once the files
     /// have been quiet for `window`.
-    fn due(&self, window: Duration, eager: bool) -> Instant {
+    fn due(&self, window: Duration) -> Instant {
         match &self.failed {
             Some((_, at)) => *at,
-            None if eager && self.completed && self.unfinished.is_empty() && !self.overflow => {
-                self.last
-            }
+            None if self.completed && self.unfinished.is_empty() && !self.overflow => self.last,
             None => self.last + window,
         }
     }
@@ -905,8 +935,10 @@ pub struct Watch {
 impl Watch {
     /// Checks the options, builds the renderer and starts watching the scene's directory.
     pub fn new(options: WatchOptions) -> Result<Self, WatchError> {
-        if OutputKind::from_path(&options.output).is_none() {
-            return Err(WatchError::Output(options.output));
+        if let Some(output) = &options.output
+            && OutputKind::from_path(output).is_none()
+        {
+            return Err(WatchError::Output(output.clone()));
         }
         let plan = PassPlan::Progressive {
             first: options.first_pass.max(1),
@@ -920,7 +952,9 @@ impl Watch {
         let cancel = renderer.cancel_flag();
         let (tx, events) = mpsc::channel();
         let mut watcher = FileWatcher::new(cancel.clone(), tx.clone())?;
-        watcher.ignore(&options.output);
+        if let Some(output) = &options.output {
+            watcher.ignore(output);
+        }
         let scene = vec![options.scene.clone()];
         if watch_key(&options.scene).is_err() {
             let message = "its directory does not exist".to_string();
@@ -935,7 +969,11 @@ impl Watch {
                 message,
             });
         }
-        let output_key = watch_key(&options.output).ok().map(|(_, key)| key);
+        let output_key = options
+            .output
+            .as_deref()
+            .and_then(|o| watch_key(o).ok())
+            .map(|(_, key)| key);
         let stop = StopHandle {
             stopped: Arc::new(AtomicBool::new(false)),
             cancel: cancel.clone(),
@@ -970,6 +1008,12 @@ impl Watch {
         self.observer = Some(observer);
     }
 
+    /// Attaches a (hidden) progress bar that the renderer advances by rows rendered (the live
+    /// viewer's progress indicator).
+    pub fn set_progress(&mut self, bar: indicatif::ProgressBar) {
+        self.renderer.set_progress(Some(bar));
+    }
+
     /// Loads and renders the scene, then re-renders on every relevant save until stopped.
     /// Everything that happens is passed to `report` (after the observer, if any).
     pub fn run(mut self, mut report: impl FnMut(Report)) {
@@ -987,6 +1031,11 @@ impl Watch {
             if self.stop.is_stopped() {
                 break;
             }
+            // Times and permissions cannot change what a good scene renders (a `touch`, or the
+            // `chmod` that ends a vim save); they matter only to a load that failed.
+            if self.last_error.is_none() && !self.missing {
+                pending.take_if(|p| !p.content && p.failed.is_none());
+            }
             if let Some(p) = pending.as_mut()
                 && std::mem::take(&mut p.rearm)
             {
@@ -996,7 +1045,7 @@ impl Watch {
                 }
             }
             let now = Instant::now();
-            let due = pending.as_ref().map(|p| p.due(window, self.options.eager));
+            let due = pending.as_ref().map(|p| p.due(window));
             if let Some(p) = pending.take_if(|_| due.is_some_and(|d| d <= now)) {
                 pending = self.act(p, &mut out);
                 continue;
@@ -1024,6 +1073,7 @@ impl Watch {
                 None => {
                     let mut p = Pending::initial();
                     p.completed = false;
+                    p.content = false;
                     p.last = change.at;
                     p.add(change);
                     *pending = Some(p);
@@ -1163,25 +1213,10 @@ impl Watch {
         );
         self.job = Some(Job {
             report: ReloadReport {
-                number,
-                trigger: p.paths.clone(),
-                applied: false,
-                changes: ChangeSummary::default(),
-                bvh_rebuilt: false,
-                primitives: 0,
-                materials_synced: false,
                 textures_decoded: self.renderer.texture_decodes().saturating_sub(decodes),
                 parse,
-                ecs: Duration::ZERO,
-                bvh: Duration::ZERO,
-                first_pass: None,
-                preview: false,
-                first_image: None,
-                full: None,
-                samples: 0,
-                spp: info.settings.spp,
-                restarts: 0,
                 counters: before,
+                ..ReloadReport::started(number, p.paths.clone(), info.settings.spp)
             },
             saved: p.last,
             before,
@@ -1237,7 +1272,13 @@ impl Watch {
                 r.preview = !now.real;
             }
             if now > self.on_disk {
-                match film.write(&self.options.output) {
+                // No output file with `--serve` alone: the observer shows the image.
+                let written = self
+                    .options
+                    .output
+                    .as_deref()
+                    .map_or(Ok(()), |o| film.write_live(o));
+                match written {
                     Ok(()) => {
                         let at = Instant::now();
                         self.on_disk = now;
@@ -1250,13 +1291,14 @@ impl Watch {
                             samples: now.samples,
                             preview: !now.real,
                             spp: r.spp,
+                            changes: r.changes.clone(),
                             at,
                         };
                         out.emit(report, Some(film));
                     }
                     Err(e) => {
-                        let message =
-                            format!("{}: cannot write image: {e}", self.options.output.display());
+                        let output = self.options.output.as_deref().unwrap_or(Path::new(""));
+                        let message = format!("{}: cannot write image: {e}", output.display());
                         out.emit(Report::Warning { message }, None);
                     }
                 }
@@ -1414,6 +1456,24 @@ mod tests {
         let event = notify::Event::new(EventKind::Create(CreateKind::File))
             .add_path(PathBuf::from("/d/scene.ron.swp"));
         assert!(f.change(&event).is_none());
+    }
+
+    #[test]
+    fn a_reload_superseded_before_its_first_frame_says_which_file_changed() {
+        let mut r = ReloadReport::started(4, vec![PathBuf::from("/d/scene.ron")], 16);
+        let line = r.to_string();
+        assert!(
+            line.starts_with("reload 4: scene.ron changed | superseded")
+                && !line.contains("no changes"),
+            "{line}"
+        );
+        r.applied = true;
+        r.changes.reordered = true;
+        r.first_pass = Some((1, Duration::from_millis(9)));
+        r.preview = true;
+        let line = r.to_string();
+        assert!(line.contains("entities reordered |"), "{line}");
+        assert!(line.contains("first pass 9.00 ms (preview)"), "{line}");
     }
 
     #[test]

@@ -280,14 +280,18 @@ fn triangle_and_mesh_lights_estimate_lamberts_irradiance_at_every_distance() {
 
 #[test]
 fn light_selection_frequencies_match_the_power_shares_of_a_hundred_thousand_emitters() {
-    // 10⁵ emitting triangles of areas spread over a factor of 40; each must be picked with
-    // frequency area / total area (the independent truth, in f64): χ² over 10⁵ bins.
+    // 10⁵ emitting triangles: equal ones, as in the review's replication, except every
+    // seventh is 4× larger. Each must be picked with frequency area / total area (the
+    // independent truth, in f64): χ² over 10⁵ bins. A running sum in f32 drifts by ~10⁻³
+    // over such a list (emulated in this order: to 0.99916, so the last emitter is picked
+    // 120× its share; with equal emitters to 1.001, so the last hundred are never picked):
+    // a χ² excess of 10⁴–10⁶ against a standard deviation of 447.
     let n = 100_000usize;
     let mut rng = Rng::new(3, 4);
     let mut prims = Vec::with_capacity(n);
     let mut areas = Vec::with_capacity(n);
     for i in 0..n {
-        let s = 0.05 + rng.next_f32() * 0.3;
+        let s = if i % 7 == 0 { 0.4 } else { 0.2 };
         let o = Vec3::new((i % 300) as f32, (i / 300) as f32, 0.0);
         let p = [o, o + Vec3::new(s, 0.0, 0.0), o + Vec3::new(0.0, s, 0.0)];
         areas.push(0.5 * f64::from(s) * f64::from(s));
@@ -311,7 +315,8 @@ fn light_selection_frequencies_match_the_power_shares_of_a_hundred_thousand_emit
         })
         .collect();
     let total: f64 = area_of_slot.iter().sum();
-    assert!((total - areas.iter().sum::<f64>()).abs() < 1e-6 * total);
+    // (The f32 vertices far from the origin round the areas by up to ~10⁻⁴.)
+    assert!((total - areas.iter().sum::<f64>()).abs() < 1e-3 * total);
     let draws = 20_000_000usize;
     let mut counts = vec![0u32; n];
     for _ in 0..draws {
@@ -330,7 +335,7 @@ fn light_selection_frequencies_match_the_power_shares_of_a_hundred_thousand_emit
         "χ² = {chi2} for {dof} degrees of freedom"
     );
     // The estimator divides by the table's probability, which is the power share to 2⁻²⁴.
-    for (k, area) in area_of_slot.iter().enumerate().take(n) {
+    for (k, area) in area_of_slot.iter().enumerate() {
         let pmf = f64::from(set.selection_pmf(k));
         assert!(
             (pmf - area / total).abs() <= 1.0 / f64::from(1u32 << 24),

@@ -143,6 +143,61 @@ fn a_missing_prefab_names_the_placing_file_line_and_column() {
     assert!(e.contains("s.ron:3:35") && e.contains("nope.ron"), "{e}");
 }
 
+/// `line:col` (1-based) of the first occurrence of `needle` in `text`, counted by hand.
+fn line_col(text: &str, needle: &str) -> String {
+    let at = text.find(needle).unwrap_or_else(|| panic!("no {needle}"));
+    let line = text[..at].matches('\n').count() + 1;
+    let line_start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    format!("{line}:{}", text[line_start..at].chars().count() + 1)
+}
+
+#[test]
+fn a_written_name_equal_to_a_qualified_one_is_an_error_naming_both_places() {
+    // "tall/box" written in the scene and the child "box" of the placement "tall" would be two
+    // entities with one name: one would silently replace the other.
+    let dir = temp_dir("prefab-collision");
+    let prefab = r#"Prefab(
+    materials: { "m": Diffuse(albedo: Constant((1, 1, 1))) },
+    entities: [
+        Entity(name: "box", material: "m", shape: Box(min: (0, 0, 0), max: (1, 1, 1))),
+    ])"#;
+    write_scene(&dir, "tall.ron", prefab);
+    let source = format!(
+        r#"Scene({CAMERA}
+    materials: {{ "w": Diffuse(albedo: Constant((1, 1, 1))) }},
+    entities: [
+        Entity(name: "tall", prefab: "tall.ron"),
+        Entity(name: "tall/box", material: "w", shape: Sphere(center: (0, 0, 0), radius: 1)),
+    ])"#
+    );
+    let scene = write_scene(&dir, "s.ron", &source);
+    let e = load(&scene).expect_err("two entities named tall/box");
+    let written = format!("s.ron:{}", line_col(&source, "\"tall/box\""));
+    let child = format!("tall.ron:{}", line_col(prefab, "\"box\""));
+    assert!(
+        e.contains(&written) && e.contains(&child) && e.contains("\"tall/box\""),
+        "{e}"
+    );
+    // `rondo check` loads the scene the same way: it fails with the same message.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .arg("check")
+        .arg(&scene)
+        .output()
+        .expect("run rondo check");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&written) && stderr.contains(&child),
+        "{stderr}"
+    );
+    // Without the collision (another written name), the scene loads with both entities.
+    let renamed = source.replace("\"tall/box\"", "\"tall-box\"");
+    let scene = write_scene(&dir, "s.ron", &renamed);
+    let loaded = load(&scene).expect("loads");
+    let names: Vec<&str> = loaded.entities.iter().map(|e| e.name.as_str()).collect();
+    assert_eq!(names, ["tall/box", "tall-box"]);
+}
+
 #[test]
 fn a_material_nobody_defines_is_an_error_naming_both_files() {
     let dir = temp_dir("prefab-undefined");

@@ -24,21 +24,35 @@ fn error_of(name: &str, source: &str) -> String {
     }
 }
 
+/// The line and column of an error's `…/scene.ron:line:col: ` prefix.
 fn location(text: &str) -> (usize, usize) {
-    let rest = text
-        .split("scene.ron:")
-        .nth(1)
-        .unwrap_or_else(|| panic!("no location in {text}"));
-    let mut parts = rest.split(':');
-    let line = parts
-        .next()
-        .and_then(|l| l.parse().ok())
-        .unwrap_or_else(|| panic!("{text}"));
-    let col = parts
-        .next()
-        .and_then(|c| c.parse().ok())
-        .unwrap_or_else(|| panic!("{text}"));
+    let (line, col, _) = split(text);
     (line, col)
+}
+
+/// The message after an error's `…/scene.ron:line:col: ` prefix. The temporary path holds the
+/// test's name, so assertions on words must look only here.
+fn message(text: &str) -> &str {
+    split(text).2
+}
+
+fn split(text: &str) -> (usize, usize, &str) {
+    let (_, rest) = text
+        .split_once("scene.ron:")
+        .unwrap_or_else(|| panic!("no location in {text}"));
+    let mut parts = rest.splitn(3, ':');
+    let mut number = || {
+        parts
+            .next()
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no line:col in {text}"))
+    };
+    let (line, col) = (number(), number());
+    let message = parts
+        .next()
+        .and_then(|m| m.strip_prefix(' '))
+        .unwrap_or_else(|| panic!("no message in {text}"));
+    (line, col, message)
 }
 
 #[test]
@@ -76,7 +90,10 @@ fn zero_spp_is_rejected_at_its_value() {
     let src = "Scene(\n    camera: Camera(position: (0, 1, -5), look_at: (0, 1, 0)),\n    settings: Settings(spp: 0),\n)";
     let e = error_of("spp0", src);
     assert_eq!(location(&e).0, 3, "{e}");
-    assert!(e.contains("nonzero") || e.contains("zero"), "{e}");
+    assert_eq!(
+        message(&e),
+        "settings: spp must be a whole number >= 1 (got 0)"
+    );
 }
 
 #[test]
@@ -84,6 +101,10 @@ fn negative_spp_is_rejected() {
     let src = "Scene(\n    camera: Camera(position: (0, 1, -5), look_at: (0, 1, 0)),\n    settings: Settings(spp: -4),\n)";
     let e = error_of("spp-neg", src);
     assert_eq!(location(&e).0, 3, "{e}");
+    assert_eq!(
+        message(&e),
+        "settings: spp must be a whole number >= 1 (got -4)"
+    );
 }
 
 #[test]
@@ -94,7 +115,10 @@ fn nan_and_infinite_numbers_are_rejected_where_they_stand() {
         );
         let e = error_of(name, &src);
         assert_eq!(location(&e).0, 6, "{e}");
-        assert!(e.contains("finite"), "{e}");
+        assert_eq!(
+            message(&e),
+            format!("entity \"#0\": radius must be a finite number (got {value})")
+        );
     }
 }
 
@@ -117,9 +141,17 @@ fn degenerate_shapes_and_cameras_are_rejected() {
         assert_eq!(location(&e).0, 5, "{name}: {e}");
     }
     let up = "Scene(camera: Camera(position: (0, 0, 0), direction: (0, 2, 0), up: (0, 1, 0)))";
-    assert!(error_of("up-parallel", up).contains("parallel"));
+    let e = error_of("up-parallel", up);
+    assert!(
+        message(&e).starts_with("camera: ") && message(&e).contains("parallel"),
+        "{e}"
+    );
     let fov = "Scene(camera: Camera(position: (0, 0, 0), direction: (0, 0, 1), fov: 180))";
-    assert!(error_of("fov", fov).contains("fov"));
+    let e = error_of("fov", fov);
+    assert_eq!(
+        message(&e),
+        "camera: fov must be in (0, 180) degrees (got 180)"
+    );
 }
 
 #[test]
@@ -189,4 +221,173 @@ fn an_explicit_name_cannot_collide_with_a_default_one() {
     let e = error_of("default-name", &src);
     assert!(e.contains("duplicate entity name \"#1\""), "{e}");
     assert_eq!(location(&e).0, 7, "{e}");
+}
+
+/// Loads `materials` and `entities` (RON text of the two fields) after a valid header.
+fn scene_error(name: &str, materials: &str, entities: &str) -> String {
+    error_of(
+        name,
+        &format!(
+            "{HEADER}    materials: {{ {materials} }},\n    entities: [\n        {entities}\n    ],\n)"
+        ),
+    )
+}
+
+const WHITE: &str = "\"w\": Diffuse(albedo: Constant((1, 1, 1)))";
+const BALL: &str =
+    "Entity(name: \"ball\", material: \"w\", shape: Sphere(center: (0, 0, 0), radius: 1))";
+
+#[test]
+fn value_errors_name_the_field_and_the_entity_or_material() {
+    let cases = [
+        (
+            "radius",
+            WHITE.to_string(),
+            BALL.replace("radius: 1", "radius: -1"),
+            (6, "entity \"ball\": radius must be > 0 (got -1)"),
+        ),
+        (
+            "center",
+            WHITE.to_string(),
+            BALL.replace("(0, 0, 0)", "(0, inf, 0)"),
+            (6, "entity \"ball\": center must be a finite number (got inf)"),
+        ),
+        (
+            "ior",
+            format!("{WHITE}, \"glass\": Dielectric(ior: 0)"),
+            BALL.to_string(),
+            (4, "material \"glass\": ior must be > 0 (got 0)"),
+        ),
+        (
+            "intensity",
+            format!("{WHITE}, \"lamp\": Light(emit: Constant((1, 1, 1)), intensity: -2)"),
+            BALL.to_string(),
+            (4, "material \"lamp\": intensity must be >= 0 (got -2)"),
+        ),
+        (
+            "albedo",
+            WHITE.replace("(1, 1, 1)", "(1, -0.5, 1)"),
+            BALL.to_string(),
+            (4, "material \"w\": albedo must be >= 0 (got -0.5)"),
+        ),
+        (
+            "checker",
+            "\"c\": Diffuse(albedo: Checker(scale: NaN, even: Constant((1, 1, 1)), odd: Constant((0, 0, 0))))".to_string(),
+            BALL.replace("\"w\"", "\"c\""),
+            (4, "material \"c\": scale must be a finite number (got NaN)"),
+        ),
+        (
+            "scale",
+            WHITE.to_string(),
+            BALL.replace("radius: 1)", "radius: 1), transform: Transform(scale: (1, 0, 1))"),
+            (6, "entity \"ball\": scale must be non-zero on every axis (got [1, 0, 1])"),
+        ),
+        (
+            "translate",
+            WHITE.to_string(),
+            BALL.replace("radius: 1)", "radius: 1), transform: Transform(translate: (1, 2, NaN))"),
+            (6, "entity \"ball\": translate must be a finite number (got NaN)"),
+        ),
+        (
+            "unnamed",
+            WHITE.to_string(),
+            "Entity(material: \"w\", shape: Triangle(a: (0, 0, 0), b: (1, 0, 0), c: (0, 1, -inf)))"
+                .to_string(),
+            (6, "entity \"#0\": c must be a finite number (got -inf)"),
+        ),
+    ];
+    for (name, materials, entities, (line, expected)) in cases {
+        let e = scene_error(name, &materials, &entities);
+        assert_eq!(message(&e), expected, "{name}: {e}");
+        assert_eq!(location(&e).0, line, "{name}: {e}");
+    }
+}
+
+#[test]
+fn settings_values_are_named() {
+    let cases = [
+        (
+            "width: 0",
+            "settings: width must be a whole number >= 1 (got 0)",
+        ),
+        (
+            "height: 2.5",
+            "settings: height must be a whole number >= 1 (got 2.5)",
+        ),
+        (
+            "max_depth: -1",
+            "settings: max_depth must be a whole number >= 1 (got -1)",
+        ),
+        (
+            "spp: 2000000",
+            "settings: spp must be at most 1048576 (got 2000000)",
+        ),
+        (
+            "background: (0, -1, 0)",
+            "settings: background must be >= 0 (got -1)",
+        ),
+        (
+            "method: Fast",
+            "settings: unknown method \"Fast\" (expected Naive, Nee or Mis)",
+        ),
+    ];
+    for (setting, expected) in cases {
+        let src = format!(
+            "Scene(\n    camera: Camera(position: (0, 1, -5), look_at: (0, 1, 0)),\n    settings: Settings({setting}),\n)"
+        );
+        let e = error_of(&setting.replace([' ', ':', '(', ')', ','], ""), &src);
+        assert_eq!(message(&e), expected, "{e}");
+        assert_eq!(location(&e).0, 3, "{e}");
+    }
+}
+
+#[test]
+fn kind_typos_list_the_kinds_in_the_users_words() {
+    let e = scene_error("material-kind", &WHITE.replace("Diffuse", "Difuse"), BALL);
+    assert_eq!(
+        message(&e),
+        "material \"w\": unknown material kind \"Difuse\" (expected Diffuse, Metal, Glossy, Dielectric or Light)"
+    );
+    assert_eq!(location(&e).0, 4, "{e}");
+    let e = scene_error("shape-kind", WHITE, &BALL.replace("Sphere", "Sphre"));
+    assert_eq!(
+        message(&e),
+        "entity \"ball\": unknown shape kind \"Sphre\" (expected Sphere, Plane, Triangle, Quad, Box or Mesh)"
+    );
+    let e = scene_error("texture-kind", &WHITE.replace("Constant", "Constnt"), BALL);
+    assert_eq!(
+        message(&e),
+        "material \"w\": unknown texture kind \"Constnt\" (expected Constant, Checker or Image)"
+    );
+    let e = scene_error("field", WHITE, &BALL.replace("radius", "radus"));
+    assert_eq!(
+        message(&e),
+        "entity \"ball\": unknown field `radus` in Sphere (expected center or radius)"
+    );
+}
+
+#[test]
+fn value_errors_in_a_prefab_name_its_entity() {
+    let dir = temp_dir("errors-prefab");
+    write_scene(
+        &dir,
+        "part.ron",
+        "Prefab(entities: [\n    Entity(name: \"knob\", material: \"m\", shape: Sphere(center: (0, 0, 0), radius: 0)),\n])",
+    );
+    let path = write_scene(
+        &dir,
+        "scene.ron",
+        &format!(
+            "{HEADER}    materials: {{ \"m\": Diffuse(albedo: Constant((1, 1, 1))) }},\n    entities: [ Entity(name: \"door\", prefab: \"part.ron\") ],\n)"
+        ),
+    );
+    let Err(e) = load_scene(&path, &mut AssetCache::default()) else {
+        panic!("a zero radius is an error");
+    };
+    let e = e.to_string();
+    let (_, rest) = e.split_once("part.ron:2:").unwrap_or_else(|| panic!("{e}"));
+    assert!(
+        rest.ends_with(": entity \"knob\": radius must be > 0 (got 0)"),
+        "{e}"
+    );
 }

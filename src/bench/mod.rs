@@ -5,3 +5,4 @@ pub mod accuracy;
 pub mod chart;
 pub mod instances;
 pub mod layout;
+pub mod load;

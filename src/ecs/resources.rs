@@ -152,8 +152,8 @@ pub struct RenderControl {
     pub progress: Option<indicatif::ProgressBar>,
     /// Russian roulette on (the default; off only to test that it is unbiased).
     pub roulette: bool,
-    /// Progressive renders start with a preview of one sample per `preview_block`² pixels
-    /// (1 = no preview).
+    /// Progressive renders start with a preview of one sample per `preview_block`² pixels, or
+    /// larger blocks for large images (see [`crate::systems::preview_block`]); 1 = no preview.
     pub preview_block: u32,
     /// Layout of the geometry the render reads; images are bit-identical in every layout.
     pub layout: LayoutKind,

@@ -5,19 +5,27 @@
 //! legal but probably a mistake. Each heuristic is simple and stated on its [`WarningKind`]:
 //!
 //! ```text
-//! warning: scenes/stress.ron: material "spare" is defined but no entity uses it
-//! warning: scenes/stress.ron: entities "floor" and "ground" overlap in one plane (z-fighting: …)
+//! warning: scene.ron:9:9: material "spare" is defined but no entity uses it
+//! warning: scene.ron:30:9: entities "floor" and "ground" overlap in one plane (z-fighting: …); "ground" is at scene.ron:31:9
 //! ```
 //!
+//! Each warning names the file, line and column of the entity (or material) it is about, found
+//! by one scan of each file that has a warning ([`super::locate`]).
+//!
 //! The geometry is placed exactly as the renderer places it ([`world_primitives`]), so what is
-//! checked is what would be traced.
+//! checked is what would be traced. Every rule is linear in the scene (or n log n): the coplanar
+//! rule compares only pieces whose boxes share a cell of a multi-level grid, never all pairs.
 
 use std::collections::{BTreeSet, HashMap};
 use std::fmt;
+use std::hash::{BuildHasherDefault, Hasher};
+use std::path::PathBuf;
+use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
-use crate::ecs::components::Shape;
+use crate::ecs::components::{MeshData, MeshRef, Shape, Transform};
+use crate::geometry::instance::BlasCache;
 use crate::geometry::packed::{Geometry, Primitive};
 use crate::geometry::ray::{Ray, gamma, spawn_origin};
 use crate::shading::material::Material;
@@ -26,7 +34,9 @@ use crate::shading::sampling::{Frame, cosine_hemisphere};
 use crate::shading::texture::Texture;
 use crate::systems::world_primitives;
 
+use super::error::Location;
 use super::load::LoadedScene;
+use super::locate::Places;
 
 /// What a [`Warning`] is about, with the rule that raises it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -36,6 +46,9 @@ pub enum WarningKind {
     /// their size, or 8 float steps of their coordinates, whichever is larger), overlap with
     /// positive area (an infinite plane overlaps anything in it), and the overlap can be seen:
     /// their geometric normals point the same way (a rug on a floor), or one of them is glass.
+    /// Mesh placements take part with their triangles up to [`MESH_TRIANGLE_BUDGET`] in all
+    /// (in scene order); placements beyond it are not compared (memory for every triangle of
+    /// every placement of a big mesh would grow with the product).
     /// Which one a ray sees is then decided by rounding: the image shows a speckled mix
     /// (z-fighting). Opposite normals on opaque surfaces are two solids touching (a box standing
     /// on a floor): the shared area is hidden between them and is not reported.
@@ -62,6 +75,8 @@ pub enum WarningKind {
 
 /// Tolerance of [`WarningKind::CoplanarOverlap`], relative to the larger surface's size.
 pub const COPLANAR_TOLERANCE: f32 = 1e-5;
+/// Mesh triangles, summed over placements, that [`WarningKind::CoplanarOverlap`] compares.
+pub const MESH_TRIANGLE_BUDGET: usize = 1 << 21;
 /// Tolerance of [`WarningKind::NonPlanarQuad`], relative to the quad's longest diagonal.
 pub const NON_PLANAR_TOLERANCE: f32 = 1e-4;
 
@@ -72,31 +87,124 @@ pub struct Warning {
     pub kind: WarningKind,
     /// What is wrong, naming the entities or materials concerned.
     pub message: String,
+    /// The file of the entity or material it is about (the scene or a prefab).
+    pub path: PathBuf,
+    /// Where in that file, if the scene was read from text.
+    pub location: Option<Location>,
 }
 
 impl fmt::Display for Warning {
+    /// `path:line:col: message`, as errors are written.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.message)
+        write!(f, "{}", self.path.display())?;
+        if let Some(l) = self.location {
+            write!(f, ":{}:{}", l.line, l.col)?;
+        }
+        write!(f, ": {}", self.message)
     }
+}
+
+/// Work counted by [`check_counted`], for the scaling tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CheckStats {
+    /// Pairs of planar pieces compared by the coplanar rule.
+    pub comparisons: u64,
+    /// Bytes of scene text scanned to locate the warnings.
+    pub located_bytes: u64,
 }
 
 /// Everything suspicious about `scene`, in a stable order (by kind, then by the order the
 /// entities and materials appear).
 pub fn check_scene(scene: &LoadedScene) -> Vec<Warning> {
-    let placed: Vec<Vec<Primitive>> = scene
-        .entities
-        .iter()
-        .map(|e| world_primitives(&e.shape, &e.transform))
-        .collect();
-    let mut warnings = Vec::new();
-    coplanar_overlaps(scene, &placed, &mut warnings);
-    lights_facing_away(scene, &placed, &mut warnings);
-    non_planar_quads(scene, &mut warnings);
-    unused_materials(scene, &mut warnings);
-    outside_view(scene, &placed, &mut warnings);
-    albedo_above_one(scene, &mut warnings);
+    check_counted(scene).0
+}
+
+/// [`check_scene`], with the work it did.
+pub fn check_counted(scene: &LoadedScene) -> (Vec<Warning>, CheckStats) {
+    let mut out = Out {
+        scene,
+        places: Places::new(&scene.sources),
+        warnings: Vec::new(),
+    };
+    let comparisons = coplanar_overlaps(scene, &mut out);
+    lights_facing_away(scene, &mut out);
+    non_planar_quads(scene, &mut out);
+    unused_materials(scene, &mut out);
+    outside_view(scene, &mut out);
+    albedo_above_one(scene, &mut out);
+    let stats = CheckStats {
+        comparisons,
+        located_bytes: out.places.bytes_scanned(),
+    };
+    let mut warnings = out.warnings;
     warnings.sort_by_key(|w| w.kind);
-    warnings
+    (warnings, stats)
+}
+
+/// The warnings found so far, with the locators that place them.
+struct Out<'a> {
+    scene: &'a LoadedScene,
+    places: Places<'a>,
+    warnings: Vec<Warning>,
+}
+
+impl Out<'_> {
+    /// File and location of entity `i`.
+    fn entity_place(&mut self, i: usize) -> (PathBuf, Option<Location>) {
+        let Some(o) = self.scene.origins.get(i) else {
+            return (self.scene.path.clone(), None);
+        };
+        let name = &self.scene.entities[i].name;
+        let location = self
+            .places
+            .locator(o.file)
+            .and_then(|l| o.offset(name, l).map(|off| l.location(off)));
+        let path = self.places.path(o.file).unwrap_or(&self.scene.path);
+        (path.to_path_buf(), location)
+    }
+
+    /// `; "name" is at path:line:col` of entity `i`, or nothing if it has no location.
+    fn entity_at(&mut self, i: usize) -> String {
+        match self.entity_place(i) {
+            (path, Some(l)) => format!(
+                "; \"{}\" is at {}:{}:{}",
+                self.scene.entities[i].name,
+                path.display(),
+                l.line,
+                l.col
+            ),
+            (_, None) => String::new(),
+        }
+    }
+
+    /// A warning about entity `i`.
+    fn entity(&mut self, i: usize, kind: WarningKind, message: String) {
+        let (path, location) = self.entity_place(i);
+        self.warnings.push(Warning {
+            kind,
+            message,
+            path,
+            location,
+        });
+    }
+
+    /// A warning about the material with table key `key`.
+    fn material(&mut self, key: &str, kind: WarningKind, message: String) {
+        let origin = self.scene.material_origins.get(key);
+        let location = origin.and_then(|(file, name)| {
+            let l = self.places.locator(*file)?;
+            l.first(name).map(|off| l.location(off))
+        });
+        let path = origin
+            .and_then(|(file, _)| self.places.path(*file))
+            .unwrap_or(&self.scene.path);
+        self.warnings.push(Warning {
+            kind,
+            message,
+            path: path.to_path_buf(),
+            location,
+        });
+    }
 }
 
 /// A planar piece of an entity: a triangle, or an infinite plane (`None` vertices).
@@ -108,19 +216,34 @@ struct Flat {
 }
 
 impl Flat {
+    /// Longest edge (0 for a plane).
+    fn size(&self) -> f32 {
+        self.vertices.map_or(0.0, |[a, b, c]| {
+            (a - b).length().max((b - c).length()).max((c - a).length())
+        })
+    }
+
+    /// Largest coordinate magnitude.
+    fn magnitude(&self) -> f32 {
+        match self.vertices {
+            Some([a, b, c]) => a.abs().max(b.abs()).max(c.abs()).max_element(),
+            None => self.point.abs().max_element(),
+        }
+    }
+
     /// Distance within which another surface counts as lying in this one's plane.
     fn tolerance(&self, other: &Flat) -> f32 {
-        let size = |f: &Flat| {
-            f.vertices.map_or(0.0, |[a, b, c]| {
-                (a - b).length().max((b - c).length()).max((c - a).length())
-            })
-        };
-        let magnitude = |f: &Flat| match f.vertices {
-            Some([a, b, c]) => a.abs().max(b.abs()).max(c.abs()).max_element(),
-            None => f.point.abs().max_element(),
-        };
-        let step = 8.0 * f32::EPSILON * magnitude(self).max(magnitude(other));
-        (COPLANAR_TOLERANCE * size(self).max(size(other))).max(step)
+        let step = 8.0 * f32::EPSILON * self.magnitude().max(other.magnitude());
+        (COPLANAR_TOLERANCE * self.size().max(other.size())).max(step)
+    }
+
+    /// A triangle's bounding box grown by its own share of [`Self::tolerance`]: the pair's
+    /// tolerance is at most the larger share, so two pieces that overlap within it have
+    /// intersecting grown boxes.
+    fn grown_box(&self) -> Option<(Vec3, Vec3)> {
+        let [a, b, c] = self.vertices?;
+        let own = (COPLANAR_TOLERANCE * self.size()).max(8.0 * f32::EPSILON * self.magnitude());
+        Some((a.min(b).min(c) - own, a.max(b).max(c) + own))
     }
 
     /// Whether every vertex of `other` (its point, for a plane) lies within `tol` of this plane.
@@ -156,13 +279,24 @@ fn triangles_overlap(a: [Vec3; 3], b: [Vec3; 3], normal: Vec3, tol: f32) -> bool
     !edges(&a).into_iter().chain(edges(&b)).any(separated_by)
 }
 
-/// [`WarningKind::CoplanarOverlap`]: planar pieces are bucketed by their quantised normal (the
-/// 27 neighbouring buckets are searched too), so only near-parallel pairs are compared.
-fn coplanar_overlaps(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut Vec<Warning>) {
+/// [`WarningKind::CoplanarOverlap`]. Triangles are found through a multi-level grid (a
+/// "loose" grid: each grown box is filed once, by its centre, at the level whose cells are at
+/// least 1.25 times its extent), so a triangle is compared only with triangles in the 27 cells
+/// around it on its own and coarser levels: linear in the scene for pieces of any sizes.
+/// Infinite planes are compared with every piece of a near-parallel normal (planes are few).
+/// Returns the number of pairs compared.
+fn coplanar_overlaps(scene: &LoadedScene, out: &mut Out) -> u64 {
     let mut flats = Vec::new();
-    for (entity, prims) in placed.iter().enumerate() {
-        for prim in prims {
-            match *prim {
+    let mut budget = MESH_TRIANGLE_BUDGET;
+    for (entity, e) in scene.entities.iter().enumerate() {
+        if let Shape::Mesh(m) = &e.shape {
+            if m.data.triangles.len() > budget {
+                continue;
+            }
+            budget -= m.data.triangles.len();
+        }
+        for prim in world_primitives(&e.shape, &e.transform) {
+            match prim {
                 Primitive::Triangle { p, .. } => {
                     let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
                     if n != Vec3::ZERO {
@@ -186,7 +320,41 @@ fn coplanar_overlaps(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut V
             }
         }
     }
-    // A normal and its opposite are the same plane orientation: fold them together.
+    let see_through = |entity: usize| {
+        matches!(
+            scene.materials.get(&scene.entities[entity].material),
+            Some(Material::Dielectric { .. })
+        )
+    };
+    let mut pairs = BTreeSet::new();
+    let mut comparisons = 0u64;
+    let mut compare = |f: &Flat, g: &Flat| {
+        if g.entity == f.entity {
+            return;
+        }
+        let pair = (f.entity.min(g.entity), f.entity.max(g.entity));
+        if pairs.contains(&pair) || f.normal.dot(g.normal).abs() < 1.0 - 1e-6 {
+            return;
+        }
+        let seen = f.normal.dot(g.normal) > 0.0 || see_through(f.entity) || see_through(g.entity);
+        if !seen {
+            return;
+        }
+        let tol = f.tolerance(g);
+        if !(f.holds(g, tol) && g.holds(f, tol)) {
+            return;
+        }
+        let overlap = match (f.vertices, g.vertices) {
+            (Some(a), Some(b)) => triangles_overlap(a, b, f.normal, tol),
+            _ => true,
+        };
+        if overlap {
+            pairs.insert(pair);
+        }
+    };
+
+    // Planes against everything of a near-parallel normal: pieces are bucketed by their
+    // quantised normal, a normal and its opposite folded together (27 neighbouring buckets).
     let key = |n: Vec3| {
         let n = if n.x < 0.0 || (n.x == 0.0 && (n.y < 0.0 || (n.y == 0.0 && n.z < 0.0))) {
             -n
@@ -195,70 +363,144 @@ fn coplanar_overlaps(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut V
         };
         (n * 1000.0).round().as_ivec3()
     };
-    let mut buckets: HashMap<glam::IVec3, Vec<usize>> = HashMap::new();
-    for (i, f) in flats.iter().enumerate() {
-        buckets.entry(key(f.normal)).or_default().push(i);
-    }
-    let see_through = |entity: usize| {
-        matches!(
-            scene.materials.get(&scene.entities[entity].material),
-            Some(Material::Dielectric { .. })
-        )
-    };
-    let mut pairs = BTreeSet::new();
-    for (i, f) in flats.iter().enumerate() {
-        for k in [key(f.normal), key(-f.normal)] {
-            for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        let Some(others) = buckets.get(&(k + glam::IVec3::new(dx, dy, dz))) else {
-                            continue;
-                        };
-                        for &j in others {
-                            let g = &flats[j];
-                            if j <= i || g.entity == f.entity {
-                                continue;
-                            }
-                            let pair = (f.entity.min(g.entity), f.entity.max(g.entity));
-                            if pairs.contains(&pair) || f.normal.dot(g.normal).abs() < 1.0 - 1e-6 {
-                                continue;
-                            }
-                            let seen = f.normal.dot(g.normal) > 0.0
-                                || see_through(f.entity)
-                                || see_through(g.entity);
-                            if !seen {
-                                continue;
-                            }
-                            let tol = f.tolerance(g);
-                            if !(f.holds(g, tol) && g.holds(f, tol)) {
-                                continue;
-                            }
-                            let overlap = match (f.vertices, g.vertices) {
-                                (Some(a), Some(b)) => triangles_overlap(a, b, f.normal, tol),
-                                _ => true,
-                            };
-                            if overlap {
-                                pairs.insert(pair);
-                            }
+    if flats.iter().any(|f| f.vertices.is_none()) {
+        let mut buckets: HashMap<glam::IVec3, Vec<usize>> = HashMap::new();
+        for (i, f) in flats.iter().enumerate() {
+            buckets.entry(key(f.normal)).or_default().push(i);
+        }
+        for (i, f) in flats
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| f.vertices.is_none())
+        {
+            for k in [key(f.normal), key(-f.normal)] {
+                for d in NEIGHBOURS {
+                    for &j in buckets
+                        .get(&(k + glam::IVec3::from(d)))
+                        .into_iter()
+                        .flatten()
+                    {
+                        // A plane pair is met from both planes: compare it once.
+                        if flats[j].vertices.is_some() || j > i {
+                            comparisons += 1;
+                            compare(&flats[i.min(j)], &flats[i.max(j)]);
                         }
                     }
                 }
             }
         }
     }
+
+    // Triangles against triangles, through the grid. Cells are at least 2.5 times the
+    // extent of what they hold, so the centres of two overlapping boxes are less than 0.4 cell
+    // apart on every axis: 2 cells per axis (the centre's and the nearer neighbour) hold every
+    // candidate.
+    let boxes: Vec<Option<(Vec3, Vec3)>> = flats.iter().map(Flat::grown_box).collect();
+    let level_of =
+        |(lo, hi): (Vec3, Vec3)| (2.5 * f64::from((hi - lo).max_element())).log2().ceil() as i32;
+    let centre_in =
+        |(lo, hi): (Vec3, Vec3), level: i32| (lo + hi).as_dvec3() * 0.5 / f64::from(level).exp2();
+    let mut grid: HashMap<(i32, [i64; 3]), Vec<usize>, BuildHasherDefault<CellHasher>> =
+        HashMap::default();
+    let mut levels = BTreeSet::new();
+    for (i, b) in boxes.iter().enumerate() {
+        if let Some(b) = *b {
+            let level = level_of(b);
+            levels.insert(level);
+            let c = centre_in(b, level).floor().as_i64vec3().to_array();
+            grid.entry((level, c)).or_default().push(i);
+        }
+    }
+    for (i, b) in boxes.iter().enumerate() {
+        let Some(b) = *b else { continue };
+        let own = level_of(b);
+        for &level in levels.range(own..) {
+            let c = centre_in(b, level);
+            let cell = c.floor();
+            let side = (c - cell).cmpge(glam::DVec3::splat(0.5));
+            let cell = cell.as_i64vec3();
+            let near = glam::I64Vec3::select(side, cell + 1, cell - 1);
+            for k in 0..8 {
+                let pick = glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0);
+                let key = (level, glam::I64Vec3::select(pick, near, cell).to_array());
+                for &j in grid.get(&key).into_iter().flatten() {
+                    // A pair on one level is met from both sides: compare it once.
+                    if level == own && j <= i {
+                        continue;
+                    }
+                    comparisons += 1;
+                    let Some((lo, hi)) = boxes[j] else { continue };
+                    if lo.cmple(b.1).all() && b.0.cmple(hi).all() {
+                        compare(&flats[i.min(j)], &flats[i.max(j)]);
+                    }
+                }
+            }
+        }
+    }
     for (a, b) in pairs {
-        out.push(Warning {
-            kind: WarningKind::CoplanarOverlap,
-            message: format!(
-                "entities \"{}\" and \"{}\" overlap in one plane (z-fighting: which one is seen is decided by rounding)",
+        let at = out.entity_at(b);
+        out.entity(
+            a,
+            WarningKind::CoplanarOverlap,
+            format!(
+                "entities \"{}\" and \"{}\" overlap in one plane (z-fighting: which one is seen is decided by rounding){at}",
                 scene.entities[a].name, scene.entities[b].name
             ),
-        });
+        );
+    }
+    comparisons
+}
+
+/// A multiply-rotate hash (as rustc's FxHash) for the grid's integer cell keys: SipHash took
+/// most of the coplanar rule's time.
+#[derive(Default)]
+struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+
+    fn write_i64(&mut self, v: i64) {
+        self.write_u64(v as u64);
+    }
+
+    fn write_i32(&mut self, v: i32) {
+        self.write_u64(u64::from(v as u32));
+    }
+
+    fn write_usize(&mut self, v: usize) {
+        self.write_u64(v as u64);
+    }
+
+    fn finish(&self) -> u64 {
+        self.0
     }
 }
 
+/// The 27 offsets of a cell and its neighbours.
+const NEIGHBOURS: [[i32; 3]; 27] = {
+    let mut n = [[0; 3]; 27];
+    let mut k = 0;
+    while k < 27 {
+        n[k] = [
+            (k % 3) as i32 - 1,
+            ((k / 3) % 3) as i32 - 1,
+            (k / 9) as i32 - 1,
+        ];
+        k += 1;
+    }
+    n
+};
+
 /// [`WarningKind::LightFacesAway`].
-fn lights_facing_away(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut Vec<Warning>) {
+fn lights_facing_away(scene: &LoadedScene, out: &mut Out) {
     let one_sided = |name: &str| {
         matches!(
             scene.materials.get(name),
@@ -268,11 +510,25 @@ fn lights_facing_away(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut 
     if !scene.entities.iter().any(|e| one_sided(&e.material)) {
         return;
     }
-    let prims: Vec<(u32, Primitive)> = placed
-        .iter()
-        .enumerate()
-        .flat_map(|(i, p)| p.iter().map(move |p| (i as u32, p.clone())))
-        .collect();
+    // Meshes are placed as instances of one shared BVH each, as the renderer places them.
+    let mut blas = BlasCache::default();
+    let mut prims: Vec<(u32, Primitive)> = Vec::with_capacity(scene.entities.len());
+    for (i, e) in scene.entities.iter().enumerate() {
+        match &e.shape {
+            Shape::Mesh(m) => prims.push((
+                i as u32,
+                Primitive::Instance {
+                    blas: blas.get(&m.data),
+                    world_from_object: e.transform.0,
+                },
+            )),
+            shape => prims.extend(
+                world_primitives(shape, &e.transform)
+                    .into_iter()
+                    .map(|p| (i as u32, p)),
+            ),
+        }
+    }
     let geometry = Geometry::build(&prims);
     let mut rng = Rng::new(0x5eed, 7);
     for (i, e) in scene.entities.iter().enumerate() {
@@ -282,8 +538,8 @@ fn lights_facing_away(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut 
         // Points on the emitter with their front normals: a few per primitive, at most 64
         // primitives (a mesh is sampled, not swept).
         let mut points = Vec::new();
-        for prim in placed[i].iter().take(64) {
-            match *prim {
+        for prim in first_primitives(&e.shape, &e.transform, 64) {
+            match prim {
                 Primitive::Triangle { p, .. } => {
                     let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
                     for (b1, b2) in [(1.0 / 3.0, 1.0 / 3.0), (0.1, 0.1), (0.8, 0.1), (0.1, 0.8)] {
@@ -296,7 +552,7 @@ fn lights_facing_away(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut 
                     }
                 }
                 Primitive::Plane { point, normal } => points.push((point, normal)),
-                // `world_primitives` flattens meshes, so no instance reaches this check.
+                // `first_primitives` flattens meshes, so no instance reaches this check.
                 Primitive::Instance { .. } => {}
             }
         }
@@ -315,20 +571,41 @@ fn lights_facing_away(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut 
             })
         });
         if !sees_something {
-            out.push(Warning {
-                kind: WarningKind::LightFacesAway,
-                message: format!(
+            out.entity(
+                i,
+                WarningKind::LightFacesAway,
+                format!(
                     "entity \"{}\": one-sided light \"{}\" faces away from everything (nothing in front of its emitting side: it lights nothing; is its normal flipped?)",
                     e.name, e.material
                 ),
-            });
+            );
         }
     }
 }
 
+/// The world-space primitives of `shape`, at most `count` (a mesh's first triangles, without
+/// transforming the rest).
+fn first_primitives(shape: &Shape, transform: &Transform, count: usize) -> Vec<Primitive> {
+    match shape {
+        Shape::Mesh(m) if m.data.triangles.len() > count => {
+            let head = MeshData {
+                positions: m.data.positions.clone(),
+                triangles: m.data.triangles[..count].to_vec(),
+                ..MeshData::default()
+            };
+            let shape = Shape::Mesh(MeshRef {
+                path: m.path.clone(),
+                data: Arc::new(head),
+            });
+            world_primitives(&shape, transform)
+        }
+        shape => world_primitives(shape, transform),
+    }
+}
+
 /// [`WarningKind::NonPlanarQuad`].
-fn non_planar_quads(scene: &LoadedScene, out: &mut Vec<Warning>) {
-    for e in &scene.entities {
+fn non_planar_quads(scene: &LoadedScene, out: &mut Out) {
+    for (i, e) in scene.entities.iter().enumerate() {
         let Shape::Quad { a, b, c, d } = e.shape else {
             continue;
         };
@@ -338,33 +615,35 @@ fn non_planar_quads(scene: &LoadedScene, out: &mut Vec<Warning>) {
         let diagonal = (c - a).length().max((d - b).length());
         let off = (d - a).dot(n).abs();
         if off > NON_PLANAR_TOLERANCE * diagonal {
-            out.push(Warning {
-                kind: WarningKind::NonPlanarQuad,
-                message: format!(
+            out.entity(
+                i,
+                WarningKind::NonPlanarQuad,
+                format!(
                     "entity \"{}\": quad is not planar: d is {off:.3e} off the plane of a, b, c ({:.2}% of its diagonal); it renders as two triangles folded along a–c",
                     e.name,
                     100.0 * off / diagonal
                 ),
-            });
+            );
         }
     }
 }
 
 /// [`WarningKind::UnusedMaterial`].
-fn unused_materials(scene: &LoadedScene, out: &mut Vec<Warning>) {
+fn unused_materials(scene: &LoadedScene, out: &mut Out) {
     let used: BTreeSet<&str> = scene.entities.iter().map(|e| e.material.as_str()).collect();
     for name in scene.materials.keys() {
         if !used.contains(name.as_str()) {
-            out.push(Warning {
-                kind: WarningKind::UnusedMaterial,
-                message: format!("material \"{name}\" is defined but no entity uses it"),
-            });
+            out.material(
+                name,
+                WarningKind::UnusedMaterial,
+                format!("material \"{name}\" is defined but no entity uses it"),
+            );
         }
     }
 }
 
 /// [`WarningKind::OutsideView`].
-fn outside_view(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut Vec<Warning>) {
+fn outside_view(scene: &LoadedScene, out: &mut Out) {
     let cam = &scene.camera;
     let forward = cam.direction.normalize();
     let right = forward.cross(cam.up).normalize();
@@ -372,6 +651,7 @@ fn outside_view(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut Vec<Wa
     let aspect = scene.settings.width as f32 / scene.settings.height as f32;
     let tan_v = 2.0 * (0.5 * cam.fov.to_radians()).tan();
     let tan_h = tan_v * aspect;
+    let mut bounds: HashMap<usize, Shape> = HashMap::new();
     for (i, e) in scene.entities.iter().enumerate() {
         if scene
             .materials
@@ -380,11 +660,27 @@ fn outside_view(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut Vec<Wa
         {
             continue;
         }
-        // Bounding sphere of the entity's primitives; planes are everywhere.
+        // Bounding sphere of the entity's primitives (of a mesh's bounding box); planes are
+        // everywhere.
         let mut points = Vec::new();
         let mut infinite = false;
-        for prim in &placed[i] {
-            match *prim {
+        let prims = match &e.shape {
+            Shape::Mesh(m) => {
+                let bounds = bounds
+                    .entry(Arc::as_ptr(&m.data) as usize)
+                    .or_insert_with(|| {
+                        let p = &m.data.positions;
+                        Shape::Box {
+                            min: p.iter().fold(Vec3::INFINITY, |a, &v| a.min(v)),
+                            max: p.iter().fold(Vec3::NEG_INFINITY, |a, &v| a.max(v)),
+                        }
+                    });
+                world_primitives(bounds, &e.transform)
+            }
+            shape => world_primitives(shape, &e.transform),
+        };
+        for prim in prims {
+            match prim {
                 Primitive::Triangle { p, .. } => points.extend(p),
                 Primitive::Sphere { center, radius, .. } => {
                     points.extend([center - Vec3::splat(radius), center + Vec3::splat(radius)]);
@@ -407,13 +703,14 @@ fn outside_view(scene: &LoadedScene, placed: &[Vec<Primitive>], out: &mut Vec<Wa
         let beyond = |lateral: f32, tan: f32| (lateral.abs() - z * tan) / (1.0 + tan * tan).sqrt();
         let outside = z + radius < 0.0 || beyond(x, tan_h) > radius || beyond(y, tan_v) > radius;
         if outside {
-            out.push(Warning {
-                kind: WarningKind::OutsideView,
-                message: format!(
+            out.entity(
+                i,
+                WarningKind::OutsideView,
+                format!(
                     "entity \"{}\" is far outside the camera's view (it can still cast shadows or be reflected)",
                     e.name
                 ),
-            });
+            );
         }
     }
 }
@@ -428,7 +725,7 @@ fn max_component(t: &Texture) -> f32 {
 }
 
 /// [`WarningKind::AlbedoAboveOne`].
-fn albedo_above_one(scene: &LoadedScene, out: &mut Vec<Warning>) {
+fn albedo_above_one(scene: &LoadedScene, out: &mut Out) {
     for (name, m) in &scene.materials {
         let albedo = match m {
             Material::Diffuse { albedo }
@@ -438,12 +735,13 @@ fn albedo_above_one(scene: &LoadedScene, out: &mut Vec<Warning>) {
         };
         let max = max_component(albedo);
         if max > 1.0 {
-            out.push(Warning {
-                kind: WarningKind::AlbedoAboveOne,
-                message: format!(
+            out.material(
+                name,
+                WarningKind::AlbedoAboveOne,
+                format!(
                     "material \"{name}\": albedo component {max} is above 1 (it reflects more light than it receives)"
                 ),
-            });
+            );
         }
     }
 }
@@ -502,6 +800,10 @@ mod tests {
                 })
                 .collect(),
             dependencies: Vec::new(),
+            sources: Vec::new(),
+            origins: Vec::new(),
+            material_origins: BTreeMap::new(),
+            stats: Default::default(),
         }
     }
 
@@ -841,5 +1143,96 @@ mod tests {
         let w = check_scene(&s);
         assert_eq!(kinds(&w), vec![WarningKind::OutsideView; 2], "{w:?}");
         assert!(w[0].message.contains("\"behind\"") && w[1].message.contains("\"beside\""));
+    }
+
+    #[test]
+    fn the_grid_finds_exactly_the_pairs_that_comparing_all_pairs_finds() {
+        // Quads of sizes over four orders of magnitude, in two planes, many overlapping, some
+        // tilted a little; the rule's pairs must equal a brute force over every triangle pair
+        // with the same predicate.
+        let mut rng = Rng::new(11, 3);
+        let mut r = || rng.next_f32();
+        let mut entities = Vec::new();
+        for k in 0..300 {
+            let size = 10f32.powf(4.0 * r() - 2.0);
+            let (x, z) = (20.0 * r() - 10.0, 20.0 * r() - 10.0);
+            let y = if k % 2 == 0 { 0.0 } else { 1.0 };
+            let tilt = if k % 7 == 0 { 1e-3 } else { 0.0 };
+            let q = quad(
+                [x, y, z],
+                [x, y + tilt * size, z + size],
+                [x + size, y + tilt * size, z + size],
+                [x + size, y, z],
+            );
+            entities.push((format!("q{k}"), q));
+        }
+        let names: Vec<String> = entities.iter().map(|e| e.0.clone()).collect();
+        let s = scene(
+            &[("w", diffuse(0.5))],
+            entities
+                .iter()
+                .enumerate()
+                .map(|(k, (_, q))| (names[k].as_str(), "w", q.clone(), ID))
+                .collect(),
+        );
+        let mut out = Out {
+            scene: &s,
+            places: Places::new(&s.sources),
+            warnings: Vec::new(),
+        };
+        let comparisons = coplanar_overlaps(&s, &mut out);
+        let found: BTreeSet<String> = out.warnings.iter().map(|w| w.message.clone()).collect();
+
+        let flats: Vec<(usize, [Vec3; 3])> = s
+            .entities
+            .iter()
+            .enumerate()
+            .flat_map(|(i, e)| {
+                world_primitives(&e.shape, &e.transform)
+                    .into_iter()
+                    .filter_map(move |p| match p {
+                        Primitive::Triangle { p, .. } => Some((i, p)),
+                        _ => None,
+                    })
+            })
+            .collect();
+        let flat = |(entity, p): (usize, [Vec3; 3])| Flat {
+            entity,
+            normal: (p[1] - p[0]).cross(p[2] - p[0]).normalize(),
+            point: p[0],
+            vertices: Some(p),
+        };
+        let mut expected = BTreeSet::new();
+        for (i, &a) in flats.iter().enumerate() {
+            for &b in &flats[i + 1..] {
+                let (f, g) = (flat(a), flat(b));
+                let tol = f.tolerance(&g);
+                if f.entity != g.entity
+                    && f.normal.dot(g.normal) > 1.0 - 1e-6
+                    && f.holds(&g, tol)
+                    && g.holds(&f, tol)
+                    && triangles_overlap(a.1, b.1, f.normal, tol)
+                {
+                    expected.insert(format!(
+                        "entities \"{}\" and \"{}\" overlap in one plane (z-fighting: which one is seen is decided by rounding)",
+                        names[f.entity.min(g.entity)],
+                        names[f.entity.max(g.entity)]
+                    ));
+                }
+            }
+        }
+        assert!(
+            expected.len() > 20,
+            "the test needs overlaps: {}",
+            expected.len()
+        );
+        assert_eq!(found, expected);
+        let all_pairs = (flats.len() * (flats.len() - 1) / 2) as u64;
+        // Most quads are far apart, but the big ones cover much of the square: well under all
+        // pairs, not far under (tests/scaling.rs measures the growth).
+        assert!(
+            comparisons < all_pairs * 2 / 3,
+            "{comparisons} of {all_pairs}"
+        );
     }
 }

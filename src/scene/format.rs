@@ -1,15 +1,39 @@
 //! Serde mirror of the RON scene format. Values are validated while they are parsed, so a bad
-//! value is reported at its own line and column by the RON parser.
+//! value is reported at its own line and column by the RON parser, with the field it belongs to
+//! and the entity or material it is part of ([`parse`]).
 
 use std::collections::BTreeMap;
-use std::num::NonZeroU32;
+use std::path::Path;
 
 use glam::{Affine3A, EulerRot, Mat3, Quat, Vec3};
-use serde::de::Error as _;
+use serde::de::{DeserializeOwned, Error as _};
 use serde::{Deserialize, Deserializer};
 
 use crate::ecs::components::Shape;
+use crate::scene::error::{SceneError, VALUE};
 use crate::shading::sampler::SamplerKind;
+
+/// Parses the RON text `source` of the scene or prefab file `path`. RON's `implicit_some` is on,
+/// so optional fields are written bare. An error names the field at fault and the entity or
+/// material that holds it, from the path of the value being parsed when it failed.
+pub fn parse<T: DeserializeOwned>(path: &Path, source: &str) -> Result<T, SceneError> {
+    let options =
+        ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+    let mut de = ron::Deserializer::from_str_with_options(source, &options)
+        .map_err(|e| SceneError::from_ron(path, source, &e, &[]))?;
+    match serde_path_to_error::deserialize(&mut de) {
+        Ok(value) => {
+            de.end()
+                .map_err(|e| SceneError::from_ron(path, source, &de.span_error(e), &[]))?;
+            Ok(value)
+        }
+        Err(e) => {
+            let at: Vec<_> = e.path().iter().cloned().collect();
+            let spanned = de.span_error(e.into_inner());
+            Err(SceneError::from_ron(path, source, &spanned, &at))
+        }
+    }
+}
 
 /// A finite number (RON accepts `inf` and `NaN`; scenes may not).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -20,7 +44,9 @@ impl<'de> Deserialize<'de> for Real {
         let v = f64::deserialize(d)?;
         let f = v as f32;
         if !f.is_finite() {
-            return Err(D::Error::custom(format!("{v} is not a finite number")));
+            return Err(D::Error::custom(format!(
+                "{VALUE} must be a finite number (got {v})"
+            )));
         }
         Ok(Self(f))
     }
@@ -34,7 +60,7 @@ impl<'de> Deserialize<'de> for Positive {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let Real(v) = Real::deserialize(d)?;
         if v <= 0.0 {
-            return Err(D::Error::custom(format!("{v} must be greater than 0")));
+            return Err(D::Error::custom(format!("{VALUE} must be > 0 (got {v})")));
         }
         Ok(Self(v))
     }
@@ -48,9 +74,25 @@ impl<'de> Deserialize<'de> for NonNegative {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let Real(v) = Real::deserialize(d)?;
         if v < 0.0 {
-            return Err(D::Error::custom(format!("{v} must not be negative")));
+            return Err(D::Error::custom(format!("{VALUE} must be >= 0 (got {v})")));
         }
         Ok(Self(v))
+    }
+}
+
+/// A whole number ≥ 1 that fits a `u32`: image sides, samples, path depths.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Count(pub u32);
+
+impl<'de> Deserialize<'de> for Count {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = f64::deserialize(d)?;
+        if !(v >= 1.0 && v <= f64::from(u32::MAX) && v.fract() == 0.0) {
+            return Err(D::Error::custom(format!(
+                "{VALUE} must be a whole number >= 1 (got {v})"
+            )));
+        }
+        Ok(Self(v as u32))
     }
 }
 
@@ -134,9 +176,9 @@ impl TryFrom<RawCamera> for CameraDesc {
             (Some(at), None) => at.0 - raw.position.0,
             (None, Some(d)) => d.0,
             (Some(_), Some(_)) => {
-                return Err("camera: give `look_at` or `direction`, not both".into());
+                return Err("give `look_at` or `direction`, not both".into());
             }
-            (None, None) => return Err("camera: `look_at` or `direction` is required".into()),
+            (None, None) => return Err("`look_at` or `direction` is required".into()),
         };
         // Only the directions of `direction` and `up` matter. Scaling each by its largest
         // component makes any non-zero length safe to square: `up: (3e38, 0, -3e38)` made the
@@ -147,21 +189,21 @@ impl TryFrom<RawCamera> for CameraDesc {
         };
         let direction = unit_max(direction);
         if direction == Vec3::ZERO || !direction.is_finite() {
-            return Err("camera: the view direction is zero (look_at equals position?)".into());
+            return Err("the view direction is zero (`look_at` equals `position`?)".into());
         }
         if raw.position.0.abs().max_element() > MAX_COORDINATE {
             return Err(format!(
-                "camera: position {} is beyond ±{MAX_COORDINATE:e}",
+                "position must be within ±{MAX_COORDINATE:e} on every axis (got {})",
                 raw.position.0
             ));
         }
         let up = unit_max(raw.up.0);
         if direction.normalize().cross(up).length_squared() < 1e-12 {
-            return Err("camera: `up` is zero or parallel to the view direction".into());
+            return Err("`up` must be non-zero and not parallel to the view direction".into());
         }
         let fov = raw.fov.0;
         if !(fov > 0.0 && fov < 180.0) {
-            return Err(format!("camera: fov {fov} must be in (0, 180) degrees"));
+            return Err(format!("fov must be in (0, 180) degrees (got {fov})"));
         }
         Ok(Self {
             position: raw.position.0,
@@ -265,10 +307,10 @@ impl Default for SettingsDesc {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, rename = "Settings")]
 struct RawSettings {
-    width: Option<NonZeroU32>,
-    height: Option<NonZeroU32>,
-    spp: Option<NonZeroU32>,
-    max_depth: Option<NonZeroU32>,
+    width: Option<Count>,
+    height: Option<Count>,
+    spp: Option<Count>,
+    max_depth: Option<Count>,
     background: Option<Color>,
     seed: Option<u64>,
     method: Option<Method>,
@@ -280,10 +322,10 @@ impl TryFrom<RawSettings> for SettingsDesc {
     fn try_from(raw: RawSettings) -> Result<Self, String> {
         let d = Self::default();
         let s = Self {
-            width: raw.width.map_or(d.width, NonZeroU32::get),
-            height: raw.height.map_or(d.height, NonZeroU32::get),
-            spp: raw.spp.map_or(d.spp, NonZeroU32::get),
-            max_depth: raw.max_depth.map_or(d.max_depth, NonZeroU32::get),
+            width: raw.width.map_or(d.width, |c| c.0),
+            height: raw.height.map_or(d.height, |c| c.0),
+            spp: raw.spp.map_or(d.spp, |c| c.0),
+            max_depth: raw.max_depth.map_or(d.max_depth, |c| c.0),
             background: raw.background.map_or(d.background, |c| c.0),
             seed: raw.seed.unwrap_or(d.seed),
             method: raw.method.unwrap_or(d.method),
@@ -297,22 +339,34 @@ impl TryFrom<RawSettings> for SettingsDesc {
 impl SettingsDesc {
     /// Checks the limits that keep a render from asking for absurd amounts of memory or time.
     pub fn validate(&self) -> Result<(), String> {
-        let pixels = u64::from(self.width) * u64::from(self.height);
-        if self.width == 0 || self.height == 0 || self.spp == 0 || self.max_depth == 0 {
-            return Err("width, height, spp and max_depth must be at least 1".into());
+        for (field, value) in [
+            ("width", self.width),
+            ("height", self.height),
+            ("spp", self.spp),
+            ("max_depth", self.max_depth),
+        ] {
+            if value == 0 {
+                return Err(format!("{field} must be >= 1 (got 0)"));
+            }
         }
-        if self.width > MAX_SIDE || self.height > MAX_SIDE || pixels > MAX_PIXELS {
+        for (field, value) in [("width", self.width), ("height", self.height)] {
+            if value > MAX_SIDE {
+                return Err(format!("{field} must be at most {MAX_SIDE} (got {value})"));
+            }
+        }
+        let pixels = u64::from(self.width) * u64::from(self.height);
+        if pixels > MAX_PIXELS {
             return Err(format!(
-                "image {}×{} is too large (at most {MAX_SIDE} per side and {MAX_PIXELS} pixels)",
+                "width × height must be at most {MAX_PIXELS} pixels (got {}×{} = {pixels})",
                 self.width, self.height
             ));
         }
         if self.spp > MAX_SPP {
-            return Err(format!("spp {} is too large (at most {MAX_SPP})", self.spp));
+            return Err(format!("spp must be at most {MAX_SPP} (got {})", self.spp));
         }
         if self.max_depth > MAX_DEPTH {
             return Err(format!(
-                "max_depth {} is too large (at most {MAX_DEPTH})",
+                "max_depth must be at most {MAX_DEPTH} (got {})",
                 self.max_depth
             ));
         }
@@ -472,7 +526,7 @@ impl TryFrom<RawShape> for ShapeDesc {
             RawShape::Plane { point, normal } => {
                 let n = normal.0;
                 if n.length_squared() == 0.0 || !n.length_squared().is_normal() {
-                    return Err("plane: the normal is zero".into());
+                    return Err(format!("plane: `normal` must be non-zero (got {n})"));
                 }
                 Shape::Plane {
                     point: point.0,
@@ -504,7 +558,10 @@ impl TryFrom<RawShape> for ShapeDesc {
             }
             RawShape::Box { min, max } => {
                 if !min.0.cmplt(max.0).all() {
-                    return Err("box: `min` must be less than `max` on every axis".into());
+                    return Err(format!(
+                        "box: `min` must be less than `max` on every axis (got min {}, max {})",
+                        min.0, max.0
+                    ));
                 }
                 Shape::Box {
                     min: min.0,
@@ -566,7 +623,10 @@ impl TryFrom<RawTransform> for TransformDesc {
             scale: raw.scale.map_or(d.scale, |v| v.0),
         };
         if t.scale.abs().min_element() < 1e-12 {
-            return Err("transform: scale must not be zero on any axis".into());
+            return Err(format!(
+                "scale must be non-zero on every axis (got {})",
+                t.scale
+            ));
         }
         Ok(t)
     }

@@ -1,12 +1,20 @@
 //! Reading a scene file: parse, expand prefabs, validate names and references, load textures
 //! and meshes.
+//!
+//! Every stage is linear in what grows (entities, placements, materials, files): nothing is
+//! searched from the start per item. Locations in the text are found only when an error needs
+//! one ([`super::locate`]); dependencies are an ordered set; each mesh's bounds are computed once
+//! and bound every placement's coordinates by 8 corners; each file is read and each asset
+//! fetched once per load.
 
+use std::borrow::Cow;
+use std::cell::RefCell;
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 use std::sync::Arc;
 
-use glam::Affine3A;
+use glam::{Affine3A, Vec3};
 
 use crate::ecs::components::{MeshData, MeshRef, Shape, Transform};
 use crate::shading::material::Material;
@@ -17,6 +25,7 @@ use super::format::{
     CameraDesc, EntityDesc, MAX_COORDINATE, MaterialDesc, PrefabDesc, SceneDesc, SettingsDesc,
     ShapeDesc, TextureDesc,
 };
+use super::locate::{Locator, Places, SourceText};
 
 /// Most entities a scene may expand to (prefabs can multiply quickly).
 pub const MAX_ENTITIES: usize = 1_000_000;
@@ -36,6 +45,41 @@ pub struct LoadedEntity {
     pub material: String,
 }
 
+/// Where a loaded entity is written: which file, which entry of its `entities` list.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Origin {
+    /// Index of the file in [`LoadedScene::sources`].
+    pub file: u32,
+    /// Position in that file's `entities` list.
+    pub index: u32,
+    /// Bytes of placement prefix in the qualified name (`box1/` of `box1/top`): the rest is
+    /// the name written in the file.
+    pub prefix: u32,
+    /// Whether the entity has a `name` (otherwise it is `#index`).
+    pub named: bool,
+}
+
+impl Origin {
+    /// Offset of the entity named `qualified` in its file, found by that file's locator: its
+    /// name's first string literal, or for an unnamed entity its `Entity(`.
+    pub fn offset(&self, qualified: &str, locator: &Locator) -> Option<usize> {
+        if self.named {
+            locator.first(qualified.get(self.prefix as usize..)?)
+        } else {
+            locator.entity(self.index as usize)
+        }
+    }
+}
+
+/// Work counted while loading, for the scaling tests and `rondo bench load`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadStats {
+    /// Points transformed by the coordinate-limit check: each mesh's vertices once (for its
+    /// bounds), 8 bounding-box corners per mesh placement, every vertex only when the corners
+    /// exceed the limit, and the few points of each analytic shape.
+    pub limit_vertices: u64,
+}
+
 /// A parsed, validated scene with its prefabs expanded and its assets loaded.
 #[derive(Clone, Debug)]
 pub struct LoadedScene {
@@ -51,6 +95,15 @@ pub struct LoadedScene {
     pub entities: Vec<LoadedEntity>,
     /// Every file the scene depends on: itself first, then prefabs, textures and meshes.
     pub dependencies: Vec<PathBuf>,
+    /// The text of the scene file (first) and of each prefab file read, for locating.
+    pub sources: Vec<SourceText>,
+    /// Where each entity is written, parallel to [`Self::entities`] (may be empty for a scene
+    /// built in code).
+    pub origins: Vec<Origin>,
+    /// Where each material is defined: file (index in [`Self::sources`]) and written name.
+    pub material_origins: BTreeMap<String, (u32, String)>,
+    /// Work counted while loading.
+    pub stats: LoadStats,
 }
 
 struct Cached<T> {
@@ -72,6 +125,8 @@ pub struct AssetCache {
     mesh_loads: u64,
     /// Every asset or prefab path asked for since [`AssetCache::begin_load`], found or not.
     requested: Vec<PathBuf>,
+    /// The same paths, for O(1) membership (a scene can ask for 10⁵ files).
+    requested_set: HashSet<PathBuf>,
 }
 
 /// The cached value for `path`, or `load(bytes)` when the file is new or its bytes changed.
@@ -123,12 +178,14 @@ impl AssetCache {
     /// Starts a scene load: forgets the paths asked for by the previous one.
     pub fn begin_load(&mut self) {
         self.requested.clear();
+        self.requested_set.clear();
     }
 
     /// Records that the load asked for `path` (a texture, a mesh or a prefab), whether or not
     /// it exists: a failed load still tells a watcher which files could fix it.
     pub fn note(&mut self, path: &Path) {
-        if !self.requested.iter().any(|p| p == path) {
+        if !self.requested_set.contains(path) {
+            self.requested_set.insert(path.to_path_buf());
             self.requested.push(path.to_path_buf());
         }
     }
@@ -189,36 +246,49 @@ pub fn parse_scene(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
 }
 
 fn parse<T: serde::de::DeserializeOwned>(path: &Path, source: &str) -> Result<T, SceneError> {
-    ron::Options::default()
-        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
-        .from_str(source)
-        .map_err(|e| SceneError::from_ron(path, &e))
+    crate::scene::format::parse(path, source)
 }
 
-/// Byte offset of the quoted string `"text"` in `source` at or after `from`.
-fn find_quoted(source: &str, text: &str, from: usize) -> Option<usize> {
-    let needle = format!("\"{text}\"");
-    source.get(from..)?.find(&needle).map(|i| i + from)
-}
-
-/// Byte offset of the `index`-th `Entity(` in `source` (a best effort for unnamed entities).
-fn find_entity(source: &str, index: usize) -> Option<usize> {
-    source.match_indices("Entity(").nth(index).map(|(i, _)| i)
+/// What an error points at, resolved only when the error is made.
+#[derive(Clone, Copy)]
+enum Anchor<'s> {
+    /// The `index`-th entity of the file: its name's first string literal if it has one, else
+    /// its `Entity(`.
+    Entity(usize, Option<&'s str>),
+    /// The first string literal with these contents.
+    Quoted(&'s str),
+    /// The second string literal with these contents (else the first).
+    Again(&'s str),
 }
 
 /// A file being expanded, for error locations.
 struct SourceFile {
+    /// Index in [`LoadedScene::sources`].
+    id: u32,
     path: PathBuf,
-    source: String,
+    source: Arc<str>,
 }
 
 impl SourceFile {
-    fn loc(&self, offset: Option<usize>) -> Option<Location> {
-        offset.map(|o| Location::of_offset(&self.source, o))
+    /// The location of `anchor`, or of the first string literal `then` at or after it. Scans
+    /// the file once: call it for errors only.
+    fn location(&self, anchor: Anchor, then: Option<&str>) -> Option<Location> {
+        let locator = Locator::new(&self.source);
+        let base = match anchor {
+            Anchor::Entity(_, Some(name)) | Anchor::Quoted(name) => locator.first(name),
+            Anchor::Entity(index, None) => locator.entity(index),
+            Anchor::Again(name) => locator.second(name).or_else(|| locator.first(name)),
+        };
+        let offset = match (base, then) {
+            (Some(b), Some(t)) => locator.after(t, b).or(base),
+            (None, Some(t)) => locator.first(t),
+            (b, None) => b,
+        };
+        offset.map(|o| locator.location(o))
     }
 
-    fn error(&self, offset: Option<usize>, message: impl Into<String>) -> SceneError {
-        SceneError::at(&self.path, self.loc(offset), message)
+    fn error(&self, anchor: Anchor, then: Option<&str>, message: impl Into<String>) -> SceneError {
+        SceneError::at(&self.path, self.location(anchor, then), message)
     }
 
     fn dir(&self) -> &Path {
@@ -229,14 +299,42 @@ impl SourceFile {
 /// Material names visible in one file, mapped to keys of the scene's material table.
 type Scope = BTreeMap<String, String>;
 
+/// A prefab file, read and parsed once per load.
+struct Prefab {
+    file: SourceFile,
+    desc: PrefabDesc,
+    /// The scope of a placement that maps no names (every default), once built.
+    defaults: RefCell<Option<Rc<Scope>>>,
+}
+
+/// A mesh fetched for this load, with its object-space bounds.
+struct LoadedMesh {
+    data: Arc<MeshData>,
+    bounds: [Vec3; 2],
+}
+
 struct Expander<'a> {
     assets: &'a mut AssetCache,
     materials: BTreeMap<String, Material>,
+    material_origins: BTreeMap<String, (u32, String)>,
     entities: Vec<LoadedEntity>,
+    origins: Vec<Origin>,
+    /// Dependencies in first-seen order, with a set for O(1) membership.
     dependencies: Vec<PathBuf>,
-    prefabs: HashMap<PathBuf, Rc<(SourceFile, PrefabDesc)>>,
+    seen: HashSet<PathBuf>,
+    sources: Vec<SourceText>,
+    /// Prefabs by canonical path.
+    prefabs: HashMap<PathBuf, Rc<Prefab>>,
+    /// Canonical paths of prefab paths already resolved (and found to be regular files).
+    canonical: HashMap<PathBuf, PathBuf>,
+    /// Assets fetched for this load: the cache is asked once per file, not once per use.
+    meshes: HashMap<PathBuf, LoadedMesh>,
+    textures: HashMap<PathBuf, Arc<ImageTexture>>,
     /// Canonical paths of the prefabs being expanded, outermost first (cycle detection).
     chain: Vec<PathBuf>,
+    /// Whether some written name contains `/`: only then can two qualified names collide.
+    slashed: bool,
+    stats: LoadStats,
 }
 
 /// Reads, parses and validates the scene at `path`, expanding prefabs and loading textures and
@@ -246,24 +344,39 @@ pub fn load_scene(path: &Path, assets: &mut AssetCache) -> Result<LoadedScene, S
         .map_err(|e| SceneError::at(path, None, format!("cannot read scene: {e}")))?;
     let desc: SceneDesc = parse(path, &source)?;
     let file = SourceFile {
+        id: 0,
         path: path.to_path_buf(),
-        source,
+        source: source.into(),
     };
     let mut x = Expander {
         assets,
         materials: BTreeMap::new(),
-        entities: Vec::new(),
-        dependencies: vec![path.to_path_buf()],
+        material_origins: BTreeMap::new(),
+        entities: Vec::with_capacity(desc.entities.len()),
+        origins: Vec::with_capacity(desc.entities.len()),
+        dependencies: Vec::new(),
+        seen: HashSet::new(),
+        sources: vec![SourceText {
+            path: file.path.clone(),
+            text: file.source.clone(),
+        }],
         prefabs: HashMap::new(),
+        canonical: HashMap::new(),
+        meshes: HashMap::new(),
+        textures: HashMap::new(),
         chain: vec![std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())],
+        slashed: false,
+        stats: LoadStats::default(),
     };
+    x.depend(path);
     let mut scope = Scope::new();
     for (name, m) in &desc.materials {
-        let material = x.material(&file, name, m)?;
+        let material = x.material(&file, name, name, m)?;
         x.materials.insert(name.clone(), material);
         scope.insert(name.clone(), name.clone());
     }
     x.expand(&file, &desc.entities, &scope, Affine3A::IDENTITY, "")?;
+    x.unique_names()?;
     Ok(LoadedScene {
         path: path.to_path_buf(),
         camera: desc.camera,
@@ -271,28 +384,39 @@ pub fn load_scene(path: &Path, assets: &mut AssetCache) -> Result<LoadedScene, S
         materials: x.materials,
         entities: x.entities,
         dependencies: x.dependencies,
+        sources: x.sources,
+        origins: x.origins,
+        material_origins: x.material_origins,
+        stats: x.stats,
     })
 }
 
 impl Expander<'_> {
     fn depend(&mut self, path: &Path) {
-        if !self.dependencies.iter().any(|d| d == path) {
+        if !self.seen.contains(path) {
+            self.seen.insert(path.to_path_buf());
             self.dependencies.push(path.to_path_buf());
         }
     }
 
-    /// Builds material `name` of `file`, loading its textures.
+    /// Builds material `name` of `file`, loading its textures; records where it is defined
+    /// under its table key `key`.
     fn material(
         &mut self,
         file: &SourceFile,
         name: &str,
+        key: &str,
         m: &MaterialDesc,
     ) -> Result<Material, SceneError> {
-        let at = find_quoted(&file.source, name, 0);
+        self.material_origins
+            .insert(key.to_string(), (file.id, name.to_string()));
         let mut texture = |t: &TextureDesc| {
             self.texture(t, file.dir()).map_err(|(p, msg)| {
-                let offset = find_quoted(&file.source, &p, at.unwrap_or(0)).or(at);
-                file.error(offset, format!("material \"{name}\": {msg}"))
+                file.error(
+                    Anchor::Quoted(name),
+                    Some(&p),
+                    format!("material \"{name}\": {msg}"),
+                )
             })
         };
         Ok(match m {
@@ -334,13 +458,38 @@ impl Expander<'_> {
             TextureDesc::Image { path } => {
                 let full = dir.join(path);
                 self.depend(&full);
+                if let Some(image) = self.textures.get(&full) {
+                    return Ok(Texture::Image(image.clone()));
+                }
                 let image = self
                     .assets
                     .texture(&full)
                     .map_err(|e| (path.clone(), format!("{}: {e}", full.display())))?;
+                self.textures.insert(full, image.clone());
                 Texture::Image(image)
             }
         })
+    }
+
+    /// The mesh at `full` with its object-space bounds, fetched once per load.
+    fn mesh(&mut self, full: &Path) -> Result<(Arc<MeshData>, [Vec3; 2]), String> {
+        if let Some(m) = self.meshes.get(full) {
+            return Ok((m.data.clone(), m.bounds));
+        }
+        let data = self.assets.mesh(full)?;
+        let bounds = data.positions.iter().fold(
+            [Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)],
+            |[lo, hi], &p| [lo.min(p), hi.max(p)],
+        );
+        self.stats.limit_vertices += data.positions.len() as u64;
+        self.meshes.insert(
+            full.to_path_buf(),
+            LoadedMesh {
+                data: data.clone(),
+                bounds,
+            },
+        );
+        Ok((data, bounds))
     }
 
     /// Expands `entities` of `file` under `parent` (`world_from_file`), naming them
@@ -353,38 +502,44 @@ impl Expander<'_> {
         parent: Affine3A,
         prefix: &str,
     ) -> Result<(), SceneError> {
-        let mut names = HashSet::new();
+        let mut names = HashSet::with_capacity(entities.len());
         for (i, e) in entities.iter().enumerate() {
-            let local = e.name.clone().unwrap_or_else(|| format!("#{i}"));
-            let at = match &e.name {
-                Some(n) => find_quoted(&file.source, n, 0),
-                None => find_entity(&file.source, i),
+            let local: Cow<str> = match &e.name {
+                Some(n) => Cow::Borrowed(n),
+                None => Cow::Owned(format!("#{i}")),
             };
+            let at = Anchor::Entity(i, e.name.as_deref());
             if !names.insert(local.clone()) {
-                let again = match &e.name {
-                    Some(n) => at.and_then(|f| find_quoted(&file.source, n, f + 1)).or(at),
-                    None => at,
-                };
-                return Err(file.error(again, format!("duplicate entity name \"{local}\"")));
+                let again = e.name.as_deref().map_or(at, Anchor::Again);
+                return Err(file.error(again, None, format!("duplicate entity name \"{local}\"")));
             }
+            self.slashed |= local.contains('/');
             let name = format!("{prefix}{local}");
+            let origin = Origin {
+                file: file.id,
+                index: i as u32,
+                prefix: prefix.len() as u32,
+                named: e.name.is_some(),
+            };
             let transform = parent * e.transform.unwrap_or_default().matrix();
             match (&e.shape, &e.prefab) {
                 (Some(shape), None) => {
-                    self.place_shape(file, e, shape, scope, name, transform, at)?
+                    self.place_shape(file, e, shape, scope, name, transform, origin)?
                 }
                 (None, Some(prefab)) => {
-                    self.place_prefab(file, e, prefab, scope, &name, transform, at)?
+                    self.place_prefab(file, e, prefab, scope, &name, transform, i)?
                 }
                 (Some(_), Some(_)) => {
                     return Err(file.error(
                         at,
+                        None,
                         format!("entity \"{name}\": give `shape` or `prefab`, not both"),
                     ));
                 }
                 (None, None) => {
                     return Err(file.error(
                         at,
+                        None,
                         format!("entity \"{name}\": `shape` or `prefab` is required"),
                     ));
                 }
@@ -392,6 +547,7 @@ impl Expander<'_> {
             if self.entities.len() > MAX_ENTITIES {
                 return Err(file.error(
                     at,
+                    None,
                     format!("the scene expands to more than {MAX_ENTITIES} entities"),
                 ));
             }
@@ -411,11 +567,13 @@ impl Expander<'_> {
         scope: &Scope,
         name: String,
         transform: Affine3A,
-        at: Option<usize>,
+        origin: Origin,
     ) -> Result<(), SceneError> {
+        let at = Anchor::Entity(origin.index as usize, e.name.as_deref());
         if e.materials.is_some() {
             return Err(file.error(
                 at,
+                None,
                 format!(
                     "entity \"{name}\": `materials` maps a prefab's names; a shape takes `material`"
                 ),
@@ -424,16 +582,15 @@ impl Expander<'_> {
         let Some(material) = &e.material else {
             return Err(file.error(
                 at,
+                None,
                 format!("entity \"{name}\": `material` is required with `shape`"),
             ));
         };
         let Some(key) = scope.get(material) else {
             let known: Vec<&str> = scope.keys().map(String::as_str).collect();
-            let offset = at
-                .and_then(|a| find_quoted(&file.source, material, a))
-                .or(at);
             return Err(file.error(
-                offset,
+                at,
+                Some(material),
                 format!(
                     "entity \"{name}\": unknown material \"{material}\" (defined: {})",
                     known.join(", ")
@@ -441,33 +598,44 @@ impl Expander<'_> {
             ));
         };
         let transform = Transform(transform);
-        let shape = match shape {
-            ShapeDesc::Analytic(s) => s.clone(),
+        let (shape, bounds) = match shape {
+            ShapeDesc::Analytic(s) => (s.clone(), None),
             ShapeDesc::Mesh { path } => {
                 let full = file.dir().join(path);
                 self.depend(&full);
-                let data = self.assets.mesh(&full).map_err(|m| {
-                    let offset = at.and_then(|a| find_quoted(&file.source, path, a)).or(at);
+                let (data, bounds) = self.mesh(&full).map_err(|m| {
                     file.error(
-                        offset,
+                        at,
+                        Some(path),
                         format!("entity \"{name}\": mesh {}: {m}", full.display()),
                     )
                 })?;
-                Shape::Mesh(MeshRef { path: full, data })
+                (Shape::Mesh(MeshRef { path: full, data }), Some(bounds))
             }
         };
         if matches!(shape, Shape::Sphere { .. }) && !transform.is_similarity() {
             return Err(file.error(
                 at,
+                None,
                 format!("entity \"{name}\": a sphere cannot take a non-uniform scale or shear (it would be an ellipsoid)"),
             ));
         }
-        let reach = world_reach(&shape, &transform);
-        if reach.is_nan() || reach > MAX_COORDINATE {
-            return Err(file.error(
-                at,
-                format!("entity \"{name}\": reaches {reach:e} in world space, beyond ±{MAX_COORDINATE:e}"),
-            ));
+        // The 8 corners of a mesh's bounds bound all its vertices; the exact scan runs only
+        // when they exceed the limit, so the same scenes are accepted as by the exact scan.
+        let within = bounds.is_some_and(|b| {
+            self.stats.limit_vertices += 8;
+            corner_reach(b, &transform) <= MAX_COORDINATE
+        });
+        if !within {
+            let (reach, visited) = world_reach(&shape, &transform);
+            self.stats.limit_vertices += visited;
+            if reach.is_nan() || reach > MAX_COORDINATE {
+                return Err(file.error(
+                    at,
+                    None,
+                    format!("entity \"{name}\": reaches {reach:e} in world space, beyond ±{MAX_COORDINATE:e}"),
+                ));
+            }
         }
         self.entities.push(LoadedEntity {
             name,
@@ -475,7 +643,23 @@ impl Expander<'_> {
             transform,
             material: key.clone(),
         });
+        self.origins.push(origin);
         Ok(())
+    }
+
+    /// The canonical path of prefab `path`, checked to be a regular file, once per path.
+    fn canonical_prefab(&mut self, path: &Path) -> Result<PathBuf, String> {
+        if let Some(c) = self.canonical.get(path) {
+            return Ok(c.clone());
+        }
+        self.assets.note(path);
+        let canonical = std::fs::canonicalize(path)
+            .map_err(|err| format!("cannot read prefab {}: {err}", path.display()))?;
+        if !std::fs::metadata(&canonical).is_ok_and(|m| m.is_file()) {
+            return Err(format!("prefab {} is not a regular file", path.display()));
+        }
+        self.canonical.insert(path.to_path_buf(), canonical.clone());
+        Ok(canonical)
     }
 
     #[expect(
@@ -490,44 +674,33 @@ impl Expander<'_> {
         scope: &Scope,
         name: &str,
         transform: Affine3A,
-        at: Option<usize>,
+        index: usize,
     ) -> Result<(), SceneError> {
-        let where_ = at.and_then(|a| find_quoted(&file.source, prefab, a)).or(at);
+        let at = Anchor::Entity(index, e.name.as_deref());
         if e.material.is_some() {
-            return Err(file.error(at, format!("entity \"{name}\": a prefab placement maps names with `materials`, not `material`")));
+            return Err(file.error(at, None, format!("entity \"{name}\": a prefab placement maps names with `materials`, not `material`")));
         }
         let path = file.dir().join(prefab);
-        self.assets.note(&path);
-        let canonical = std::fs::canonicalize(&path).map_err(|err| {
-            file.error(
-                where_,
-                format!(
-                    "entity \"{name}\": cannot read prefab {}: {err}",
-                    path.display()
-                ),
-            )
-        })?;
+        let canonical = self
+            .canonical_prefab(&path)
+            .map_err(|m| file.error(at, Some(prefab), format!("entity \"{name}\": {m}")))?;
         if let Some(start) = self.chain.iter().position(|p| *p == canonical) {
             let cycle: Vec<String> = self.chain[start..]
                 .iter()
                 .chain([&canonical])
                 .map(|p| p.display().to_string())
                 .collect();
-            return Err(file.error(where_, format!("prefab cycle: {}", cycle.join(" → "))));
+            return Err(file.error(
+                at,
+                Some(prefab),
+                format!("prefab cycle: {}", cycle.join(" → ")),
+            ));
         }
         if self.chain.len() > MAX_PREFAB_DEPTH {
             return Err(file.error(
-                where_,
+                at,
+                Some(prefab),
                 format!("prefabs nested deeper than {MAX_PREFAB_DEPTH}"),
-            ));
-        }
-        if !std::fs::metadata(&canonical).is_ok_and(|m| m.is_file()) {
-            return Err(file.error(
-                where_,
-                format!(
-                    "entity \"{name}\": prefab {} is not a regular file",
-                    path.display()
-                ),
             ));
         }
         self.depend(&path);
@@ -536,7 +709,8 @@ impl Expander<'_> {
             None => {
                 let source = std::fs::read_to_string(&path).map_err(|err| {
                     file.error(
-                        where_,
+                        at,
+                        Some(prefab),
                         format!(
                             "entity \"{name}\": cannot read prefab {}: {err}",
                             path.display()
@@ -544,42 +718,66 @@ impl Expander<'_> {
                     )
                 })?;
                 let desc: PrefabDesc = parse(&path, &source)?;
-                let p = Rc::new((
-                    SourceFile {
-                        path: path.clone(),
-                        source,
-                    },
+                let file = SourceFile {
+                    id: self.sources.len() as u32,
+                    path: path.clone(),
+                    source: source.into(),
+                };
+                self.sources.push(SourceText {
+                    path: path.clone(),
+                    text: file.source.clone(),
+                });
+                let p = Rc::new(Prefab {
+                    file,
                     desc,
-                ));
+                    defaults: RefCell::new(None),
+                });
                 self.prefabs.insert(canonical.clone(), p.clone());
                 p
             }
         };
-        let (prefab_file, desc) = (&loaded.0, &loaded.1);
+        let (prefab_file, desc) = (&loaded.file, &loaded.desc);
 
-        // The prefab's names: mapped by the placement, else the prefab's own default.
-        let mut inner = Scope::new();
-        for (theirs, ours) in e.materials.iter().flatten() {
-            let Some(key) = scope.get(ours) else {
-                let offset = at.and_then(|a| find_quoted(&file.source, ours, a)).or(at);
-                return Err(file.error(
-                    offset,
-                    format!("entity \"{name}\": maps \"{theirs}\" to unknown material \"{ours}\""),
-                ));
-            };
-            inner.insert(theirs.clone(), key.clone());
-        }
-        for (own, m) in &desc.materials {
-            if inner.contains_key(own) {
-                continue;
+        // The prefab's names: mapped by the placement, else the prefab's own default. A
+        // placement that maps nothing shares the scope built by the first such placement.
+        let cached = e
+            .materials
+            .as_ref()
+            .is_none_or(BTreeMap::is_empty)
+            .then(|| loaded.defaults.borrow().clone())
+            .flatten();
+        let inner = match cached {
+            Some(scope) => scope,
+            None => {
+                let mut inner = Scope::new();
+                for (theirs, ours) in e.materials.iter().flatten() {
+                    let Some(key) = scope.get(ours) else {
+                        return Err(file.error(
+                            at,
+                            Some(ours),
+                            format!("entity \"{name}\": maps \"{theirs}\" to unknown material \"{ours}\""),
+                        ));
+                    };
+                    inner.insert(theirs.clone(), key.clone());
+                }
+                for (own, m) in &desc.materials {
+                    if inner.contains_key(own) {
+                        continue;
+                    }
+                    let key = format!("{}::{own}", canonical.display());
+                    if !self.materials.contains_key(&key) {
+                        let material = self.material(prefab_file, own, &key, m)?;
+                        self.materials.insert(key.clone(), material);
+                    }
+                    inner.insert(own.clone(), key);
+                }
+                let inner = Rc::new(inner);
+                if e.materials.as_ref().is_none_or(BTreeMap::is_empty) {
+                    *loaded.defaults.borrow_mut() = Some(inner.clone());
+                }
+                inner
             }
-            let key = format!("{}::{own}", canonical.display());
-            if !self.materials.contains_key(&key) {
-                let material = self.material(prefab_file, own, m)?;
-                self.materials.insert(key.clone(), material);
-            }
-            inner.insert(own.clone(), key);
-        }
+        };
         if let Some(missing) = desc
             .entities
             .iter()
@@ -588,12 +786,12 @@ impl Expander<'_> {
             .find(|m| !inner.contains_key(*m))
         {
             let loc = file
-                .loc(at)
+                .location(at, None)
                 .map(|l| format!(":{}:{}", l.line, l.col))
                 .unwrap_or_default();
-            let offset = find_quoted(&prefab_file.source, missing, 0);
             return Err(prefab_file.error(
-                offset,
+                Anchor::Quoted(missing),
+                None,
                 format!(
                     "material \"{missing}\" is defined neither by this prefab nor by its placement \"{name}\" in {}{loc}",
                     file.path.display()
@@ -611,33 +809,103 @@ impl Expander<'_> {
         self.chain.pop();
         result
     }
+
+    /// Refuses two entities with one qualified name (`"tall/box"` written beside the child
+    /// `"box"` of a placement `"tall"`): one of them would silently replace the other. Names are
+    /// unique within each file, so this can only happen when a written name contains `/`.
+    fn unique_names(&self) -> Result<(), SceneError> {
+        if !self.slashed {
+            return Ok(());
+        }
+        let mut seen: HashMap<&str, usize> = HashMap::with_capacity(self.entities.len());
+        for (k, e) in self.entities.iter().enumerate() {
+            let Some(first) = seen.insert(&e.name, k) else {
+                continue;
+            };
+            let mut places = Places::new(&self.sources);
+            let mut describe = |i: usize| {
+                let (e, o) = (&self.entities[i], self.origins[i]);
+                let offset = places.locator(o.file).and_then(|l| o.offset(&e.name, l));
+                let location =
+                    offset.and_then(|off| places.locator(o.file).map(|l| l.location(off)));
+                let place = places.describe(o.file, location);
+                let what = match o.prefix {
+                    0 => format!("entity \"{}\"", e.name),
+                    p => format!(
+                        "\"{}\" of placement \"{}\"",
+                        &e.name[p as usize..],
+                        &e.name[..p as usize - 1]
+                    ),
+                };
+                (format!("{what} at {place}"), location)
+            };
+            let (a, _) = describe(first);
+            let (b, location) = describe(k);
+            return Err(SceneError::at(
+                &self.sources[self.origins[k].file as usize].path,
+                location,
+                format!(
+                    "two entities are named \"{}\": {b} and {a}; one would replace the other, rename one",
+                    e.name
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// An upper bound of [`world_reach`] for a mesh with object-space `bounds`, from the box's 8
+/// corners: each world coordinate is affine in the object point, so its extremes over the box
+/// are at corners. A margin of 8 ulps of the largest product covers the rounding of each
+/// vertex's own transform, so a bound within the limit proves every vertex is.
+fn corner_reach([lo, hi]: [Vec3; 2], transform: &Transform) -> f32 {
+    let m = &transform.0;
+    let corners = (0..8).map(|i| {
+        Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    });
+    let reach = corners.fold(0.0f32, |r, p| {
+        r.max(m.transform_point3(p).abs().max_element())
+    });
+    let size = lo.abs().max(hi.abs());
+    let magnitude = glam::Mat3A::from_cols(
+        m.matrix3.x_axis.abs(),
+        m.matrix3.y_axis.abs(),
+        m.matrix3.z_axis.abs(),
+    ) * glam::Vec3A::from(size)
+        + m.translation.abs();
+    reach + 8.0 * f32::EPSILON * magnitude.max_element()
 }
 
 /// Largest magnitude of any world-space coordinate of `shape` placed by `transform`: its
 /// vertices (box corners, mesh positions), a sphere's centre plus radius, a plane's point. NaN or
-/// infinite if the transform overflows.
-fn world_reach(shape: &Shape, transform: &Transform) -> f32 {
+/// infinite if the transform overflows. Also returns the number of points transformed.
+fn world_reach(shape: &Shape, transform: &Transform) -> (f32, u64) {
     let m = &transform.0;
-    let reach = |points: &mut dyn Iterator<Item = glam::Vec3>| {
-        points.fold(0.0f32, |r, p| {
+    let reach = |points: &mut dyn Iterator<Item = Vec3>| {
+        points.fold((0.0f32, 0u64), |(r, n), p| {
             let a = m.transform_point3(p).abs().max_element();
-            if a.is_nan() || r.is_nan() {
+            let r = if a.is_nan() || r.is_nan() {
                 f32::NAN
             } else {
                 r.max(a)
-            }
+            };
+            (r, n + 1)
         })
     };
     match shape {
         Shape::Sphere { center, radius } => {
             let c = m.transform_point3(*center).abs().max_element();
-            c + radius * transform.uniform_scale()
+            (c + radius * transform.uniform_scale(), 1)
         }
         Shape::Plane { point, .. } => reach(&mut std::iter::once(*point)),
         Shape::Triangle { a, b, c } => reach(&mut [*a, *b, *c].into_iter()),
         Shape::Quad { a, b, c, d } => reach(&mut [*a, *b, *c, *d].into_iter()),
         Shape::Box { min, max } => reach(&mut (0..8).map(|i| {
-            glam::Vec3::new(
+            Vec3::new(
                 if i & 1 == 0 { min.x } else { max.x },
                 if i & 2 == 0 { min.y } else { max.y },
                 if i & 4 == 0 { min.z } else { max.z },
@@ -652,11 +920,33 @@ mod tests {
     use super::*;
 
     #[test]
-    fn quoted_strings_and_entities_are_found_by_offset() {
-        let s = "Entity(name: \"a\"), Entity(name: \"b\")";
-        assert_eq!(find_quoted(s, "b", 0), Some(32));
-        assert_eq!(find_quoted(s, "a", 15), None);
-        assert_eq!(find_entity(s, 1), Some(19));
+    fn corners_bound_every_vertex_of_a_transformed_mesh() {
+        let mut rng = crate::shading::rng::Rng::new(3, 5);
+        let mut r = || 2.0 * rng.next_f32() - 1.0;
+        for _ in 0..200 {
+            let positions: Vec<Vec3> = (0..50).map(|_| Vec3::new(r(), r(), r()) * 1e3).collect();
+            let t = Transform(Affine3A::from_scale_rotation_translation(
+                Vec3::new(r(), r(), r()) * 1e5,
+                glam::Quat::from_euler(glam::EulerRot::XYZ, r(), r(), r()),
+                Vec3::new(r(), r(), r()) * 1e8,
+            ));
+            let bounds = positions.iter().fold(
+                [Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)],
+                |[lo, hi], &p| [lo.min(p), hi.max(p)],
+            );
+            let data = Arc::new(MeshData {
+                positions,
+                triangles: vec![[0, 1, 2]],
+                ..MeshData::default()
+            });
+            let shape = Shape::Mesh(MeshRef {
+                path: PathBuf::new(),
+                data,
+            });
+            let (exact, n) = world_reach(&shape, &t);
+            assert_eq!(n, 50);
+            assert!(corner_reach(bounds, &t) >= exact, "{exact}");
+        }
     }
 
     #[test]

@@ -23,4 +23,5 @@ pub mod check;
 pub mod error;
 pub mod format;
 pub mod load;
+pub mod locate;
 pub mod mesh;

@@ -1,0 +1,563 @@
+//! What the viewer shows: the latest images and the event stream, fed by the render loop.
+//!
+//! Events, one JSON object each (every one has `kind`; times are milliseconds):
+//!
+//! ```text
+//! {"kind":"reload","reload":3,"trigger":["scene.ron"],"target_spp":64,"since_save_ms":1.2}
+//! {"kind":"pass","reload":3,"spp":16,"preview":false,"target_spp":64,"width":512,"height":512,
+//!  "changed":"materials","since_save_ms":41.0,"samples_per_s":2.1e6,"trigger":["scene.ron"]}
+//! {"kind":"progress","reload":3,"rows":128,"height":512}
+//! {"kind":"done","reload":3,"spp":64,"full_ms":812.0,"line":"reload 3: materials | …"}
+//! {"kind":"error","message":"scene.ron:6:40: …","file":"scene.ron","line":6,"col":40,
+//!  "source_line":"        \"red\": Diffuse(albedo: …","reload":2}
+//! ```
+//!
+//! `reload` starts a render of a good save (and clears an error), `pass` says a new image is
+//! at `/image.f32` (and the other image routes), `progress` counts the rows of the pass in
+//! flight, `done` ends a render at full quality, and `error` is a save that did not load (the
+//! last good image stays; `reload` is the number of the render still shown). A new client
+//! first gets the latest `reload`, `pass`, `done` and `error` that still apply.
+
+use std::collections::VecDeque;
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock, PoisonError};
+use std::time::{Duration, Instant};
+
+use image::ImageFormat;
+use indicatif::ProgressBar;
+use serde_json::{Value, json};
+
+use crate::ecs::resources::ChangeSummary;
+use crate::film::Film;
+use crate::watch::{Observer, Report};
+
+/// The first 8 bytes of `/image.f32`. Then four little-endian `u32`: width, height, reload
+/// number (low 32 bits) and samples per pixel; then `width × height` pixels of three
+/// little-endian `f32` (linear RGB, unclamped), rows from the top. 24 bytes of header keep the
+/// floats 4-byte aligned for a `Float32Array` view.
+pub const RAW_MAGIC: &[u8; 8] = b"RONDOF32";
+
+/// Events a stalled client may have queued; older ones are dropped.
+const QUEUE: usize = 32;
+
+/// The encodings of a [`Frame`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Encoding {
+    /// 8-bit sRGB PNG.
+    Png,
+    /// Linear float OpenEXR.
+    Exr,
+    /// Raw linear floats (see [`RAW_MAGIC`]).
+    Raw,
+}
+
+/// One image the server hands out; the encodings are made on first request.
+pub struct Frame {
+    reload: u64,
+    film: Film,
+    raw: OnceLock<Vec<u8>>,
+    png: OnceLock<Result<Vec<u8>, String>>,
+    exr: OnceLock<Result<Vec<u8>, String>>,
+}
+
+impl Frame {
+    fn new(reload: u64, film: Film) -> Self {
+        Self {
+            reload,
+            film,
+            raw: OnceLock::new(),
+            png: OnceLock::new(),
+            exr: OnceLock::new(),
+        }
+    }
+
+    /// The reload whose render made it.
+    pub fn reload(&self) -> u64 {
+        self.reload
+    }
+
+    /// Samples per pixel in it.
+    pub fn samples(&self) -> u32 {
+        self.film.samples
+    }
+
+    /// The raw float encoding (see [`RAW_MAGIC`]).
+    pub fn raw(&self) -> &[u8] {
+        self.raw.get_or_init(|| {
+            let f = &self.film;
+            let mut out = Vec::with_capacity(24 + f.sum.len() * 12);
+            out.extend_from_slice(RAW_MAGIC);
+            for v in [f.width, f.height, self.reload as u32, f.samples] {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+            // As `Film::mean`, without its intermediate vector.
+            let scale = 1.0 / f64::from(f.samples.max(1));
+            for s in &f.sum {
+                for v in (*s * scale).as_vec3().to_array() {
+                    out.extend_from_slice(&v.to_le_bytes());
+                }
+            }
+            out
+        })
+    }
+
+    /// The bytes of one encoding (made now if it was not yet).
+    pub fn bytes(&self, encoding: Encoding) -> Result<&[u8], &str> {
+        match encoding {
+            Encoding::Png => self.png(),
+            Encoding::Exr => self.exr(),
+            Encoding::Raw => Ok(self.raw()),
+        }
+    }
+
+    /// PNG, encoded as [`Film::write`] encodes a `.png`.
+    pub fn png(&self) -> Result<&[u8], &str> {
+        encoded(&self.png, |out| {
+            self.film.to_srgb8().write_to(out, ImageFormat::Png)
+        })
+    }
+
+    /// OpenEXR, encoded as [`Film::write`] encodes an `.exr`.
+    pub fn exr(&self) -> Result<&[u8], &str> {
+        encoded(&self.exr, |out| {
+            self.film.to_linear().write_to(out, ImageFormat::OpenExr)
+        })
+    }
+}
+
+/// The encoding in `cell`, made by `write` on first use.
+fn encoded(
+    cell: &OnceLock<Result<Vec<u8>, String>>,
+    write: impl FnOnce(&mut Cursor<Vec<u8>>) -> image::ImageResult<()>,
+) -> Result<&[u8], &str> {
+    cell.get_or_init(|| {
+        let mut out = Cursor::new(Vec::new());
+        write(&mut out).map_err(|e| e.to_string())?;
+        Ok(out.into_inner())
+    })
+    .as_ref()
+    .map(Vec::as_slice)
+    .map_err(String::as_str)
+}
+
+/// An event-stream client: its queue, filled by the render loop, drained by its own thread.
+pub struct Client {
+    queue: Mutex<VecDeque<Arc<str>>>,
+    ready: Condvar,
+}
+
+impl Client {
+    fn push(&self, event: &Arc<str>) {
+        let mut q = self.queue.lock().unwrap_or_else(PoisonError::into_inner);
+        if q.len() == QUEUE {
+            // A stalled client skips ahead: the newest events matter, the oldest are stale.
+            q.pop_front();
+        }
+        q.push_back(event.clone());
+        drop(q);
+        self.ready.notify_one();
+    }
+
+    /// Every queued event, waiting at most `timeout` for one (empty on timeout).
+    pub fn next_batch(&self, timeout: Duration) -> Vec<Arc<str>> {
+        let q = self.queue.lock().unwrap_or_else(PoisonError::into_inner);
+        let (mut q, _) = self
+            .ready
+            .wait_timeout_while(q, timeout, |q| q.is_empty())
+            .unwrap_or_else(PoisonError::into_inner);
+        q.drain(..).collect()
+    }
+}
+
+/// The render in progress, for rates and progress.
+#[derive(Clone)]
+struct Render {
+    reload: u64,
+    /// When its first frame started (the renderer's clock for samples/s).
+    started: Instant,
+    height: u32,
+    trigger: Vec<String>,
+    /// From the save to `started`.
+    since_save: Duration,
+}
+
+/// The events a new client gets first.
+#[derive(Default)]
+struct Sticky {
+    reload: Option<Arc<str>>,
+    pass: Option<Arc<str>>,
+    done: Option<Arc<str>>,
+    error: Option<Arc<str>>,
+}
+
+#[derive(Default)]
+struct State {
+    current: Option<Arc<Frame>>,
+    previous: Option<Arc<Frame>>,
+    render: Option<Render>,
+    sticky: Sticky,
+    clients: Vec<Arc<Client>>,
+    /// The progress last sent (rows), to send only changes.
+    progress_sent: u64,
+}
+
+struct Shared {
+    state: Mutex<State>,
+    progress: ProgressBar,
+}
+
+/// The server's side of the render loop: sees the watch loop's reports (see [`Feed::observer`]),
+/// keeps the latest images and broadcasts events. Cheap to clone; all clones share one state.
+#[derive(Clone)]
+pub struct Feed {
+    shared: Arc<Shared>,
+}
+
+impl Default for Feed {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Feed {
+    /// An empty feed: no image yet, no clients.
+    pub fn new() -> Self {
+        Self {
+            shared: Arc::new(Shared {
+                state: Mutex::new(State::default()),
+                progress: ProgressBar::hidden(),
+            }),
+        }
+    }
+
+    fn state(&self) -> MutexGuard<'_, State> {
+        self.shared
+            .state
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// The latest image.
+    pub fn current(&self) -> Option<Arc<Frame>> {
+        self.state().current.clone()
+    }
+
+    /// The last image of the render before the latest save.
+    pub fn previous(&self) -> Option<Arc<Frame>> {
+        self.state().previous.clone()
+    }
+
+    /// A new event-stream client, already holding the events that describe the present; `None`
+    /// if `max` clients are connected.
+    pub fn subscribe(&self, max: usize) -> Option<Arc<Client>> {
+        let mut state = self.state();
+        if state.clients.len() >= max {
+            return None;
+        }
+        let client = Arc::new(Client {
+            queue: Mutex::new(VecDeque::new()),
+            ready: Condvar::new(),
+        });
+        let s = &state.sticky;
+        for e in [&s.reload, &s.pass, &s.done, &s.error]
+            .into_iter()
+            .flatten()
+        {
+            client.push(e);
+        }
+        state.clients.push(client.clone());
+        Some(client)
+    }
+
+    /// Forgets a client (its stream closed).
+    pub fn unsubscribe(&self, client: &Arc<Client>) {
+        self.state().clients.retain(|c| !Arc::ptr_eq(c, client));
+    }
+
+    /// Connected event-stream clients.
+    pub fn clients(&self) -> usize {
+        self.state().clients.len()
+    }
+
+    /// Sends `event` to every client; returns it shared.
+    fn broadcast(state: &mut State, event: &Value) -> Arc<str> {
+        let text: Arc<str> = event.to_string().into();
+        for c in &state.clients {
+            c.push(&text);
+        }
+        text
+    }
+
+    /// Sends a `progress` event if rows were rendered since the last one (called by a timer).
+    pub fn send_progress(&self) {
+        let rows = self.shared.progress.position();
+        let mut state = self.state();
+        if rows == state.progress_sent {
+            return;
+        }
+        state.progress_sent = rows;
+        let Some(render) = state.render.as_ref() else {
+            return;
+        };
+        let event = json!({
+            "kind": "progress",
+            "reload": render.reload,
+            "rows": rows.min(u64::from(render.height)),
+            "height": render.height,
+        });
+        Self::broadcast(&mut state, &event);
+    }
+
+    fn restart_progress(&self, state: &mut State) {
+        self.shared.progress.set_position(0);
+        state.progress_sent = 0;
+    }
+
+    /// The hidden progress bar the renderer should advance ([`crate::watch::Watch::set_progress`]).
+    pub fn progress_bar(&self) -> ProgressBar {
+        self.shared.progress.clone()
+    }
+
+    /// This feed as the watch loop's [`Observer`].
+    pub fn observer(&self) -> Observer {
+        let feed = self.clone();
+        Box::new(move |report, film| feed.observe(report, film))
+    }
+
+    /// Takes one report of the watch loop (with the film of a [`Report::Wrote`]): updates the
+    /// images and sends the matching event. Returns at once: the film is copied (~1 ms at 512²),
+    /// encodings are made on request.
+    pub fn observe(&self, report: &Report, film: Option<&Film>) {
+        let mut state = self.state();
+        let shown = state.current.as_ref().map(|c| c.reload);
+        let event = match (report, film) {
+            (
+                Report::Started {
+                    reload,
+                    trigger,
+                    spp,
+                    saved,
+                },
+                _,
+            ) => {
+                self.restart_progress(&mut state);
+                let height = state.render.as_ref().map_or(0, |r| r.height);
+                let render = state.render.insert(Render {
+                    reload: *reload,
+                    started: Instant::now(),
+                    height,
+                    trigger: names(trigger),
+                    since_save: saved.elapsed(),
+                });
+                json!({
+                    "kind": "reload",
+                    "reload": reload,
+                    "trigger": render.trigger,
+                    "target_spp": spp,
+                    "since_save_ms": ms(render.since_save),
+                })
+            }
+            (
+                Report::Wrote {
+                    reload,
+                    preview,
+                    spp,
+                    changes,
+                    ..
+                },
+                Some(film),
+            ) => {
+                self.restart_progress(&mut state);
+                if shown.is_some_and(|r| r != *reload) {
+                    state.previous = state.current.take();
+                }
+                state.current = Some(Arc::new(Frame::new(*reload, film.clone())));
+                let render = match state.render.as_mut() {
+                    Some(r) if r.reload == *reload => r,
+                    _ => state.render.insert(Render {
+                        reload: *reload,
+                        started: Instant::now(),
+                        height: film.height,
+                        trigger: Vec::new(),
+                        since_save: Duration::ZERO,
+                    }),
+                };
+                render.height = film.height;
+                let elapsed = render.started.elapsed();
+                let pixels = f64::from(film.width) * f64::from(film.height);
+                let rate = pixels * f64::from(film.samples) / elapsed.as_secs_f64().max(1e-9);
+                json!({
+                    "kind": "pass",
+                    "reload": reload,
+                    "spp": film.samples,
+                    "preview": preview,
+                    "target_spp": spp,
+                    "width": film.width,
+                    "height": film.height,
+                    "changed": changed_text(changes),
+                    "trigger": render.trigger,
+                    "since_save_ms": ms(render.since_save + elapsed),
+                    "samples_per_s": rate.round(),
+                })
+            }
+            (Report::Rendered(r), _) if r.completed() => json!({
+                "kind": "done",
+                "reload": r.number,
+                "spp": r.spp,
+                "full_ms": r.full.map(ms),
+                "line": r.to_string(),
+            }),
+            (Report::Failed { message }, _) => {
+                let at = error_location(message);
+                let (file, line, col) = match &at {
+                    Some((f, l, c)) => (Some(f.display().to_string()), Some(*l), Some(*c)),
+                    None => (None, None, None),
+                };
+                json!({
+                    "kind": "error",
+                    "message": message,
+                    "file": file,
+                    "line": line,
+                    "col": col,
+                    "source_line": at.and_then(|(f, l, _)| source_line(&f, l)),
+                    "reload": shown,
+                })
+            }
+            (Report::SceneMissing { path }, _) => json!({
+                "kind": "error",
+                "message": format!("{}: deleted; waiting for it to come back", path.display()),
+                "reload": shown,
+            }),
+            _ => return,
+        };
+        let text = Self::broadcast(&mut state, &event);
+        let sticky = &mut state.sticky;
+        match event["kind"].as_str() {
+            // A good save starts afresh: the error and the old render's events no longer apply.
+            Some("reload") => {
+                *sticky = Sticky {
+                    reload: Some(text),
+                    ..Sticky::default()
+                }
+            }
+            Some("pass") => sticky.pass = Some(text),
+            Some("done") => sticky.done = Some(text),
+            _ => sticky.error = Some(text),
+        }
+    }
+}
+
+fn ms(d: Duration) -> f64 {
+    (d.as_secs_f64() * 1e6).round() / 1e3
+}
+
+fn names(paths: &[PathBuf]) -> Vec<String> {
+    paths
+        .iter()
+        .map(|p| {
+            p.file_name()
+                .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into())
+        })
+        .collect()
+}
+
+/// What a reload changed, in words: `materials`, `2 entities changed, camera`, `nothing`.
+pub fn changed_text(c: &ChangeSummary) -> String {
+    let counts = [
+        (c.added, "added"),
+        (c.changed, "changed"),
+        (c.removed, "removed"),
+    ]
+    .into_iter()
+    .filter(|(n, _)| *n > 0)
+    .map(|(n, what)| format!("{n} {} {what}", if n == 1 { "entity" } else { "entities" }));
+    let flags = [
+        (c.materials, "materials"),
+        (c.camera, "camera"),
+        (c.settings, "settings"),
+    ]
+    .into_iter()
+    .filter(|(on, _)| *on)
+    .map(|(_, what)| what.to_string());
+    let parts: Vec<String> = counts.chain(flags).collect();
+    if parts.is_empty() {
+        "nothing".into()
+    } else {
+        parts.join(", ")
+    }
+}
+
+/// Where an error message points: `(file, line, col)` from its `file:line:col: ` prefix.
+pub fn error_location(message: &str) -> Option<(PathBuf, usize, usize)> {
+    message.match_indices(": ").find_map(|(at, _)| {
+        let mut parts = message[..at].rsplitn(3, ':');
+        let col = parts.next()?.parse().ok()?;
+        let line = parts.next()?.parse().ok()?;
+        let file = parts.next().filter(|f| !f.is_empty())?;
+        Some((PathBuf::from(file), line, col))
+    })
+}
+
+/// Line `line` (from 1) of `file`, if it can be read; long lines are cut.
+fn source_line(file: &Path, line: usize) -> Option<String> {
+    const MAX: usize = 400;
+    let text = std::fs::read_to_string(file).ok()?;
+    let l = text.lines().nth(line.checked_sub(1)?)?;
+    Some(l.chars().take(MAX).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn error_locations_come_from_the_prefix() {
+        assert_eq!(
+            error_location("dir/scene.ron:6:40: entity \"ball\": unknown material \"whit\""),
+            Some((PathBuf::from("dir/scene.ron"), 6, 40))
+        );
+        assert_eq!(
+            error_location("C:\\x:y\\s.ron:12:3: bad: worse"),
+            Some((PathBuf::from("C:\\x:y\\s.ron"), 12, 3))
+        );
+        assert_eq!(error_location("scene.ron: cannot read: gone"), None);
+        assert_eq!(error_location("no location at all"), None);
+    }
+
+    #[test]
+    fn a_stalled_client_keeps_only_the_newest_events() {
+        let feed = Feed::new();
+        let client = feed.subscribe(4).expect("room for a client");
+        let mut state = feed.state();
+        for i in 0..QUEUE + 5 {
+            Feed::broadcast(&mut state, &json!({ "i": i }));
+        }
+        drop(state);
+        let got = client.next_batch(Duration::ZERO);
+        assert_eq!(got.len(), QUEUE);
+        assert_eq!(&*got[0], r#"{"i":5}"#);
+        assert_eq!(&*got[QUEUE - 1], format!(r#"{{"i":{}}}"#, QUEUE + 4));
+        assert!(feed.subscribe(1).is_none(), "the limit holds");
+    }
+
+    #[test]
+    fn raw_frames_carry_size_reload_samples_and_linear_means() {
+        let mut film = Film::new(2, 1);
+        film.sum = vec![
+            glam::DVec3::new(4.0, 0.5, -1.0),
+            glam::DVec3::new(0.0, 2.0, 0.0),
+        ];
+        film.samples = 2;
+        let frame = Frame::new(7, film);
+        let raw = frame.raw();
+        assert_eq!(&raw[..8], RAW_MAGIC);
+        let u = |i: usize| u32::from_le_bytes(raw[8 + 4 * i..12 + 4 * i].try_into().unwrap());
+        assert_eq!([u(0), u(1), u(2), u(3)], [2, 1, 7, 2]);
+        let floats: Vec<f32> = raw[24..]
+            .chunks(4)
+            .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+            .collect();
+        assert_eq!(floats, [2.0, 0.25, -0.5, 0.0, 1.0, 0.0]);
+    }
+}

@@ -1,0 +1,282 @@
+// The live viewer in a real browser: headless Debian chromium (/usr/bin/chromium, never a
+// downloaded build) driven by playwright-core against `rondo watch --serve`.
+//
+//   node viewer.test.mjs                      # the checks, then the latency on the Cornell box
+//   node viewer.test.mjs --screenshot out.png # also a screenshot of the page (docs/viewer.png)
+//
+// RONDO_BIN names the binary (default: ../../target/release/rondo), RONDO_LATENCY_EDITS the
+// number of timed edits (default 5). Every wait is bounded; any failure, including a missing
+// chromium, exits non-zero. The last line is "N passed, N failed".
+
+import { spawn } from "node:child_process";
+import fs from "node:fs";
+import os from "node:os";
+import path from "node:path";
+import { fileURLToPath } from "node:url";
+import { chromium } from "playwright-core";
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+const root = path.resolve(here, "../..");
+const bin = process.env.RONDO_BIN || path.join(root, "target/release/rondo");
+const browserPath = process.env.CHROMIUM || "/usr/bin/chromium";
+const screenshot = (() => {
+  const i = process.argv.indexOf("--screenshot");
+  return i > 0 ? path.resolve(process.argv[i + 1]) : null;
+})();
+const WAIT = 30_000;
+const LATENCY_EDITS = Number(process.env.RONDO_LATENCY_EDITS) || 5;
+
+let passed = 0, failed = 0;
+function check(name, ok, detail = "") {
+  if (ok) { passed++; console.log(`ok   ${name}`); }
+  else { failed++; console.log(`FAIL ${name}${detail ? `: ${detail}` : ""}`); }
+}
+
+// A scene whose centre pixel sees only the `wall` emitter, so its colour is exactly the wall's
+// emission (any sample count, preview included). Line 5 holds the wall's material.
+function scene(wall) {
+  return `Scene(
+    camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0), fov: 40.0),
+    settings: Settings(width: 64, height: 64, spp: 4, max_depth: 3),
+    materials: {
+        "wall": Light(emit: Constant(${wall}), intensity: 1.0, two_sided: true),
+        "ball": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
+    },
+    entities: [
+        Entity(name: "wall", material: "wall", shape: Quad(a: (-10, -10, 5), b: (10, -10, 5), c: (10, 10, 5), d: (-10, 10, 5))),
+        Entity(name: "ball", material: "ball", shape: Sphere(center: (0, 1.4, 0), radius: 0.3)),
+    ],
+)
+`;
+}
+
+// Starts `rondo watch SCENE --serve 127.0.0.1:0 ARGS` and resolves with the viewer's URL.
+function startRondo(scenePath, args = []) {
+  const child = spawn(bin, ["watch", scenePath, "--serve", "127.0.0.1:0", ...args], {
+    stdio: ["ignore", "ignore", "pipe"],
+  });
+  const log = [];
+  const url = new Promise((resolve, reject) => {
+    const timer = setTimeout(() => reject(new Error(`no viewer line: ${log.join("")}`)), WAIT);
+    child.stderr.setEncoding("utf8");
+    child.stderr.on("data", (text) => {
+      log.push(text);
+      const m = /viewer: (http:\/\/\S+)/.exec(log.join(""));
+      if (m) { clearTimeout(timer); resolve(m[1]); }
+    });
+    child.on("exit", (code) => reject(new Error(`rondo exited (${code}): ${log.join("")}`)));
+    child.on("error", reject);
+  });
+  return { child, url, log };
+}
+
+async function stopRondo(child) {
+  if (child.exitCode !== null) return child.exitCode;
+  const exited = new Promise((resolve) => child.on("exit", (code, signal) => resolve(code ?? signal)));
+  child.kill("SIGINT");
+  const timer = setTimeout(() => child.kill("SIGKILL"), WAIT);
+  const code = await exited;
+  clearTimeout(timer);
+  return code;
+}
+
+// Saves like an editor that writes a temporary file and renames it over the original; resolves
+// with the wall-clock time (ms since the epoch) at which the save completed.
+function save(file, text) {
+  const tmp = `${file}.tmp~`;
+  fs.writeFileSync(tmp, text);
+  fs.renameSync(tmp, file);
+  return performance.timeOrigin + performance.now();
+}
+
+const pixelAt = (page, x, y) => page.evaluate(([x, y]) => {
+  const c = document.getElementById("canvas");
+  return Array.from(c.getContext("2d").getImageData(x, y, 1, 1).data.slice(0, 3));
+}, [x, y]);
+
+async function waitPixel(page, x, y, rgb) {
+  await page.waitForFunction(([x, y, rgb]) => {
+    const c = document.getElementById("canvas");
+    if (c.hidden) return false;
+    const d = c.getContext("2d").getImageData(x, y, 1, 1).data;
+    return d[0] === rgb[0] && d[1] === rgb[1] && d[2] === rgb[2];
+  }, [x, y, rgb], { timeout: WAIT, polling: 10 });
+}
+
+async function launch() {
+  if (!fs.existsSync(browserPath)) throw new Error(`${browserPath} missing: apt-get install chromium`);
+  const profile = fs.mkdtempSync(path.join(os.tmpdir(), "rondo-chromium-"));
+  const context = await chromium.launchPersistentContext(profile, {
+    executablePath: browserPath,
+    headless: true,
+    viewport: { width: 1000, height: 760 },
+    args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+           "--disable-background-networking", "--disable-component-update", "--disable-sync"],
+  });
+  return { context, profile };
+}
+
+async function behaviour(context) {
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), "rondo-viewer-"));
+  const file = path.join(dir, "scene.ron");
+  fs.writeFileSync(file, scene("(1.0, 0.0, 0.0)"));
+  const rondo = startRondo(file, ["--threads", "2"]);
+  try {
+    const url = await rondo.url;
+    const page = await context.newPage();
+    const loads = [];
+    page.on("load", () => loads.push(Date.now()));
+    await page.goto(url);
+    await waitPixel(page, 32, 32, [255, 0, 0]);
+    check("the first image appears (centre pixel red)", true);
+    await page.evaluate(() => { window.__marker = "same page"; });
+
+    save(file, scene("(0.0, 0.0, 1.0)"));
+    await waitPixel(page, 32, 32, [0, 0, 255]);
+    const marker = await page.evaluate(() => window.__marker);
+    check("a save changes the image without reloading the page", marker === "same page" && loads.length === 1,
+      `marker ${marker}, ${loads.length} loads`);
+
+    const broken = scene("(0.0, 0.0, 1.0)").replace("intensity: 1.0", "intensity: 1.0 1.0");
+    save(file, broken);
+    await page.waitForSelector("#error", { state: "visible", timeout: WAIT });
+    const message = await page.textContent("#error .message");
+    const source = await page.textContent("#error .source");
+    check("a broken save shows file:line:col", /scene\.ron:5:\d+: /.test(message), message);
+    check("... and the offending source line", source.includes('"wall": Light(emit: Constant((0.0, 0.0, 1.0)), intensity: 1.0 1.0'), source);
+    check("... over the last good image", String(await pixelAt(page, 32, 32)) === "0,0,255");
+
+    save(file, scene("(0.0, 1.0, 0.0)"));
+    await waitPixel(page, 32, 32, [0, 255, 0]);
+    await page.waitForSelector("#error", { state: "hidden", timeout: WAIT });
+    check("the next good save clears the error and shows its image", true);
+
+    await page.waitForFunction(() => !document.getElementById("ab").disabled, null, { timeout: WAIT });
+    await page.click("#ab");
+    await waitPixel(page, 32, 32, [0, 0, 255]);
+    check("A/B shows the image from before the last save", true);
+    await page.click("#ab");
+    await waitPixel(page, 32, 32, [0, 255, 0]);
+
+    // Closed forms: 1.0 at -1 stop is 0.5 linear; sRGB(0.5) = 0.7354 -> 188; linear -> 128.
+    await page.fill("#exposure", "-1");
+    await page.dispatchEvent("#exposure", "input");
+    check("exposure -1 stop in sRGB gives 188", String(await pixelAt(page, 32, 32)) === "0,188,0",
+      String(await pixelAt(page, 32, 32)));
+    await page.click("#srgb");
+    check("... and 128 when displayed linear", String(await pixelAt(page, 32, 32)) === "0,128,0",
+      String(await pixelAt(page, 32, 32)));
+
+    const box = await page.locator("#canvas").boundingBox();
+    await page.mouse.move(box.x + box.width * 32.5 / 64, box.y + box.height * 32.5 / 64);
+    const inspected = await page.textContent("#pixel");
+    check("the pixel inspector shows x, y and linear RGB", inspected.includes("x 32 y 32") && inspected.includes("0.0000 1.0000 0.0000"), inspected);
+
+    await page.click("#zoom");
+    const width = await page.evaluate(() => parseFloat(document.getElementById("canvas").style.width));
+    check("1:1 zoom shows one screen pixel per pixel", Math.abs(width - 64) < 0.01, String(width));
+    await page.close();
+  } finally {
+    const code = await stopRondo(rondo.child);
+    check("rondo stops on SIGINT", code === 0, String(code));
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+}
+
+// Save -> first image of the edit, for material edits of the Cornell box at 512x512: on disk
+// (rondo's own "first image … since save", with -o), on the event stream (the `pass` event
+// reaching the page) and on the page (the canvas drawn).
+async function latency(context) {
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), "rondo-viewer-latency-"));
+  const file = path.join(dir, "scene.ron");
+  const original = fs.readFileSync(path.join(root, "scenes/cornell.ron"), "utf8");
+  const [red, blue] = ["(0.65, 0.05, 0.05)", "(0.05, 0.05, 0.65)"];
+  if (!original.includes(red)) throw new Error("scenes/cornell.ron: no red material to edit");
+  fs.writeFileSync(file, original);
+  const rondo = startRondo(file, ["-o", path.join(dir, "out.png")]);
+  const rows = [], stream = [], fetches = [], draws = [];
+  try {
+    const page = await context.newPage();
+    await page.goto(await rondo.url);
+    await page.waitForFunction(() => document.getElementById("canvas").dataset.reload === "0", null, { timeout: WAIT });
+    await page.evaluate(() => {
+      window.__seen = [];
+      window.__events = [];
+      const handle = window.onEvent;
+      window.onEvent = (e) => {
+        if (e.kind === "pass") window.__events.push({ reload: e.reload, at: performance.timeOrigin + performance.now() });
+        handle(e);
+      };
+      const c = document.getElementById("canvas");
+      new MutationObserver(() => window.__seen.push({ reload: Number(c.dataset.reload), at: performance.timeOrigin + performance.now() }))
+        .observe(c, { attributes: true, attributeFilter: ["data-samples", "data-reload"] });
+    });
+    let text = original;
+    for (let i = 1; i <= LATENCY_EDITS; i++) {
+      text = text.includes(red) ? text.replace(red, blue) : text.replace(blue, red);
+      // Let the previous render settle a moment so each edit starts from the same state.
+      await new Promise((r) => setTimeout(r, 300));
+      const saved = save(file, text);
+      await page.waitForFunction((n) => window.__seen.some((s) => s.reload === n), i, { timeout: WAIT, polling: 5 });
+      const [drawn, event] = await page.evaluate((n) => [window.__seen.find((s) => s.reload === n).at,
+        window.__events.find((s) => s.reload === n).at], i);
+      rows.push(drawn - saved);
+      stream.push(event - saved);
+      const [fetchMs, drawMs] = await page.evaluate(() => [document.body.dataset.fetchMs, document.body.dataset.drawMs]);
+      fetches.push(Number(fetchMs));
+      draws.push(Number(drawMs));
+    }
+    await page.close();
+  } finally {
+    await stopRondo(rondo.child);
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+  const stats = (v) => {
+    v.sort((a, b) => a - b);
+    return `median ${v[v.length >> 1].toFixed(1)} ms (min ${v[0].toFixed(1)}, max ${v[v.length - 1].toFixed(1)})`;
+  };
+  const disk = rondo.log.join("").split("\n").filter((l) => l.startsWith("reload "))
+    .map((l) => /first image ([\d.]+) (m?s)/.exec(l)).filter(Boolean)
+    .map((m) => Number(m[1]) * (m[2] === "s" ? 1000 : 1));
+  console.log(`latency, save -> first image, Cornell box 512x512, material edit, ${rows.length} edits:`);
+  if (disk.length) console.log(`  on disk (rondo's log)     ${stats(disk)}`);
+  console.log(`  on the stream (page)      ${stats(stream)}`);
+  console.log(`  drawn on the page         ${stats(rows)}`);
+  console.log(`    of which: fetch of /image.f32 ${stats(fetches)}, tone-map and draw ${stats(draws)}`);
+  check("the page shows each edit", rows.length === LATENCY_EDITS);
+}
+
+async function takeScreenshot(context, out) {
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), "rondo-viewer-shot-"));
+  const file = path.join(dir, "cornell.ron");
+  fs.writeFileSync(file, fs.readFileSync(path.join(root, "scenes/cornell.ron"), "utf8"));
+  const rondo = startRondo(file, ["--spp", "64"]);
+  try {
+    const page = await context.newPage();
+    await page.goto(await rondo.url);
+    await page.waitForFunction(() => /64\/64 spp · done/.test(document.getElementById("status").textContent), null, { timeout: 10 * WAIT });
+    const box = await page.locator("#canvas").boundingBox();
+    await page.mouse.move(box.x + box.width * 0.3, box.y + box.height * 0.6);
+    await page.screenshot({ path: out });
+    console.log(`wrote ${out}`);
+    await page.close();
+  } finally {
+    await stopRondo(rondo.child);
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+}
+
+let context, profile;
+try {
+  ({ context, profile } = await launch());
+  await behaviour(context);
+  await latency(context);
+  if (screenshot) await takeScreenshot(context, screenshot);
+} catch (e) {
+  check("the browser test ran to the end", false, e.stack || String(e));
+} finally {
+  if (context) await context.close();
+  if (profile) fs.rmSync(profile, { recursive: true, force: true });
+}
+console.log(`${passed} passed, ${failed} failed`);
+process.exit(failed === 0 && passed > 0 ? 0 : 1);

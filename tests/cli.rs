@@ -1,0 +1,246 @@
+//! The command line: exit codes (1 for bad input, 2 for bad usage), output paths refused before
+//! any work is done for them, errors that say their cause once.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use common::{scenes_dir, temp_dir, write_scene};
+
+/// Longer than any command here needs by orders of magnitude: only guards against a hang (a
+/// command that renders 10⁶ samples per pixel before looking at its output path).
+const HANG_GUARD: Duration = Duration::from_secs(300);
+
+/// Runs `rondo args…`, killing it (and failing) if it is still running after [`HANG_GUARD`].
+fn rondo(args: &[&str]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start rondo");
+    let start = Instant::now();
+    while child.try_wait().expect("wait for rondo").is_none() {
+        if start.elapsed() > HANG_GUARD {
+            child.kill().ok();
+            panic!("rondo {args:?} still running after {HANG_GUARD:?}: it started working");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().expect("rondo output")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn text(p: &Path) -> &str {
+    p.to_str().expect("UTF-8 temp path")
+}
+
+fn cornell() -> PathBuf {
+    scenes_dir().join("cornell.ron")
+}
+
+/// A render that would take days on one thread: it must be refused before it starts.
+fn endless_render(output: &str) -> Output {
+    let scene = cornell();
+    rondo(&[
+        "render",
+        text(&scene),
+        "-o",
+        output,
+        "--spp",
+        "1048576",
+        "--threads",
+        "1",
+    ])
+}
+
+/// Asserts a refusal with exit status 1, the `expected` reason, and no render summary.
+fn assert_refused(out: &Output, expected: &str) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains(expected), "{err}");
+    assert!(
+        !err.contains("samples/s"),
+        "rendered before refusing: {err}"
+    );
+}
+
+#[test]
+fn render_refuses_an_output_in_a_missing_directory_before_rendering() {
+    let dir = temp_dir("cli-missing-dir");
+    let output = dir.join("no/such/dir/out.png");
+    let out = endless_render(text(&output));
+    assert_refused(&out, "does not exist");
+    assert!(
+        stderr(&out).contains("no/such/dir/out.png"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
+fn render_refuses_an_output_that_is_a_directory_before_rendering() {
+    let dir = temp_dir("cli-output-is-dir");
+    let output = dir.join("taken.png");
+    std::fs::create_dir_all(&output).expect("mkdir");
+    assert_refused(&endless_render(text(&output)), "is a directory");
+    let file = dir.join("file");
+    std::fs::write(&file, "").expect("write");
+    assert_refused(
+        &endless_render(text(&file.join("out.png"))),
+        "is not a directory",
+    );
+}
+
+/// Permission bits stop writes only for users other than root (CI may run as root): the render
+/// must be refused exactly when creating a file in the directory fails.
+#[test]
+fn render_refuses_a_directory_that_does_not_accept_files_exactly_when_it_does_not() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = temp_dir("cli-read-only");
+    let locked = dir.join("locked");
+    std::fs::create_dir_all(&locked).expect("mkdir");
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).expect("chmod");
+    let writable = std::fs::write(locked.join("probe"), "").is_ok();
+    std::fs::remove_file(locked.join("probe")).ok();
+    let output = locked.join("out.png");
+    if writable {
+        let scene = cornell();
+        let out = rondo(&[
+            "render",
+            text(&scene),
+            "-o",
+            text(&output),
+            "--spp",
+            "1",
+            "--width",
+            "4",
+            "--height",
+            "4",
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        assert!(output.exists());
+    } else {
+        assert_refused(&endless_render(text(&output)), "cannot create files in");
+    }
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o755)).expect("chmod");
+}
+
+#[test]
+fn watch_refuses_an_unwritable_output_instead_of_watching() {
+    let dir = temp_dir("cli-watch");
+    let scene = cornell();
+    let output = dir.join("missing/live.png");
+    let out = rondo(&["watch", text(&scene), "-o", text(&output)]);
+    assert_refused(&out, "does not exist");
+}
+
+/// Writes a 2×1 PNG with the given red values.
+fn png(dir: &Path, name: &str, red: [u8; 2]) -> PathBuf {
+    let path = dir.join(name);
+    image::RgbImage::from_raw(2, 1, vec![red[0], 0, 0, red[1], 0, 0])
+        .expect("2x1 image")
+        .save(&path)
+        .expect("write png");
+    path
+}
+
+#[test]
+fn diff_refuses_an_unwritable_error_image_before_comparing() {
+    let dir = temp_dir("cli-diff");
+    let a = png(&dir, "a.png", [0, 255]);
+    let b = png(&dir, "b.png", [255, 255]);
+    let error_image = dir.join("missing/err.png");
+    let out = rondo(&[
+        "diff",
+        text(&a),
+        text(&b),
+        "--error-image",
+        text(&error_image),
+    ]);
+    assert_refused(&out, "does not exist");
+    assert!(out.stdout.is_empty(), "compared anyway");
+}
+
+#[test]
+fn benches_refuse_an_output_directory_that_is_a_file() {
+    let dir = temp_dir("cli-bench-out");
+    let file = dir.join("file");
+    std::fs::write(&file, "").expect("write");
+    let out = rondo(&["bench", "layout", "--smoke", "--out", text(&file)]);
+    assert_refused(&out, "is not a directory");
+    let out = rondo(&[
+        "bench",
+        "accuracy",
+        text(&cornell()),
+        "--reference",
+        text(&dir.join("missing.exr")),
+        "--out",
+        text(&file.join("sub")),
+    ]);
+    assert_refused(&out, "cannot create it");
+}
+
+#[test]
+fn a_missing_diff_input_says_its_cause_once() {
+    let dir = temp_dir("cli-diff-missing");
+    let b = png(&dir, "b.png", [0, 0]);
+    let out = rondo(&["diff", text(&dir.join("nope.png")), text(&b)]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(err.matches("No such file").count(), 1, "{err}");
+    assert!(err.contains("nope.png"), "{err}");
+}
+
+#[test]
+fn usage_errors_exit_with_status_2_and_input_errors_with_status_1() {
+    let dir = temp_dir("cli-codes");
+    let scene = cornell();
+    let scene = text(&scene);
+    let out_png = dir.join("out.png");
+    let out_png = text(&out_png);
+    let usage: [&[&str]; 9] = [
+        &[],
+        &["paint"],
+        &["render", scene],
+        &["render", scene, "-o", "out.txt"],
+        &["render", scene, "-o", out_png, "--spp", "0"],
+        &["render", scene, "-o", out_png, "--threads", "0"],
+        &["render", scene, "-o", out_png, "--width", "many"],
+        &["watch", scene, "-o", out_png, "--first-spp", "0"],
+        &["bench", "layout", "--workload", "nope"],
+    ];
+    for args in usage {
+        let out = rondo(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(!Path::new(out_png).exists(), "{args:?} wrote an image");
+    }
+    let bad = write_scene(
+        &dir,
+        "bad.ron",
+        "Scene(camera: Camera(position: (0, 0, 0)))",
+    );
+    let missing = dir.join("missing.ron");
+    let input: [&[&str]; 3] = [
+        &["render", text(&bad), "-o", out_png],
+        &["render", text(&missing), "-o", out_png],
+        &["check", text(&missing)],
+    ];
+    for args in input {
+        let out = rondo(args);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.starts_with("error: ") && !err.contains("panicked"),
+            "{err}"
+        );
+    }
+    let out = rondo(&["check", scene]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+}

@@ -1,0 +1,503 @@
+//! The live viewer over HTTP: the real `rondo watch --serve` binary on a scene in a temporary
+//! directory, talked to through plain sockets (so request targets reach the server exactly as
+//! written, `/../` included, and a client can refuse to read). Waits are bounded (an event or a
+//! timeout), never sleeps; nothing here times the render.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::{SocketAddr, TcpStream};
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::{Receiver, channel};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+mod common;
+
+/// Upper bound of every wait; a passing run takes a small fraction of it.
+const WAIT: Duration = Duration::from_secs(60);
+
+const RED: &str = "(1.0, 0.0, 0.0)";
+const BLUE: &str = "(0.0, 0.0, 1.0)";
+const GREEN: &str = "(0.0, 1.0, 0.0)";
+
+/// A scene whose centre pixel sees only the `wall` emitter, so its colour is exactly the wall's
+/// emission whatever the sample count. Line 5 holds the wall material.
+fn scene(wall: &str, size: u32, spp: u32) -> String {
+    format!(
+        r#"Scene(
+    camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0), fov: 40.0),
+    settings: Settings(width: {size}, height: {size}, spp: {spp}, max_depth: 3),
+    materials: {{
+        "wall": Light(emit: Constant({wall}), intensity: 1.0, two_sided: true),
+        "ball": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
+    }},
+    entities: [
+        Entity(name: "wall", material: "wall", shape: Quad(a: (-10, -10, 5), b: (10, -10, 5), c: (10, 10, 5), d: (-10, 10, 5))),
+        Entity(name: "ball", material: "ball", shape: Sphere(center: (0, 1.4, 0), radius: 0.3)),
+    ],
+)
+"#
+    )
+}
+
+/// `rondo watch scene.ron --serve 127.0.0.1:0 ARGS` in a fresh directory (`{dir}` in an
+/// argument names it); killed on drop.
+struct Rondo {
+    child: Child,
+    dir: PathBuf,
+    scene: PathBuf,
+    addr: SocketAddr,
+    stderr: Receiver<String>,
+}
+
+impl Rondo {
+    fn start(name: &str, text: &str, args: &[&str]) -> Self {
+        let dir = common::temp_dir(&format!("serve-{name}"));
+        let scene = dir.join("scene.ron");
+        std::fs::write(&scene, text).expect("write scene");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_rondo"))
+            .arg("watch")
+            .arg(&scene)
+            .args(["--serve", "127.0.0.1:0", "--threads", "2"])
+            .args(
+                args.iter()
+                    .map(|a| a.replace("{dir}", &dir.to_string_lossy())),
+            )
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start rondo");
+        let (tx, stderr) = channel();
+        let pipe = child.stderr.take().expect("piped stderr");
+        std::thread::spawn(move || {
+            for line in BufReader::new(pipe).lines().map_while(Result::ok) {
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        let mut rondo = Self {
+            child,
+            dir,
+            scene,
+            addr: SocketAddr::from(([127, 0, 0, 1], 0)),
+            stderr,
+        };
+        let line = rondo.line("the viewer line", |l| l.starts_with("viewer: "));
+        let url = line
+            .trim_start_matches("viewer: http://")
+            .trim_end_matches('/');
+        rondo.addr = url.parse().expect("viewer: http://ADDR/");
+        rondo
+    }
+
+    /// Waits for a line of stderr matching `predicate`.
+    fn line(&self, what: &str, mut predicate: impl FnMut(&str) -> bool) -> String {
+        wait_on(&self.stderr, what, |l| predicate(l)).0
+    }
+
+    fn save(&self, text: &str) {
+        std::fs::write(&self.scene, text).expect("write scene");
+    }
+
+    fn get(&self, target: &str) -> Reply {
+        request(self.addr, "GET", target)
+    }
+
+    fn events(&self) -> Events {
+        Events::open(self.addr)
+    }
+}
+
+impl Drop for Rondo {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+/// Waits at most [`WAIT`] for an item matching `predicate`; returns it and the items before it.
+fn wait_on<T: std::fmt::Debug>(
+    rx: &Receiver<T>,
+    what: &str,
+    mut predicate: impl FnMut(&T) -> bool,
+) -> (T, Vec<T>) {
+    let deadline = Instant::now() + WAIT;
+    let mut seen = Vec::new();
+    while let Ok(item) = rx.recv_timeout(deadline.saturating_duration_since(Instant::now())) {
+        if predicate(&item) {
+            return (item, seen);
+        }
+        seen.push(item);
+    }
+    panic!("timed out waiting for {what}; seen meanwhile: {seen:#?}");
+}
+
+/// An HTTP/1.0 reply: tiny_http answers 1.0 with a Content-Length body and closes, so reading
+/// to the end and splitting off the head is the whole client.
+struct Reply {
+    status: u16,
+    head: String,
+    body: Vec<u8>,
+}
+
+impl Reply {
+    fn header(&self, name: &str) -> Option<&str> {
+        self.head.lines().skip(1).find_map(|l| {
+            let (n, v) = l.split_once(':')?;
+            n.eq_ignore_ascii_case(name).then(|| v.trim())
+        })
+    }
+}
+
+fn request(addr: SocketAddr, method: &str, target: &str) -> Reply {
+    request_as(addr, method, target, &addr.to_string())
+}
+
+fn request_as(addr: SocketAddr, method: &str, target: &str, host: &str) -> Reply {
+    let mut s = TcpStream::connect(addr).expect("connect");
+    s.set_read_timeout(Some(WAIT)).expect("timeout");
+    write!(s, "{method} {target} HTTP/1.0\r\nHost: {host}\r\n\r\n").expect("send");
+    let mut all = Vec::new();
+    s.read_to_end(&mut all).expect("read reply");
+    let split = all
+        .windows(4)
+        .position(|w| w == b"\r\n\r\n")
+        .expect("a head");
+    let head = String::from_utf8_lossy(&all[..split]).into_owned();
+    let status = head
+        .split(' ')
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .expect("a status");
+    Reply {
+        status,
+        head,
+        body: all[split + 4..].to_vec(),
+    }
+}
+
+/// An event-stream client: a thread reads `data:` lines and parses them as JSON.
+struct Events {
+    rx: Receiver<Value>,
+}
+
+impl Events {
+    fn open(addr: SocketAddr) -> Self {
+        let mut s = TcpStream::connect(addr).expect("connect");
+        write!(s, "GET /events HTTP/1.1\r\nHost: {addr}\r\n\r\n").expect("send");
+        let (tx, rx) = channel();
+        std::thread::spawn(move || {
+            let mut head = true;
+            for line in BufReader::new(s).lines().map_while(Result::ok) {
+                if head {
+                    assert!(
+                        !line.starts_with("HTTP/") || line.contains(" 200 "),
+                        "{line}"
+                    );
+                    head = !line.is_empty();
+                    continue;
+                }
+                if let Some(data) = line.strip_prefix("data: ") {
+                    let event = serde_json::from_str(data).expect("each event is JSON");
+                    if tx.send(event).is_err() {
+                        break;
+                    }
+                }
+            }
+        });
+        Self { rx }
+    }
+
+    /// Waits for an event matching `predicate`; returns it and the events before it.
+    fn wait(&self, what: &str, predicate: impl FnMut(&Value) -> bool) -> (Value, Vec<Value>) {
+        wait_on(&self.rx, what, predicate)
+    }
+
+    fn done(&self, reload: u64) -> (Value, Vec<Value>) {
+        self.wait(&format!("done of reload {reload}"), |e| {
+            e["kind"] == "done" && e["reload"] == reload
+        })
+    }
+}
+
+/// The linear RGB of pixel (x, y) of a `/image.f32` body, after checking its header.
+fn raw_pixel(body: &[u8], x: usize, y: usize) -> [f32; 3] {
+    assert_eq!(&body[..8], b"RONDOF32");
+    let u = |i: usize| u32::from_le_bytes(body[8 + 4 * i..12 + 4 * i].try_into().expect("u32"));
+    let (w, h) = (u(0) as usize, u(1) as usize);
+    assert_eq!(body.len(), 24 + w * h * 12, "header and pixel count agree");
+    let at = 24 + 12 * (y * w + x);
+    let f =
+        |k: usize| f32::from_le_bytes(body[at + 4 * k..at + 4 * k + 4].try_into().expect("f32"));
+    [f(0), f(1), f(2)]
+}
+
+#[test]
+fn routes_have_their_content_types_and_everything_else_is_404() {
+    let rondo = Rondo::start("routes", &scene(RED, 32, 4), &["-o", "{dir}/out.png"]);
+    let out = rondo.dir.join("out.png");
+    // `done` follows the last image's write to disk.
+    rondo.events().done(0);
+
+    let page = rondo.get("/");
+    assert_eq!(page.status, 200);
+    assert_eq!(
+        page.header("Content-Type"),
+        Some("text/html; charset=utf-8")
+    );
+    let html = String::from_utf8_lossy(&page.body);
+    assert!(html.contains("<canvas") && html.contains("new EventSource(\"/events\")"));
+    assert!(
+        !html.contains("src=\"http"),
+        "no outside scripts: the page works offline"
+    );
+
+    let png = rondo.get("/image.png");
+    assert_eq!(png.status, 200);
+    assert_eq!(png.header("Content-Type"), Some("image/png"));
+    let on_disk = std::fs::read(&out).expect("-o image written");
+    assert!(png.body == on_disk, "/image.png is the bytes -o wrote");
+    let decoded = image::load_from_memory(&png.body).expect("a PNG").to_rgb8();
+    assert_eq!(decoded.get_pixel(16, 16).0, [255, 0, 0]);
+
+    let exr = rondo.get("/image.exr");
+    assert_eq!(exr.status, 200);
+    assert_eq!(exr.header("Content-Type"), Some("image/x-exr"));
+    let linear = image::load_from_memory_with_format(&exr.body, image::ImageFormat::OpenExr)
+        .expect("an EXR")
+        .to_rgb32f();
+    assert_eq!(linear.get_pixel(16, 16).0, [1.0, 0.0, 0.0]);
+
+    let raw = rondo.get("/image.f32");
+    assert_eq!(raw.status, 200);
+    assert_eq!(raw.header("Content-Type"), Some("application/octet-stream"));
+    assert_eq!(raw_pixel(&raw.body, 16, 16), [1.0, 0.0, 0.0]);
+    assert_eq!(
+        rondo.get("/image.png?t=7").body,
+        png.body,
+        "queries are ignored"
+    );
+    assert_eq!(
+        rondo.get("/previous.f32").status,
+        503,
+        "no image before a save yet"
+    );
+
+    for target in [
+        "/nope",
+        "/../image.png",
+        "/./image.png",
+        "/%2e%2e/image.png",
+        "/..%2fimage.png",
+        "//image.png",
+        "/image.png/",
+        "/events/../image.png",
+        "/../../../../etc/passwd",
+        "/src/serve/page.html",
+        "/page.html",
+    ] {
+        let reply = rondo.get(target);
+        assert_eq!(reply.status, 404, "{target}");
+        assert!(reply.body.len() < 100, "{target}: no file content");
+    }
+    assert_eq!(request(rondo.addr, "POST", "/image.png").status, 405);
+    // DNS rebinding: a page of another site that resolves to 127.0.0.1 sends its own Host.
+    let port = rondo.addr.port();
+    for (host, status) in [
+        (format!("evil.example:{port}"), 403),
+        (format!("localhost:{port}"), 200),
+        ("localhost:9000".into(), 200),
+    ] {
+        let reply = request_as(rondo.addr, "GET", "/image.png", &host);
+        assert_eq!(reply.status, status, "Host: {host}");
+    }
+    let head = request(rondo.addr, "HEAD", "/image.png");
+    assert_eq!((head.status, head.body.len()), (200, 0));
+
+    // A new client gets the present at once: the latest pass (full spp) and its done.
+    let late = rondo.events();
+    let (pass, _) = late.wait("the current pass", |e| e["kind"] == "pass");
+    assert_eq!(
+        (pass["reload"].as_u64(), pass["spp"].as_u64()),
+        (Some(0), Some(4))
+    );
+    late.done(0);
+}
+
+#[test]
+fn a_save_streams_a_pass_and_a_broken_save_an_error_while_the_image_stays() {
+    let rondo = Rondo::start("events", &scene(RED, 32, 4), &[]);
+    let events = rondo.events();
+    events.done(0);
+
+    rondo.save(&scene(BLUE, 32, 4));
+    let (reload, _) = events.wait("a reload", |e| e["kind"] == "reload");
+    assert_eq!(reload["reload"], 1);
+    assert_eq!(reload["trigger"][0], "scene.ron");
+    let (pass, _) = events.wait("a pass of reload 1", |e| {
+        e["kind"] == "pass" && e["reload"] == 1
+    });
+    assert_eq!(pass["changed"], "materials");
+    assert_eq!(pass["target_spp"], 4);
+    events.done(1);
+    let before = rondo.get("/image.png").body;
+    assert_eq!(
+        raw_pixel(&rondo.get("/image.f32").body, 16, 16),
+        [0.0, 0.0, 1.0]
+    );
+
+    let broken = scene(BLUE, 32, 4).replace("intensity: 1.0", "intensity: 1.0 1.0");
+    rondo.save(&broken);
+    let (error, seen) = events.wait("an error", |e| e["kind"] == "error");
+    assert!(
+        seen.iter().all(|e| e["kind"] != "pass"),
+        "a broken save renders nothing: {seen:?}"
+    );
+    let message = error["message"].as_str().expect("a message");
+    assert!(message.contains("scene.ron:5:"), "{message}");
+    assert_eq!(error["line"], 5);
+    let col = error["col"].as_u64().expect("a column") as usize;
+    let line5 = broken.lines().nth(4).expect("line 5");
+    assert_eq!(error["source_line"], line5);
+    assert!(
+        line5[col - 1..].starts_with("1.0"),
+        "column {col} points at the stray value in {line5:?}"
+    );
+    assert_eq!(error["reload"], 1, "the image shown is still reload 1's");
+    assert!(
+        rondo.get("/image.png").body == before,
+        "/image.png stays byte-identical"
+    );
+
+    // The next good save clears the error and renders; A/B's previous image is reload 1's.
+    rondo.save(&scene(GREEN, 32, 4));
+    events.wait("reload 2", |e| e["kind"] == "reload" && e["reload"] == 2);
+    events.done(2);
+    assert_eq!(
+        raw_pixel(&rondo.get("/image.f32").body, 16, 16),
+        [0.0, 1.0, 0.0]
+    );
+    assert_eq!(
+        raw_pixel(&rondo.get("/previous.f32").body, 16, 16),
+        [0.0, 0.0, 1.0]
+    );
+    let late = rondo.events();
+    let (_, first) = late.done(2);
+    assert!(
+        first.iter().all(|e| e["kind"] != "error"),
+        "a good save clears the error for new clients too: {first:?}"
+    );
+}
+
+#[test]
+fn idle_and_stalled_clients_do_not_hold_up_the_render() {
+    // Eight passes (preview, 1, 2, …, 64 spp) of a 128² image: 196 KiB per /image.f32.
+    let rondo = Rondo::start("stalled", &scene(RED, 128, 64), &[]);
+    let events = rondo.events();
+    events.done(0);
+    // Twenty event streams that never read a byte.
+    let idle: Vec<TcpStream> = (0..20)
+        .map(|_| {
+            let mut s = TcpStream::connect(rondo.addr).expect("connect");
+            write!(s, "GET /events HTTP/1.1\r\nHost: localhost\r\n\r\n").expect("send");
+            s
+        })
+        .collect();
+    // And one client that asks for 100 images (20 MB, far more than loopback buffers hold) and
+    // never reads: its connection's writer blocks for good.
+    let mut stalled = TcpStream::connect(rondo.addr).expect("connect");
+    let pipelined = "GET /image.f32 HTTP/1.1\r\nHost: localhost\r\n\r\n".repeat(100);
+    stalled.write_all(pipelined.as_bytes()).expect("send");
+    let mut stalled_events = TcpStream::connect(rondo.addr).expect("connect");
+    write!(
+        stalled_events,
+        "GET /events HTTP/1.1\r\nHost: localhost\r\n\r\n"
+    )
+    .expect("send");
+
+    for (reload, wall) in [(1, BLUE), (2, GREEN), (3, RED)] {
+        rondo.save(&scene(wall, 128, 64));
+        let (_, seen) = events.done(reload);
+        let spp: Vec<u64> = seen
+            .iter()
+            .filter(|e| e["kind"] == "pass" && e["reload"] == reload)
+            .filter_map(|e| e["spp"].as_u64())
+            .collect();
+        // The pass plan: a preview (1 sample per 2×2 pixels), then doubling to 64.
+        assert!(
+            spp.first() == Some(&1)
+                && spp.windows(2).all(|w| w[0] <= w[1])
+                && [2, 4, 8, 16, 32, 64].iter().all(|n| spp.contains(n)),
+            "every pass of reload {reload} reached the reading client: {spp:?}"
+        );
+        assert!(
+            seen.iter()
+                .any(|e| e["kind"] == "progress" && e["reload"] == reload),
+            "progress events flow during the passes"
+        );
+        rondo.line(&format!("reload {reload}'s line"), |l| {
+            l.starts_with(&format!("reload {reload}: ")) && l.contains("full")
+        });
+    }
+    assert_eq!(
+        raw_pixel(&rondo.get("/image.f32").body, 64, 64),
+        [1.0, 0.0, 0.0]
+    );
+    drop((idle, stalled, stalled_events));
+}
+
+#[test]
+fn sigint_stops_the_server() {
+    let mut rondo = Rondo::start("sigint", &scene(RED, 32, 4), &[]);
+    rondo.events().done(0);
+    let pid = rondo.child.id().to_string();
+    let kill = Command::new("kill")
+        .args(["-INT", &pid])
+        .status()
+        .expect("run kill");
+    assert!(kill.success());
+    let deadline = Instant::now() + WAIT;
+    let status = loop {
+        if let Some(status) = rondo.child.try_wait().expect("wait for rondo") {
+            break status;
+        }
+        assert!(Instant::now() < deadline, "rondo did not stop on SIGINT");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert!(status.success(), "{status}");
+    assert!(
+        TcpStream::connect(rondo.addr).is_err(),
+        "nothing listens after the stop"
+    );
+}
+
+#[test]
+fn serve_without_output_and_a_bad_address_are_handled() {
+    let bad = Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .args(["watch", "x.ron", "--serve", "nonsense"])
+        .output()
+        .expect("run rondo");
+    assert!(!bad.status.success());
+    let text = String::from_utf8_lossy(&bad.stderr);
+    assert!(text.contains("--serve \"nonsense\""), "{text}");
+    let neither = Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .args(["watch", "x.ron"])
+        .output()
+        .expect("run rondo");
+    assert!(!neither.status.success(), "watch needs -o or --serve");
+    let rondo = Rondo::start("no-output", &scene(RED, 32, 4), &[]);
+    rondo.events().done(0);
+    let files: Vec<PathBuf> = std::fs::read_dir(&rondo.dir)
+        .expect("list dir")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    assert_eq!(
+        files,
+        std::slice::from_ref(&rondo.scene),
+        "no image written without -o"
+    );
+}
