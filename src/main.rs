@@ -188,8 +188,8 @@ enum BenchCommand {
         workloads: Vec<String>,
     },
     /// Error against a reference image as a function of render time, for each light-transport
-    /// method and sampler over a sweep of spp (renders interleaved); writes accuracy.csv, accuracy.svg (log-log
-    /// RMSE against time) and summary.md (equal-time comparison) in --out.
+    /// method and sampler over a sweep of spp (renders interleaved); writes accuracy.csv,
+    /// accuracy.svg (log-log RMSE against time) and summary.md (equal-time comparison) in --out.
     Accuracy {
         /// Scene file (.ron).
         scene: PathBuf,
