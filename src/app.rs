@@ -257,6 +257,17 @@ impl Renderer {
         &self.world.resource::<Accumulation>().film
     }
 
+    /// The accumulated film, to add to it or to take it.
+    pub fn film_mut(&mut self) -> &mut Film {
+        &mut self.world.resource_mut::<Accumulation>().into_inner().film
+    }
+
+    /// Makes the next render hold samples `first..spp` of every pixel instead of `0..spp`
+    /// (a render of a sample range, see [`crate::farm`]). Call after loading.
+    pub fn set_first_sample(&mut self, first: u32) {
+        self.world.resource_mut::<Accumulation>().first_sample = first;
+    }
+
     /// Trace counters of the current render.
     pub fn stats(&self) -> TraceStats {
         self.world.resource::<Accumulation>().stats

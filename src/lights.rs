@@ -7,7 +7,8 @@
 //! - on a sphere, uniformly in the cone of directions it subtends from the shading point (only
 //!   the visible cap), or uniformly by area from inside it;
 //! - on a triangle, uniformly in the solid angle it subtends (a spherical triangle, Arvo 1995)
-//!   when that is neither tiny nor near a hemisphere, else uniformly by area.
+//!   when it is near (area ≥ 0.3 × squared distance) and that angle is neither tiny nor near a
+//!   hemisphere, else uniformly by area.
 //!
 //! [`LightSet::sample`] and [`LightSet::pdf`] decide the strategy by the same rule, so the
 //! density a BSDF-sampled hit is weighted with is the one the light sample would have had.
@@ -43,6 +44,9 @@ const SELECT_SCALE: u32 = 1 << 24;
 /// sampling is as good; near 2π the construction breaks down (pbrt-v4's bounds).
 const SPHERICAL_MIN: f32 = 3e-4;
 const SPHERICAL_MAX: f32 = 6.22;
+/// Triangles with area below this times their squared distance from the shading point are
+/// sampled by area, without computing their solid angle.
+const SPHERICAL_MIN_AREA_RATIO: f32 = 0.3;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Emitter {
@@ -251,7 +255,15 @@ impl LightSet {
                 }
             }
             HitKind::Triangle | HitKind::Instance { .. } => {
-                let solid_angle = triangle_solid_angle(Self::vertices(geometry, e), p_ref);
+                let v = Self::vertices(geometry, e);
+                // Far from the shading point (area / distance² small), area sampling's density
+                // hardly varies over the triangle: the spherical construction would cost more
+                // than it saves.
+                let centroid = (v[0] + v[1] + v[2]) * (1.0 / 3.0);
+                if e.area < SPHERICAL_MIN_AREA_RATIO * (centroid - p_ref).length_squared() {
+                    return Strategy::Area;
+                }
+                let solid_angle = triangle_solid_angle(v, p_ref);
                 if (SPHERICAL_MIN..=SPHERICAL_MAX).contains(&solid_angle) {
                     Strategy::Spherical { solid_angle }
                 } else {

@@ -35,8 +35,38 @@ enum Command {
         /// Output image (.png or .exr).
         #[arg(short, long, value_parser = image_path)]
         output: PathBuf,
+        /// Render only samples A..B of every pixel into a partial (.exr) for `rondo merge`
+        /// (docs/farm.md). The range's end takes the place of --spp.
+        #[arg(long, value_name = "A..B", value_parser = rondo::partial::parse_range, conflicts_with = "resume")]
+        samples: Option<std::ops::Range<u32>>,
+        /// Continue the partial PATH (from --samples or `rondo merge`) with the samples after its
+        /// last one, up to --spp; the output holds them all.
+        #[arg(long, value_name = "PATH")]
+        resume: Option<PathBuf>,
         #[command(flatten)]
         options: RenderArgs,
+    },
+    /// Merge partials (from `render --samples`) in any order into one image: .png, or .exr,
+    /// which is a partial again (merges compose, `render --resume` continues it). Refuses
+    /// overlapping samples and partials of different renders; reports missing samples.
+    Merge {
+        /// Partials (.exr).
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        /// Merged image (.exr or .png).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// The merge must hold samples 0..N (missing ones at the end are reported too).
+        #[arg(long)]
+        spp: Option<u32>,
+        /// Merge even with samples missing: the image averages the samples present.
+        #[arg(long)]
+        allow_gaps: bool,
+    },
+    /// Split a render over a cluster's scheduler.
+    Farm {
+        #[command(subcommand)]
+        what: FarmCommand,
     },
     /// Render a scene, then re-render it on every save of the scene or its textures: a quick
     /// first pass, then passes doubling the samples, rewriting the image after each. Ctrl-C stops.
@@ -79,6 +109,33 @@ enum Command {
     Bench {
         #[command(subcommand)]
         what: BenchCommand,
+    },
+}
+
+#[derive(Subcommand)]
+enum FarmCommand {
+    /// Print an sbatch script (to stdout) that renders the scene as a Slurm job array of
+    /// --tasks sample ranges and merges them after the array succeeded.
+    Slurm {
+        /// Scene file (.ron).
+        scene: PathBuf,
+        /// Merged image (.exr or .png); partials go to <output without extension>.parts/.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Array tasks (sample ranges).
+        #[arg(long)]
+        tasks: u32,
+        /// CPUs, and render threads, per task.
+        #[arg(long, default_value_t = 1)]
+        cpus_per_task: u32,
+        /// Slurm partition.
+        #[arg(long)]
+        partition: Option<String>,
+        /// Time limit per task (Slurm's --time).
+        #[arg(long)]
+        time: Option<String>,
+        #[command(flatten)]
+        options: RenderArgs,
     },
 }
 
@@ -297,8 +354,50 @@ fn run(cli: Cli) -> Result<()> {
         Command::Render {
             scene,
             output,
+            samples,
+            resume,
             options,
-        } => render(&scene, &output, &options),
+        } => {
+            let part = match (samples, resume) {
+                (Some(range), _) => Some(rondo::farm::Samples::Range(range)),
+                (None, Some(path)) => Some(rondo::farm::Samples::Resume(path)),
+                (None, None) => None,
+            };
+            render(&scene, &output, &options, part)
+        }
+        Command::Merge {
+            inputs,
+            output,
+            spp,
+            allow_gaps,
+        } => merge(&inputs, &output, spp, allow_gaps),
+        Command::Farm {
+            what:
+                FarmCommand::Slurm {
+                    scene,
+                    output,
+                    tasks,
+                    cpus_per_task,
+                    partition,
+                    time,
+                    options,
+                },
+        } => farm_slurm(
+            &scene,
+            &output,
+            rondo::farm::SlurmJob {
+                rondo: PathBuf::new(),
+                scene: PathBuf::new(),
+                output: PathBuf::new(),
+                spp: 0,
+                tasks,
+                cpus_per_task,
+                partition,
+                time,
+                render_flags: Vec::new(),
+            },
+            &options,
+        ),
         Command::Bench {
             what:
                 BenchCommand::Instances {
@@ -411,11 +510,31 @@ fn bench_layout(
     Ok(())
 }
 
-fn render(scene: &Path, output: &Path, options: &RenderArgs) -> Result<()> {
+fn render(
+    scene: &Path,
+    output: &Path,
+    options: &RenderArgs,
+    part: Option<rondo::farm::Samples>,
+) -> Result<()> {
     check_output_file(output)?;
     let mut r = options.renderer()?;
-    let s = r.load(scene)?.settings;
-    r.set_output(Some(output), false);
+    let part = match &part {
+        Some(p) => Some(rondo::farm::prepare(
+            &mut r,
+            options.overrides(),
+            scene,
+            output,
+            p,
+        )?),
+        None => None,
+    };
+    let s = match &part {
+        Some(p) => p.settings,
+        None => r.load(scene)?.settings,
+    };
+    if part.is_none() {
+        r.set_output(Some(output), false);
+    }
     let bar =
         ProgressBar::with_draw_target(Some(u64::from(s.height)), ProgressDrawTarget::stderr());
     bar.set_style(
@@ -428,7 +547,82 @@ fn render(scene: &Path, output: &Path, options: &RenderArgs) -> Result<()> {
     if let Some(e) = &r.output().last_error {
         bail!("{e}");
     }
+    if let Some(part) = part {
+        let ranges = rondo::partial::format_ranges(part.ranges());
+        part.finish(&mut r)?;
+        eprintln!("{} holds samples {ranges}", output.display());
+    }
     eprintln!("{}", summary(&r, wall));
+    Ok(())
+}
+
+/// `rondo merge`: checks the partials, reports missing samples, merges and writes.
+fn merge(inputs: &[PathBuf], output: &Path, spp: Option<u32>, allow_gaps: bool) -> Result<()> {
+    if OutputKind::from_path(output).is_none() {
+        bail!("{}: output must end in .png or .exr", output.display());
+    }
+    check_output_file(output)?;
+    let plan = rondo::partial::plan_merge(inputs, spp)?;
+    if !plan.missing.is_empty() {
+        let missing = rondo::partial::format_ranges(&plan.missing).replace(',', ", ");
+        if !allow_gaps {
+            bail!(
+                "missing samples {missing} (render them, or merge what is there with --allow-gaps)"
+            );
+        }
+        eprintln!("warning: missing samples {missing}; the image averages the samples present");
+    }
+    let start = std::time::Instant::now();
+    let sum = rondo::partial::merge(inputs, &plan)?;
+    rondo::partial::write_output(output, &plan.meta, &sum)
+        .with_context(|| format!("{}: cannot write", output.display()))?;
+    eprintln!(
+        "merged {} partials ({}x{}, samples {}) into {} in {:.2} s",
+        inputs.len(),
+        plan.meta.width,
+        plan.meta.height,
+        rondo::partial::format_ranges(&plan.meta.ranges),
+        output.display(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// `rondo farm slurm`: prints the sbatch script; `job` carries the Slurm options.
+fn farm_slurm(
+    scene: &Path,
+    output: &Path,
+    mut job: rondo::farm::SlurmJob,
+    options: &RenderArgs,
+) -> Result<()> {
+    if OutputKind::from_path(output).is_none() {
+        bail!("{}: output must end in .png or .exr", output.display());
+    }
+    check_output_file(output)?;
+    if options.threads.is_some() {
+        bail!("--threads: each task renders with --cpus-per-task threads");
+    }
+    let loaded =
+        rondo::scene::load::load_scene(scene, &mut rondo::scene::load::AssetCache::default())?;
+    let mut settings = loaded.settings;
+    options
+        .overrides()
+        .apply(&mut settings)
+        .map_err(|m| anyhow::anyhow!("{}: {m}", scene.display()))?;
+    job.rondo = std::env::current_exe().context("locating the rondo binary")?;
+    job.scene = std::path::absolute(scene)?;
+    job.output = std::path::absolute(output)?;
+    job.spp = settings.spp;
+    let mut overrides = options.overrides();
+    overrides.spp = None;
+    job.render_flags = rondo::farm::render_flags(&overrides, options.layout);
+    print!("{}", rondo::farm::slurm_script(&job)?);
+    eprintln!(
+        "{} tasks, {} spp; partials in {}; submit with `sbatch <this script>`",
+        job.tasks,
+        job.spp,
+        rondo::farm::parts_dir(&job.output).display()
+    );
     Ok(())
 }
 

@@ -7,7 +7,7 @@ use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::camera::Camera;
-use crate::film::Film;
+use crate::film::{Film, Pixel};
 use crate::geometry::layout::{DefaultLayout, Layout, SphereStore, TriangleStore};
 use crate::geometry::packed::{Geometry, Hit, HitKind, LayoutKind, Surface};
 use crate::geometry::ray::{Ray, gamma, spawn_origin};
@@ -324,7 +324,7 @@ pub fn render_pass<L: Layout>(
                     let ray = view.camera.ray(x + jx, y + jy, width, height);
                     let l = trace_path(view, ray, &mut rng, &mut stats);
                     if l.is_finite() {
-                        *sum += l.as_dvec3();
+                        sum.add(l);
                     } else {
                         stats.nonfinite += 1;
                     }
@@ -379,10 +379,10 @@ pub fn render_preview<L: Layout>(
                         .ray(cx as f32 + jx, cy as f32 + jy, width as u32, height as u32);
                 let l = trace_path(view, ray, &mut rng, &mut stats);
                 let value = if l.is_finite() {
-                    l.as_dvec3()
+                    Pixel::from_radiance(l)
                 } else {
                     stats.nonfinite += 1;
-                    DVec3::ZERO
+                    Pixel::ZERO
                 };
                 for line in 0..lines {
                     rows[line * width + bx..line * width + bx + cols].fill(value);
@@ -400,6 +400,6 @@ pub fn render_preview<L: Layout>(
 
 /// Mean of a film's pixels, a convenience for tests and reports.
 pub fn film_mean(film: &Film) -> DVec3 {
-    let n = f64::from(film.samples.max(1)) * film.sum.len().max(1) as f64;
-    film.sum.iter().copied().sum::<DVec3>() / n
+    let n = film.sum.len().max(1) as f64;
+    film.mean().iter().map(|m| m.as_dvec3()).sum::<DVec3>() / n
 }

@@ -213,6 +213,9 @@ enum Op {
     Prefab(Option<usize>, Save),
     /// `tex/ball.png`: a colour, or not an image.
     Texture(Option<usize>, Save),
+    /// `linked/real.png` in a colour, and `tex/ball.png` made a symlink to it (later in-place
+    /// texture writes then edit the target, in another directory).
+    LinkTexture(usize),
     /// `meshes/tri.obj`: one of [`MESHES`], or broken.
     Mesh(Option<usize>, Save),
     /// `rm -rf DIR`.
@@ -288,6 +291,7 @@ impl Op {
                 (!rng.chance(20)).then(|| rng.below(COLOURS.len())),
                 Save::random(rng),
             ),
+            5 if rng.chance(30) => Self::LinkTexture(rng.below(COLOURS.len())),
             5 => Self::Mesh(
                 (!rng.chance(20)).then(|| rng.below(MESHES.len())),
                 Save::random(rng),
@@ -314,6 +318,14 @@ impl Op {
             Self::Texture(c, save) => {
                 if let Some(path) = file("tex", "ball.png") {
                     save.write(&path, &png_bytes(*c));
+                }
+            }
+            Self::LinkTexture(c) => {
+                std::fs::create_dir_all(dir.join("linked")).expect("mkdir");
+                std::fs::write(dir.join("linked/real.png"), png_bytes(Some(*c))).expect("write");
+                if let Some(path) = file("tex", "ball.png") {
+                    let _ = std::fs::remove_file(&path);
+                    std::os::unix::fs::symlink("../linked/real.png", &path).expect("symlink");
                 }
             }
             Self::Mesh(v, save) => {
@@ -598,6 +610,15 @@ fn regression_mesh_swapped_keeping_size_and_mtime() {
     b.play(&[Op::Mesh(Some(1), Save::KeepMtime)])
         .unwrap_or_else(|e| panic!("{e}"));
     b.play(&[Op::Mesh(Some(0), Save::KeepMtime)])
+        .unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn regression_symlinked_texture_edited_through_the_link() {
+    let mut b = Bench::new("symlink");
+    b.play(&[Op::LinkTexture(1)])
+        .unwrap_or_else(|e| panic!("{e}"));
+    b.play(&[Op::Texture(Some(2), Save::InPlace)])
         .unwrap_or_else(|e| panic!("{e}"));
 }
 

@@ -182,17 +182,17 @@ pub struct Accumulation {
     pub complete: bool,
     /// Live-preview state.
     pub preview: Preview,
+    /// First sample index a reset film starts at (0 but for a render of a sample range).
+    pub first_sample: u32,
 }
 
 impl Accumulation {
     /// Clears the film for a `width` × `height` image, reusing its memory when the size holds.
     pub fn reset(&mut self, width: u32, height: u32) {
-        if self.film.width == width && self.film.height == height {
-            self.film.sum.fill(glam::DVec3::ZERO);
-            self.film.samples = 0;
-        } else {
+        if self.film.width != width || self.film.height != height {
             self.film = Film::new(width, height);
         }
+        self.film.clear(self.first_sample);
         self.stats = TraceStats::default();
         self.complete = false;
     }

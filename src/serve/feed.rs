@@ -92,9 +92,9 @@ impl Frame {
                 out.extend_from_slice(&v.to_le_bytes());
             }
             // As `Film::mean`, without its intermediate vector.
-            let scale = 1.0 / f64::from(f.samples.max(1));
+            let count = f.count();
             for s in &f.sum {
-                for v in (*s * scale).as_vec3().to_array() {
+                for v in s.mean(count).to_array() {
                     out.extend_from_slice(&v.to_le_bytes());
                 }
             }
@@ -548,10 +548,8 @@ mod tests {
     #[test]
     fn raw_frames_carry_size_reload_samples_and_linear_means() {
         let mut film = Film::new(2, 1);
-        film.sum = vec![
-            glam::DVec3::new(4.0, 0.5, -1.0),
-            glam::DVec3::new(0.0, 2.0, 0.0),
-        ];
+        film.sum[0].add(glam::Vec3::new(4.0, 0.5, -1.0));
+        film.sum[1].add(glam::Vec3::new(0.0, 2.0, 0.0));
         film.samples = 2;
         let frame = Frame::new(7, film);
         let raw = frame.raw();

@@ -1,0 +1,506 @@
+//! Partial renders: the exact per-pixel sums of some sample ranges of a render, stored as an
+//! OpenEXR file with rondo's metadata (format in `docs/partial-format.md`), and their merge.
+//!
+//! The sums are the film's fixed-point integers ([`crate::film::Pixel`]), so merging partials
+//! adds integers: in any order the merged image is the one a single process rendering every
+//! sample makes, bit for bit.
+
+use std::fmt;
+use std::fs::File;
+use std::io::BufReader;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use exr::block::UncompressedBlock;
+use exr::block::chunk::Chunk;
+use exr::block::reader::ChunksReader;
+use exr::meta::attribute::{AttributeValue, Text};
+use rayon::prelude::*;
+
+use crate::film::{FRACTION_BITS, OutputKind, Pixel, write_atomically, write_image};
+use crate::scene::format::SettingsDesc;
+
+/// Value of the `rondo.format` attribute of a partial of this version of the format.
+pub const FORMAT: &str = "rondo-partial-1";
+
+/// The channels of a partial besides `R`, `G`, `B` (the mean): per colour, the sum's words,
+/// least significant first.
+pub const SUM_CHANNELS: [[&str; Pixel::WORDS]; 3] = [
+    ["sum.R.0", "sum.R.1", "sum.R.2"],
+    ["sum.G.0", "sum.G.1", "sum.G.2"],
+    ["sum.B.0", "sum.B.1", "sum.B.2"],
+];
+
+/// An error about partials, saying which file and what.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PartialError(pub String);
+
+impl fmt::Display for PartialError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for PartialError {}
+
+fn error(path: &Path, message: impl fmt::Display) -> PartialError {
+    PartialError(format!("{}: {message}", path.display()))
+}
+
+/// What a partial says about itself.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PartialMeta {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// The render's seed.
+    pub seed: u64,
+    /// [`image_hash`] of the scene, its files and the settings.
+    pub hash: u64,
+    /// The sample ranges held, sorted, disjoint and not adjacent.
+    pub ranges: Vec<Range<u32>>,
+    /// The scene's file name (for people; not checked).
+    pub scene: String,
+}
+
+impl PartialMeta {
+    /// Samples per pixel held.
+    pub fn count(&self) -> u64 {
+        self.ranges.iter().map(|r| u64::from(r.end - r.start)).sum()
+    }
+
+    /// One past the last sample held (0 if none).
+    pub fn end(&self) -> u32 {
+        self.ranges.last().map_or(0, |r| r.end)
+    }
+}
+
+/// 64-bit FNV-1a, a stable hash (unlike std's, whose algorithm may change).
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Self {
+        Self(0xcbf2_9ce4_8422_2325)
+    }
+    fn bytes(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    fn field(&mut self, bytes: &[u8]) {
+        self.bytes(&(bytes.len() as u64).to_le_bytes());
+        self.bytes(bytes);
+    }
+}
+
+/// Hash of everything an image depends on but the sample range: rondo's version, the contents of
+/// every file the scene loads (the scene file first, in load order; paths are left out, so the
+/// same scene in another directory hashes the same) and the settings after overrides (but spp).
+pub fn image_hash(dependencies: &[PathBuf], settings: &SettingsDesc) -> Result<u64, PartialError> {
+    let mut h = Fnv::new();
+    h.field(FORMAT.as_bytes());
+    h.field(env!("CARGO_PKG_VERSION").as_bytes());
+    for path in dependencies {
+        let data = std::fs::read(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
+        h.field(&data);
+    }
+    let s = settings;
+    h.field(&s.width.to_le_bytes());
+    h.field(&s.height.to_le_bytes());
+    h.field(&s.max_depth.to_le_bytes());
+    for c in s.background.to_array() {
+        h.field(&c.to_bits().to_le_bytes());
+    }
+    h.field(&s.seed.to_le_bytes());
+    h.field(s.method.to_string().as_bytes());
+    Ok(h.0)
+}
+
+/// Parses a sample range `A..B` (A < B).
+pub fn parse_range(text: &str) -> Result<Range<u32>, String> {
+    let bad = || format!("sample range {text:?} must be A..B with whole numbers A < B");
+    let (a, b) = text.split_once("..").ok_or_else(bad)?;
+    let (a, b): (u32, u32) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if a >= b {
+        return Err(bad());
+    }
+    Ok(a..b)
+}
+
+/// Ranges as `0..256,512..768`.
+pub fn format_ranges(ranges: &[Range<u32>]) -> String {
+    ranges
+        .iter()
+        .map(|r| format!("{}..{}", r.start, r.end))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// Sorts ranges and joins the adjacent ones (they must not overlap).
+pub fn normalize(mut ranges: Vec<Range<u32>>) -> Vec<Range<u32>> {
+    ranges.sort_by_key(|r| r.start);
+    let mut out: Vec<Range<u32>> = Vec::with_capacity(ranges.len());
+    for r in ranges {
+        match out.last_mut() {
+            Some(last) if last.end == r.start => last.end = r.end,
+            _ => out.push(r),
+        }
+    }
+    out
+}
+
+/// The samples of `0..end` that `ranges` (normalized) do not hold.
+pub fn gaps(ranges: &[Range<u32>], end: u32) -> Vec<Range<u32>> {
+    let mut out = Vec::new();
+    let mut at = 0;
+    for r in ranges {
+        if r.start > at {
+            out.push(at..r.start);
+        }
+        at = at.max(r.end);
+    }
+    if at < end {
+        out.push(at..end);
+    }
+    out
+}
+
+/// Writes a partial: the means (`R`, `G`, `B`, so any EXR viewer shows the image), the exact
+/// sums and the metadata, atomically.
+pub fn write_partial(path: &Path, meta: &PartialMeta, sum: &[Pixel]) -> std::io::Result<()> {
+    use exr::prelude::*;
+    let (w, h) = (meta.width as usize, meta.height as usize);
+    if sum.len() != w * h {
+        return Err(std::io::Error::other(format!(
+            "{}: {} pixels for a {w}x{h} partial",
+            path.display(),
+            sum.len()
+        )));
+    }
+    let count = meta.count();
+    let [r, g, b] = SUM_CHANNELS;
+    let channels = SpecificChannels::build()
+        .with_channel("R")
+        .with_channel("G")
+        .with_channel("B")
+        .with_channel(r[0])
+        .with_channel(r[1])
+        .with_channel(r[2])
+        .with_channel(g[0])
+        .with_channel(g[1])
+        .with_channel(g[2])
+        .with_channel(b[0])
+        .with_channel(b[1])
+        .with_channel(b[2])
+        .with_pixel_fn(|p: Vec2<usize>| {
+            let s = &sum[p.y() * w + p.x()];
+            let m = s.mean(count);
+            let [r0, r1, r2] = s.words(0);
+            let [g0, g1, g2] = s.words(1);
+            let [b0, b1, b2] = s.words(2);
+            (m.x, m.y, m.z, r0, r1, r2, g0, g1, g2, b0, b1, b2)
+        });
+    let mut attributes = LayerAttributes::default();
+    let text = |s: &str| AttributeValue::Text(Text::from(s));
+    let other = &mut attributes.other;
+    other.insert(Text::from("rondo.format"), text(FORMAT));
+    other.insert(
+        Text::from("rondo.samples"),
+        text(&format_ranges(&meta.ranges)),
+    );
+    other.insert(Text::from("rondo.seed"), text(&meta.seed.to_string()));
+    other.insert(
+        Text::from("rondo.hash"),
+        text(&format!("{:016x}", meta.hash)),
+    );
+    other.insert(
+        Text::from("rondo.fraction_bits"),
+        text(&FRACTION_BITS.to_string()),
+    );
+    let scene: String = meta.scene.chars().filter(char::is_ascii).collect();
+    other.insert(Text::from("rondo.scene"), text(&scene));
+    let layer = Layer::new((w, h), attributes, Encoding::FAST_LOSSLESS, channels);
+    write_atomically(path, |out| {
+        Image::from_layer(layer)
+            .write()
+            .to_buffered(out)
+            .map_err(std::io::Error::other)
+    })
+}
+
+/// Writes a merge result: a partial if `path` ends in `.exr`, an 8-bit image if `.png`.
+pub fn write_output(path: &Path, meta: &PartialMeta, sum: &[Pixel]) -> std::io::Result<()> {
+    match OutputKind::from_path(path) {
+        Some(OutputKind::Exr) => write_partial(path, meta, sum),
+        _ => write_image(path, meta.width, meta.height, sum, meta.count()),
+    }
+}
+
+fn open(path: &Path) -> Result<exr::block::reader::Reader<BufReader<File>>, PartialError> {
+    let file = File::open(path).map_err(|e| error(path, format!("cannot open: {e}")))?;
+    exr::block::read(BufReader::new(file), false)
+        .map_err(|e| error(path, format!("not an OpenEXR file: {e}")))
+}
+
+/// The metadata of the partial at `path`, checked: one layer with the sum channels, and every
+/// rondo attribute present and well-formed.
+pub fn read_meta(path: &Path) -> Result<PartialMeta, PartialError> {
+    meta_of(path, open(path)?.headers())
+}
+
+fn meta_of(
+    path: &Path,
+    headers: &[exr::meta::header::Header],
+) -> Result<PartialMeta, PartialError> {
+    let [header] = headers else {
+        return Err(error(path, "a partial has one layer"));
+    };
+    let attr = |name: &str| -> Result<String, PartialError> {
+        match header.own_attributes.other.get(&Text::from(name)) {
+            Some(AttributeValue::Text(t)) => Ok(t.to_string()),
+            _ => Err(error(
+                path,
+                format!(
+                    "not a rondo partial (no {name} attribute; make one with `rondo render --samples A..B`)"
+                ),
+            )),
+        }
+    };
+    let format = attr("rondo.format")?;
+    if format != FORMAT {
+        return Err(error(
+            path,
+            format!("partial format {format:?}, this rondo reads {FORMAT:?}"),
+        ));
+    }
+    let bits = attr("rondo.fraction_bits")?;
+    if bits != FRACTION_BITS.to_string() {
+        return Err(error(
+            path,
+            format!("rondo.fraction_bits {bits}, expected {FRACTION_BITS}"),
+        ));
+    }
+    for name in SUM_CHANNELS.iter().flatten() {
+        let found =
+            header.channels.list.iter().any(|c| {
+                c.name == **name && c.sample_type == exr::meta::attribute::SampleType::U32
+            });
+        if !found {
+            return Err(error(path, format!("partial has no u32 channel {name}")));
+        }
+    }
+    let bad = |what: &str, v: &str| error(path, format!("bad {what} attribute {v:?}"));
+    let samples = attr("rondo.samples")?;
+    let mut ranges = Vec::new();
+    for part in samples.split(',').filter(|p| !p.is_empty()) {
+        ranges.push(parse_range(part).map_err(|_| bad("rondo.samples", &samples))?);
+    }
+    let ranges_sorted = normalize(ranges.clone());
+    if ranges_sorted.windows(2).any(|w| w[0].end > w[1].start) {
+        return Err(bad("rondo.samples", &samples));
+    }
+    let seed = attr("rondo.seed")?;
+    let hash = attr("rondo.hash")?;
+    let size = header.layer_size;
+    Ok(PartialMeta {
+        width: size.width() as u32,
+        height: size.height() as u32,
+        seed: seed.parse().map_err(|_| bad("rondo.seed", &seed))?,
+        hash: u64::from_str_radix(&hash, 16).map_err(|_| bad("rondo.hash", &hash))?,
+        ranges: ranges_sorted,
+        scene: attr("rondo.scene").unwrap_or_default(),
+    })
+}
+
+/// Adds the sums of the partial at `path` into `sum` (a `width` × `height` image, row-major).
+/// Returns the partial's metadata. The file is decoded block by block (blocks in parallel), never
+/// held whole.
+pub fn add_partial(path: &Path, sum: &mut [Pixel]) -> Result<PartialMeta, PartialError> {
+    let reader = open(path)?;
+    let meta = meta_of(path, reader.headers())?;
+    if sum.len() != meta.width as usize * meta.height as usize {
+        return Err(error(
+            path,
+            format!(
+                "size {}x{} differs from the image's",
+                meta.width, meta.height
+            ),
+        ));
+    }
+    let header = &reader.headers()[0];
+    // Per channel of the file: the colour and word it holds, if a sum.
+    let roles: Vec<Option<(usize, usize)>> = header
+        .channels
+        .list
+        .iter()
+        .map(|c| {
+            SUM_CHANNELS.iter().enumerate().find_map(|(colour, words)| {
+                words
+                    .iter()
+                    .position(|n| c.name == **n)
+                    .map(|word| (colour, word))
+            })
+        })
+        .collect();
+    let channels = header.channels.clone();
+    let width = meta.width as usize;
+    let fail = |e: exr::error::Error| error(path, format!("cannot decode: {e}"));
+    let mut chunks = reader.all_chunks(false).map_err(fail)?;
+    let meta_data = chunks.meta_data().clone();
+    loop {
+        let batch: Vec<Chunk> = chunks
+            .by_ref()
+            .take(64)
+            .collect::<Result<_, _>>()
+            .map_err(fail)?;
+        if batch.is_empty() {
+            break;
+        }
+        let blocks: Vec<UncompressedBlock> = batch
+            .into_par_iter()
+            .map(|c| UncompressedBlock::decompress_chunk(c, &meta_data, false))
+            .collect::<Result<_, _>>()
+            .map_err(fail)?;
+        for block in &blocks {
+            for line in block.lines(&channels) {
+                let Some((colour, word)) = roles[line.location.channel] else {
+                    continue;
+                };
+                let (x, y) = (line.location.position.x(), line.location.position.y());
+                let start = y * width + x;
+                let pixels = sum
+                    .get_mut(start..start + line.location.sample_count)
+                    .ok_or_else(|| error(path, "a block lies outside the image"))?;
+                // Samples are little-endian u32 (OpenEXR's byte order).
+                let values = line.value.chunks_exact(4);
+                if values.len() != pixels.len() {
+                    return Err(error(path, "a line has the wrong length"));
+                }
+                let shift = 32 * word;
+                // Two's complement in 96 bits: the top word carries the sign.
+                let signed = word + 1 == Pixel::WORDS;
+                for (pixel, bytes) in pixels.iter_mut().zip(values) {
+                    let v = u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]);
+                    let part = if signed {
+                        i128::from(v as i32)
+                    } else {
+                        i128::from(v)
+                    };
+                    pixel.0[colour] += part << shift;
+                }
+            }
+        }
+    }
+    Ok(meta)
+}
+
+/// What a merge found: the combined metadata and the samples missing below its end.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MergePlan {
+    /// Metadata of the merged result.
+    pub meta: PartialMeta,
+    /// Samples of `0..end` held by no input.
+    pub missing: Vec<Range<u32>>,
+}
+
+/// Checks that the partials at `paths` can merge: same size, seed and image hash, no sample in
+/// two of them. Gaps (up to `expect_end` if given, else up to the last sample held) are reported
+/// in the plan, not refused here.
+pub fn plan_merge(paths: &[PathBuf], expect_end: Option<u32>) -> Result<MergePlan, PartialError> {
+    let Some(first_path) = paths.first() else {
+        return Err(PartialError("merge: no partials given".into()));
+    };
+    let metas = paths
+        .iter()
+        .map(|p| read_meta(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let first = &metas[0];
+    let mut owned: Vec<(Range<u32>, &Path)> = Vec::new();
+    for (meta, path) in metas.iter().zip(paths) {
+        let differs = |what: &str, mine: String, theirs: String| {
+            Err(error(
+                path,
+                format!(
+                    "{what} {mine}, but {} has {what} {theirs}: partials of one render only",
+                    first_path.display()
+                ),
+            ))
+        };
+        if (meta.width, meta.height) != (first.width, first.height) {
+            return differs(
+                "resolution",
+                format!("{}x{}", meta.width, meta.height),
+                format!("{}x{}", first.width, first.height),
+            );
+        }
+        if meta.seed != first.seed {
+            return differs("seed", meta.seed.to_string(), first.seed.to_string());
+        }
+        if meta.hash != first.hash {
+            return differs(
+                "scene/settings hash",
+                format!("{:016x}", meta.hash),
+                format!("{:016x}", first.hash),
+            );
+        }
+        owned.extend(meta.ranges.iter().map(|r| (r.clone(), path.as_path())));
+    }
+    owned.sort_by_key(|(r, _)| r.start);
+    for w in owned.windows(2) {
+        let ((a, pa), (b, pb)) = (&w[0], &w[1]);
+        if a.end > b.start {
+            return Err(error(
+                pb,
+                format!(
+                    "samples {}..{} overlap samples {}..{} of {}",
+                    b.start,
+                    b.end,
+                    a.start,
+                    a.end,
+                    pa.display()
+                ),
+            ));
+        }
+    }
+    let ranges = normalize(owned.into_iter().map(|(r, _)| r).collect());
+    let end = expect_end
+        .unwrap_or(0)
+        .max(ranges.last().map_or(0, |r| r.end));
+    let missing = gaps(&ranges, end);
+    let meta = PartialMeta {
+        ranges,
+        ..first.clone()
+    };
+    Ok(MergePlan { meta, missing })
+}
+
+/// Merges the partials at `paths` (checked by [`plan_merge`]) into one image's sums.
+pub fn merge(paths: &[PathBuf], plan: &MergePlan) -> Result<Vec<Pixel>, PartialError> {
+    let meta = &plan.meta;
+    let mut sum = vec![Pixel::ZERO; meta.width as usize * meta.height as usize];
+    for path in paths {
+        add_partial(path, &mut sum)?;
+    }
+    Ok(sum)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_parse_normalize_and_show_gaps() {
+        assert_eq!(parse_range("0..256"), Ok(0..256));
+        assert!(parse_range("5..5").is_err());
+        assert!(parse_range("7..3").is_err());
+        assert!(parse_range("1-3").is_err());
+        let r = normalize(vec![512..768, 0..256, 256..300]);
+        assert_eq!(r, vec![0..300, 512..768]);
+        assert_eq!(gaps(&r, 1024), vec![300..512, 768..1024]);
+        assert_eq!(format_ranges(&r), "0..300,512..768");
+    }
+}
