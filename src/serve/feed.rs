@@ -370,7 +370,9 @@ impl Feed {
                 Some(film),
             ) => {
                 self.restart_progress(&mut state);
-                if shown.is_some_and(|r| r != *reload) {
+                // A/B's "before": the image before the last save that changed something (a reload
+                // that changed nothing, e.g. a touch, goes on with the same image).
+                if shown.is_some_and(|r| r != *reload) && !changes.is_empty() {
                     state.previous = state.current.take();
                 }
                 state.current = Some(Arc::new(Frame::new(*reload, film.clone())));
@@ -477,6 +479,7 @@ pub fn changed_text(c: &ChangeSummary) -> String {
         (c.materials, "materials"),
         (c.camera, "camera"),
         (c.settings, "settings"),
+        (c.reordered, "order"),
     ]
     .into_iter()
     .filter(|(on, _)| *on)
