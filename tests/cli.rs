@@ -5,9 +5,9 @@ mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use common::{scenes_dir, temp_dir, write_scene};
+use common::{scenes_dir, temp_dir, wait_or_kill, write_scene};
 
 /// Longer than any command here needs by orders of magnitude: only guards against a hang (a
 /// command that renders 10⁶ samples per pixel before looking at its output path).
@@ -22,13 +22,8 @@ fn rondo(args: &[&str]) -> Output {
         .stderr(Stdio::piped())
         .spawn()
         .expect("start rondo");
-    let start = Instant::now();
-    while child.try_wait().expect("wait for rondo").is_none() {
-        if start.elapsed() > HANG_GUARD {
-            child.kill().ok();
-            panic!("rondo {args:?} still running after {HANG_GUARD:?}: it started working");
-        }
-        std::thread::sleep(Duration::from_millis(20));
+    if wait_or_kill(&mut child, HANG_GUARD).is_none() {
+        panic!("rondo {args:?} still running after {HANG_GUARD:?}: it started working");
     }
     child.wait_with_output().expect("rondo output")
 }

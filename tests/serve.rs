@@ -460,14 +460,8 @@ fn sigint_stops_the_server() {
         .status()
         .expect("run kill");
     assert!(kill.success());
-    let deadline = Instant::now() + WAIT;
-    let status = loop {
-        if let Some(status) = rondo.child.try_wait().expect("wait for rondo") {
-            break status;
-        }
-        assert!(Instant::now() < deadline, "rondo did not stop on SIGINT");
-        std::thread::sleep(Duration::from_millis(20));
-    };
+    let status =
+        common::wait_or_kill(&mut rondo.child, WAIT).expect("rondo did not stop on SIGINT");
     assert!(status.success(), "{status}");
     assert!(
         TcpStream::connect(rondo.addr).is_err(),

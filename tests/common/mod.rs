@@ -68,3 +68,31 @@ pub fn geometry_of(
         .collect();
     rondo::geometry::packed::Geometry::build(&prims)
 }
+
+/// Waits for `child` to exit and returns its status, or `None` if it was still running after
+/// `hang_guard` and was killed. The guard is a watchdog that only ends a hang: the wait itself is
+/// for the exit event, not a comparison of elapsed times.
+pub fn wait_or_kill(
+    child: &mut std::process::Child,
+    hang_guard: std::time::Duration,
+) -> Option<std::process::ExitStatus> {
+    use std::sync::mpsc::{RecvTimeoutError, channel};
+    let pid = child.id().to_string();
+    let (exited, watch) = channel::<()>();
+    let watchdog = std::thread::spawn(move || {
+        let hung = matches!(
+            watch.recv_timeout(hang_guard),
+            Err(RecvTimeoutError::Timeout)
+        );
+        if hung {
+            let _ = std::process::Command::new("kill")
+                .args(["-KILL", &pid])
+                .status();
+        }
+        hung
+    });
+    let status = child.wait().expect("wait for the child");
+    drop(exited);
+    let hung = watchdog.join().expect("watchdog");
+    (!hung).then_some(status)
+}
