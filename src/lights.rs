@@ -83,8 +83,12 @@ enum Strategy {
     Area,
     /// Uniformly in a sphere's visible cone; `2π` times this is its solid angle.
     Cone { one_minus_cos: f32 },
-    /// Uniformly in a triangle's solid angle.
-    Spherical { solid_angle: f32 },
+    /// Uniformly in a triangle's solid angle; its world-space vertices, fetched (for an
+    /// instance: transformed) once for both the choice and the sample.
+    Spherical {
+        solid_angle: f32,
+        vertices: [Vec3; 3],
+    },
 }
 
 /// The emitters of a scene with their selection probabilities.
@@ -267,7 +271,10 @@ impl LightSet {
                 }
                 let solid_angle = triangle_solid_angle(v, p_ref);
                 if (SPHERICAL_MIN..=SPHERICAL_MAX).contains(&solid_angle) {
-                    Strategy::Spherical { solid_angle }
+                    Strategy::Spherical {
+                        solid_angle,
+                        vertices: v,
+                    }
                 } else {
                     Strategy::Area
                 }
@@ -297,7 +304,7 @@ impl LightSet {
                 dist2 / (e.area * cos)
             }
             Strategy::Cone { one_minus_cos } => 1.0 / (2.0 * std::f32::consts::PI * one_minus_cos),
-            Strategy::Spherical { solid_angle } => 1.0 / solid_angle,
+            Strategy::Spherical { solid_angle, .. } => 1.0 / solid_angle,
         }
     }
 
@@ -339,8 +346,8 @@ impl LightSet {
             }
             HitKind::Triangle | HitKind::Instance { .. } => {
                 let [b0, b1, b2] = match strategy {
-                    Strategy::Spherical { .. } => {
-                        sample_spherical_triangle(Self::vertices(geometry, &e), p_ref, u)?
+                    Strategy::Spherical { vertices, .. } => {
+                        sample_spherical_triangle(vertices, p_ref, u)?
                     }
                     _ => {
                         let su = u.x.sqrt();
