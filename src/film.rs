@@ -61,9 +61,7 @@ impl Pixel {
     /// Adds one sample (`l` must be finite).
     #[inline]
     pub fn add(&mut self, l: Vec3) {
-        self.0[0] += i128::from(fixed(l.x));
-        self.0[1] += i128::from(fixed(l.y));
-        self.0[2] += i128::from(fixed(l.z));
+        self.merge(&Self::from_radiance(l));
     }
 
     /// Adds another sum (exact, so in any order).

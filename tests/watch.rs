@@ -2,6 +2,8 @@
 //! ways editors save, observed through its reports and the image it writes. Waits are bounded
 //! (a report or a timeout), never sleeps.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -115,13 +117,7 @@ impl Fixture {
 
 impl Drop for Fixture {
     fn drop(&mut self) {
-        if let Some(session) = self.session.take() {
-            let stopped = session.stop();
-            if !std::thread::panicking() {
-                stopped.expect("watch thread ends cleanly");
-            }
-        }
-        let _ = std::fs::remove_dir_all(&self.dir);
+        common::end_watch(self.session.take(), &self.dir);
     }
 }
 

@@ -13,6 +13,8 @@
 //! watch sessions); `RONDO_DIFF_SEED` the seed. A failure prints the seed, the sequence and the
 //! reports; every sequence that ever failed is kept below as a named regression case.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -489,13 +491,7 @@ impl Bench {
 
 impl Drop for Bench {
     fn drop(&mut self) {
-        if let Some(session) = self.session.take() {
-            let stopped = session.stop();
-            if !std::thread::panicking() {
-                stopped.expect("watch thread ends cleanly");
-            }
-        }
-        let _ = std::fs::remove_dir_all(&self.dir);
+        common::end_watch(self.session.take(), &self.dir);
     }
 }
 

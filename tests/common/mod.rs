@@ -96,3 +96,15 @@ pub fn wait_or_kill(
     let hung = watchdog.join().expect("watchdog");
     (!hung).then_some(status)
 }
+
+/// Ends a test's watch session (its thread must end cleanly, unless the test already failed) and
+/// removes the test's directory.
+pub fn end_watch(session: Option<rondo::watch::WatchSession>, dir: &Path) {
+    if let Some(session) = session {
+        let stopped = session.stop();
+        if !std::thread::panicking() {
+            stopped.expect("watch thread ends cleanly");
+        }
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
