@@ -94,13 +94,23 @@ const pixelAt = (page, x, y) => page.evaluate(([x, y]) => {
   return Array.from(c.getContext("2d").getImageData(x, y, 1, 1).data.slice(0, 3));
 }, [x, y]);
 
+// Waits until pixel (x, y) of the canvas is `rgb`; on timeout, the error says what the page
+// showed instead (pixel, reload drawn, A/B button, status line).
 async function waitPixel(page, x, y, rgb) {
-  await page.waitForFunction(([x, y, rgb]) => {
-    const c = document.getElementById("canvas");
-    if (c.hidden) return false;
-    const d = c.getContext("2d").getImageData(x, y, 1, 1).data;
-    return d[0] === rgb[0] && d[1] === rgb[1] && d[2] === rgb[2];
-  }, [x, y, rgb], { timeout: WAIT, polling: 10 });
+  try {
+    await page.waitForFunction(([x, y, rgb]) => {
+      const c = document.getElementById("canvas");
+      if (c.hidden) return false;
+      const d = c.getContext("2d").getImageData(x, y, 1, 1).data;
+      return d[0] === rgb[0] && d[1] === rgb[1] && d[2] === rgb[2];
+    }, [x, y, rgb], { timeout: WAIT, polling: 10 });
+  } catch (e) {
+    const seen = await page.evaluate(() => {
+      const $ = (id) => document.getElementById(id);
+      return `reload drawn ${$("canvas").dataset.reload}, A/B "${$("ab").textContent}", status "${$("status").textContent}"`;
+    }).catch(() => "page state unknown");
+    throw new Error(`pixel (${x}, ${y}) never became ${rgb}: it is ${await pixelAt(page, x, y).catch(() => "?")}; ${seen}\n${e.stack}`);
+  }
 }
 
 async function launch() {
