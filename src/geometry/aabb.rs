@@ -1,6 +1,6 @@
 //! Ray queries and the robust ray–box slab test.
 
-use glam::{Mat3, Vec3, Vec3A, Vec4};
+use glam::{Vec3, Vec3A, Vec4};
 
 use super::ray::Ray;
 
@@ -21,9 +21,12 @@ pub struct RayQuery {
     /// whose reciprocal overflows): then `0 · ∞` can occur and the slab test takes its NaN-aware
     /// path.
     axis_parallel: bool,
-    /// The watertight test's permute-and-shear transform as three vectors: a vertex `p` relative
-    /// to the origin maps to `(x_axis·p, y_axis·p, z_axis·p)`.
-    shear: Mat3,
+    /// The watertight test's permutation: the axes that become x, y and z (z the axis of the
+    /// largest |direction| component).
+    axes: [usize; 3],
+    /// Its shear: a vertex `p` relative to the origin maps to
+    /// `(p[kx] + s.x·p[kz], p[ky] + s.y·p[kz], s.z·p[kz])`.
+    shear: Vec3,
 }
 
 impl RayQuery {
@@ -41,41 +44,41 @@ impl RayQuery {
             2
         };
         let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
-        let axis = |k: usize| Vec3::AXES[k];
-        let (sx, sy, sz) = (-d[kx] / d[kz], -d[ky] / d[kz], 1.0 / d[kz]);
-        // Woop et al.'s permutation then shear, written as dot products whose zero terms add
-        // exactly nothing: (p_kx + sx·p_kz, p_ky + sy·p_kz, sz·p_kz) in the same rounding.
-        let shear = Mat3::from_cols(
-            axis(kx) + sx * axis(kz),
-            axis(ky) + sy * axis(kz),
-            sz * axis(kz),
-        );
+        let shear = Vec3::new(-d[kx] / d[kz], -d[ky] / d[kz], 1.0 / d[kz]);
         let inv_dir = Vec3A::ONE / Vec3A::from(d);
         Self {
             ray,
             origin: ray.origin.into(),
             inv_dir,
             axis_parallel: !inv_dir.is_finite(),
+            axes: [kx, ky, kz],
             shear,
         }
     }
 
     /// A vertex in the ray's sheared frame, where the ray is the +z axis from the origin
-    /// (z not yet scaled by 1/d_z, as the watertight test needs).
+    /// (z not yet scaled by 1/d_z, as the watertight test needs): Woop et al.'s permutation
+    /// then shear, one multiply and one add per coordinate.
     #[inline(always)]
     pub fn to_ray_frame(&self, p: Vec3) -> Vec3 {
-        let rel = p - self.ray.origin;
-        Vec3::new(
-            self.shear.x_axis.dot(rel),
-            self.shear.y_axis.dot(rel),
-            rel.dot(self.shear.z_axis),
-        )
+        let rel = (p - self.ray.origin).to_array();
+        let [kx, ky, kz] = self.axes;
+        let (x, y, z) = (rel[kx], rel[ky], rel[kz]);
+        let s = self.shear;
+        Vec3::new(x + s.x * z, y + s.y * z, s.z * z)
     }
 
-    /// The watertight test's shear as three rows (see [`RayQuery::to_ray_frame`]), for kernels
-    /// that move several vertices into the ray frame at once with the same operations.
+    /// The watertight test's permutation (see [`RayQuery::to_ray_frame`]): the axes that become
+    /// x, y and z, for kernels that move several vertices into the ray frame at once.
     #[inline(always)]
-    pub fn shear(&self) -> Mat3 {
+    pub fn axes(&self) -> [usize; 3] {
+        self.axes
+    }
+
+    /// The watertight test's shear (see [`RayQuery::to_ray_frame`]), for kernels that move
+    /// several vertices into the ray frame at once with the same operations.
+    #[inline(always)]
+    pub fn shear(&self) -> Vec3 {
         self.shear
     }
 

@@ -23,6 +23,16 @@ const INLINE_STACK: usize = 64;
 /// Children per wide node.
 const WIDTH: usize = 4;
 
+/// obvhs's medium build, with leaves collapsed for a node visit that costs about as much as
+/// one primitive test (obvhs assumes 3×): a wide node tests four boxes in one SIMD slab test,
+/// while a watertight triangle test is tens of instructions. Fewer primitives per leaf:
+/// −5.6 % instructions on the Cornell box, −3.5 % on `bunnies.ron`, +1.2 % on `stress.ron`
+/// (BENCHMARKS.md, issue 11).
+const BUILD_PARAMS: BvhBuildParams = BvhBuildParams {
+    collapse_traversal_cost: 1.0,
+    ..BvhBuildParams::medium_build()
+};
+
 /// A wide node: the boxes of up to four children lane by lane (`[min_x, min_y, min_z, max_x,
 /// max_y, max_z]`), and what each child is.
 #[derive(Clone, Copy, Debug)]
@@ -117,8 +127,7 @@ impl Bvh {
             .map(|&(min, max)| Aabb::new(min.into(), max.into()))
             .collect();
         let mut unused = std::time::Duration::ZERO;
-        let bvh =
-            obvhs::bvh2::builder::build_bvh2(&aabbs, BvhBuildParams::medium_build(), &mut unused);
+        let bvh = obvhs::bvh2::builder::build_bvh2(&aabbs, BUILD_PARAMS, &mut unused);
         let order = bvh.primitive_indices.clone();
         let mut wide = Vec::new();
         let depth = if bvh.nodes.first().is_some_and(|root| !root.is_leaf()) {

@@ -22,6 +22,8 @@
 
 use std::ops::{Add, Div, Mul, Neg, Range, Sub};
 
+use glam::{BVec4A, Vec4};
+
 use super::aabb::RayQuery;
 use super::layout::{SphereSoa, TriangleSoa, closest_triangle_scalar};
 use super::ray::{Ray, gamma};
@@ -32,113 +34,118 @@ use super::triangle::TriangleHit;
 /// them idle; a leaf of 5 to 8 primitives takes two chunks.
 pub const LANES: usize = 4;
 
-/// `LANES` floats, operated on element-wise.
+/// `LANES` floats, operated on element-wise: glam's `Vec4`, one SSE register on x86-64
+/// (SSE2 is part of the baseline, so no runtime detection is needed) and plain arrays elsewhere.
 #[derive(Clone, Copy, Debug)]
-struct F([f32; LANES]);
+struct F(Vec4);
 
-/// `LANES` booleans.
+/// `LANES` booleans: glam's `BVec4A`, an SSE mask register on x86-64.
 #[derive(Clone, Copy, Debug)]
-struct M([bool; LANES]);
+struct M(BVec4A);
 
 impl F {
     #[inline(always)]
     fn splat(x: f32) -> Self {
-        F([x; LANES])
+        F(Vec4::splat(x))
     }
 
+    /// Lane `i`.
     #[inline(always)]
-    fn map(self, f: impl Fn(f32) -> f32) -> Self {
-        F(self.0.map(f))
-    }
-
-    #[inline(always)]
-    fn zip(self, o: Self, f: impl Fn(f32, f32) -> f32) -> Self {
-        F(std::array::from_fn(|i| f(self.0[i], o.0[i])))
-    }
-
-    #[inline(always)]
-    fn cmp(self, o: Self, f: impl Fn(f32, f32) -> bool) -> M {
-        M(std::array::from_fn(|i| f(self.0[i], o.0[i])))
+    fn lane(self, i: usize) -> f32 {
+        self.0[i]
     }
 
     #[inline(always)]
     fn sqrt(self) -> Self {
-        self.map(f32::sqrt)
+        F(self.0.sqrt())
     }
 
     #[inline(always)]
     fn abs(self) -> Self {
-        self.map(f32::abs)
+        F(self.0.abs())
     }
 
     #[inline(always)]
     fn copysign(self, sign: Self) -> Self {
-        self.zip(sign, f32::copysign)
+        F(self.0.copysign(sign.0))
     }
 
+    /// `f32::max` per lane, NaN handling included (IEEE maxNum: a NaN operand loses). SSE's
+    /// `maxps` returns its second operand when either is NaN, so a NaN `o` is replaced.
     #[inline(always)]
     fn max(self, o: Self) -> Self {
-        self.zip(o, f32::max)
+        F(Vec4::select(o.0.is_nan_mask(), self.0, self.0.max(o.0)))
     }
 
     #[inline(always)]
     fn lt(self, o: Self) -> M {
-        self.cmp(o, |a, b| a < b)
+        M(self.0.cmplt(o.0))
     }
 
     #[inline(always)]
     fn le(self, o: Self) -> M {
-        self.cmp(o, |a, b| a <= b)
+        M(self.0.cmple(o.0))
     }
 
     #[inline(always)]
     fn gt(self, o: Self) -> M {
-        self.cmp(o, |a, b| a > b)
+        M(self.0.cmpgt(o.0))
     }
 
     #[inline(always)]
     fn ge(self, o: Self) -> M {
-        self.cmp(o, |a, b| a >= b)
+        M(self.0.cmpge(o.0))
     }
 
     #[inline(always)]
     fn eq(self, o: Self) -> M {
-        self.cmp(o, |a, b| a == b)
+        M(self.0.cmpeq(o.0))
     }
 
     /// `a` where `m`, else `b`.
     #[inline(always)]
     fn select(m: M, a: Self, b: Self) -> Self {
-        F(std::array::from_fn(
-            |i| if m.0[i] { a.0[i] } else { b.0[i] },
-        ))
+        F(Vec4::select(m.0, a.0, b.0))
     }
 }
 
 impl M {
     #[inline(always)]
     fn first(n: usize) -> Self {
-        M(std::array::from_fn(|i| i < n))
+        M(BVec4A::new(n > 0, n > 1, n > 2, n > 3))
+    }
+
+    /// The set lanes, in lane order.
+    #[inline(always)]
+    fn lanes(self) -> impl Iterator<Item = usize> {
+        let mut bits = self.0.bitmask();
+        std::iter::from_fn(move || {
+            (bits != 0).then(|| {
+                let i = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                i
+            })
+        })
     }
 
     #[inline(always)]
     fn and(self, o: Self) -> Self {
-        M(std::array::from_fn(|i| self.0[i] & o.0[i]))
+        M(self.0 & o.0)
     }
 
     #[inline(always)]
     fn or(self, o: Self) -> Self {
-        M(std::array::from_fn(|i| self.0[i] | o.0[i]))
+        M(self.0 | o.0)
     }
 
     #[inline(always)]
     fn not(self) -> Self {
-        M(self.0.map(|b| !b))
+        M(!self.0)
     }
 
     #[inline(always)]
     fn any(self) -> bool {
-        self.0.iter().fold(false, |a, &b| a | b)
+        self.0.any()
     }
 }
 
@@ -148,7 +155,7 @@ macro_rules! lane_op {
             type Output = F;
             #[inline(always)]
             fn $method(self, o: F) -> F {
-                self.zip(o, |a, b| a $op b)
+                F(self.0 $op o.0)
             }
         }
     };
@@ -162,7 +169,7 @@ impl Neg for F {
     type Output = F;
     #[inline(always)]
     fn neg(self) -> F {
-        self.map(|a| -a)
+        F(-self.0)
     }
 }
 
@@ -170,7 +177,7 @@ impl Neg for F {
 #[inline(always)]
 fn load(field: &[f32], first: usize) -> F {
     match field.get(first..).and_then(|s| s.first_chunk::<LANES>()) {
-        Some(lanes) => F(*lanes),
+        Some(lanes) => F(Vec4::from_array(*lanes)),
         None => load_tail(field, first),
     }
 }
@@ -182,18 +189,18 @@ fn load(field: &[f32], first: usize) -> F {
 fn load_tail(field: &[f32], first: usize) -> F {
     let tail = field.get(first..).unwrap_or_default();
     let last = tail.last().copied().unwrap_or(0.0);
-    F(std::array::from_fn(|i| {
+    F(Vec4::from_array(std::array::from_fn(|i| {
         tail.get(i).copied().unwrap_or(last)
-    }))
+    })))
 }
 
 /// The chunks of at most `LANES` slots that cover `slots`: `(first slot, live lanes)`.
 #[inline(always)]
 fn chunks(slots: Range<usize>) -> impl Iterator<Item = (usize, usize)> {
-    slots
-        .clone()
-        .step_by(LANES)
-        .map(move |first| (first, (slots.end - first).min(LANES)))
+    (0..slots.len().div_ceil(LANES)).map(move |c| {
+        let first = slots.start + c * LANES;
+        (first, (slots.end - first).min(LANES))
+    })
 }
 
 /// Both roots of the sphere quadratic per lane, smaller first, in the exact operations of
@@ -248,8 +255,8 @@ pub fn closest_sphere(
             continue;
         }
         // Replay the scalar loop over the lanes that hit, in slot order.
-        for i in (0..live).filter(|&i| hits.0[i]) {
-            let (t0, t1) = (t0.0[i], t1.0[i]);
+        for i in hits.lanes() {
+            let (t0, t1) = (t0.lane(i), t1.lane(i));
             let t = if t0 > 0.0 && t0 < *t_max {
                 t0
             } else if t1 > 0.0 && t1 < *t_max {
@@ -297,14 +304,12 @@ enum Chunk {
 /// Vertex `k` of the lanes' triangles in the ray frame: `RayQuery::to_ray_frame` on lanes.
 #[inline(always)]
 fn ray_frame(q: &RayQuery, tris: &TriangleSoa, first: usize, k: usize) -> (F, F, F) {
-    let (o, s) = (q.ray.origin, q.shear());
-    let rx = load(&tris.v[3 * k], first) - F::splat(o.x);
-    let ry = load(&tris.v[3 * k + 1], first) - F::splat(o.y);
-    let rz = load(&tris.v[3 * k + 2], first) - F::splat(o.z);
-    let x = F::splat(s.x_axis.x) * rx + F::splat(s.x_axis.y) * ry + F::splat(s.x_axis.z) * rz;
-    let y = F::splat(s.y_axis.x) * rx + F::splat(s.y_axis.y) * ry + F::splat(s.y_axis.z) * rz;
-    let z = rx * F::splat(s.z_axis.x) + ry * F::splat(s.z_axis.y) + rz * F::splat(s.z_axis.z);
-    (x, y, z)
+    let o = q.ray.origin.to_array();
+    let [kx, ky, kz] = q.axes();
+    let s = q.shear();
+    let rel = |axis: usize| load(&tris.v[3 * k + axis], first) - F::splat(o[axis]);
+    let (x, y, z) = (rel(kx), rel(ky), rel(kz));
+    (x + F::splat(s.x) * z, y + F::splat(s.y) * z, F::splat(s.z) * z)
 }
 
 /// [`super::triangle::intersect_triangle`] on lanes, in the same operations.
@@ -369,7 +374,7 @@ const GAMMA5: f32 = gamma(5.0);
 /// Whether lane `i` passes the scalar kernel's `t_max` test.
 #[inline(always)]
 fn within(l: &TriangleLanes, i: usize, t_max: f32) -> bool {
-    let (det, t_scaled) = (l.det.0[i], l.t_scaled.0[i]);
+    let (det, t_scaled) = (l.det.lane(i), l.t_scaled.lane(i));
     let bound = t_max * det;
     !((det < 0.0 && t_scaled < bound) || (det > 0.0 && t_scaled > bound))
 }
@@ -396,17 +401,17 @@ pub fn closest_triangle(
             Chunk::Lanes(l) => l,
         };
         // Replay the scalar loop's t_max test over the candidates, in slot order.
-        for i in (0..live).filter(|&i| l.candidate.0[i]) {
+        for i in l.candidate.lanes() {
             if within(&l, i, *t_max) {
-                let inv_det = l.inv_det.0[i];
-                let t = l.t_scaled.0[i] * inv_det;
+                let inv_det = l.inv_det.lane(i);
+                let t = l.t_scaled.lane(i) * inv_det;
                 *t_max = t;
                 best = Some((
                     first + i,
                     TriangleHit {
                         t,
-                        b1: l.e1.0[i] * inv_det,
-                        b2: l.e2.0[i] * inv_det,
+                        b1: l.e1.lane(i) * inv_det,
+                        b2: l.e2.lane(i) * inv_det,
                     },
                 ));
             }
@@ -424,6 +429,6 @@ pub fn any_triangle(tris: &TriangleSoa, q: &RayQuery, slots: Range<usize>, t_max
             let mut t = t_max;
             closest_triangle_scalar(tris, q, first..first + live, &mut t).is_some()
         }
-        Chunk::Lanes(l) => (0..live).any(|i| l.candidate.0[i] && within(&l, i, t_max)),
+        Chunk::Lanes(l) => l.candidate.lanes().any(|i| within(&l, i, t_max)),
     })
 }
