@@ -19,6 +19,8 @@ use super::aabb::RayQuery;
 
 /// Traversal stack size that needs no heap allocation; deeper trees fall back to a `Vec`.
 const INLINE_STACK: usize = 64;
+/// Stack size for trees of at most five levels (a few hundred primitives).
+const SHORT_STACK: usize = 16;
 
 /// Children per wide node.
 const WIDTH: usize = 4;
@@ -153,9 +155,31 @@ impl Bvh {
 
     /// Calls `leaf(slots, t_max)` for every leaf the ray of `q` enters before `*t_max`, nearest
     /// child first. The closure shrinks `*t_max` when it finds a closer hit and returns `false` to
-    /// stop the traversal (any-hit queries).
+    /// stop the traversal.
     #[inline]
     pub fn traverse(
+        &self,
+        q: &RayQuery,
+        t_max: &mut f32,
+        leaf: impl FnMut(Range<usize>, &mut f32) -> bool,
+    ) {
+        self.traverse_in::<true>(q, t_max, leaf);
+    }
+
+    /// [`Bvh::traverse`] for any-hit queries, whose answer does not depend on the order of the
+    /// leaves: children in node order, unsorted. The closure returns `false` to stop.
+    #[inline]
+    pub fn traverse_any(
+        &self,
+        q: &RayQuery,
+        t_max: &mut f32,
+        leaf: impl FnMut(Range<usize>, &mut f32) -> bool,
+    ) {
+        self.traverse_in::<false>(q, t_max, leaf);
+    }
+
+    #[inline(always)]
+    fn traverse_in<const NEAREST_FIRST: bool>(
         &self,
         q: &RayQuery,
         t_max: &mut f32,
@@ -172,21 +196,27 @@ impl Bvh {
             leaf(first..first + root.prim_count as usize, t_max);
             return;
         }
-        // Each level pushes at most four children after popping one.
+        // Each level pushes at most four children after popping one. The stack is zeroed at
+        // every query, so a shallow tree gets a short one.
         let needed = (WIDTH - 1) * self.depth + 1;
-        if needed <= INLINE_STACK {
+        if needed <= SHORT_STACK {
+            let mut stack = [0u32; SHORT_STACK];
+            self.traverse_wide::<NEAREST_FIRST>(&mut stack, q, t_max, &mut leaf);
+        } else if needed <= INLINE_STACK {
             let mut stack = [0u32; INLINE_STACK];
-            self.traverse_wide(&mut stack, q, t_max, &mut leaf);
+            self.traverse_wide::<NEAREST_FIRST>(&mut stack, q, t_max, &mut leaf);
         } else {
             let mut stack = vec![0u32; needed];
-            self.traverse_wide(&mut stack, q, t_max, &mut leaf);
+            self.traverse_wide::<NEAREST_FIRST>(&mut stack, q, t_max, &mut leaf);
         }
     }
 
     /// Traversal of the wide tree from its root. A node popped from `stack` tests its children
     /// against the `t_max` of that moment, which culls what a closer hit has put out of reach.
+    /// With `NEAREST_FIRST`, a node's entered children are visited nearest first (leaves at
+    /// once, inner nodes pushed farthest deepest); without, in node order.
     #[inline(always)]
-    fn traverse_wide(
+    fn traverse_wide<const NEAREST_FIRST: bool>(
         &self,
         stack: &mut [u32],
         q: &RayQuery,
@@ -199,7 +229,8 @@ impl Bvh {
             let node = &self.wide[current];
             let (mask, near) = q.enter_boxes(&node.bounds, *t_max);
             let mut hits = mask & node.valid;
-            // The entered children, nearest first (insertion sort of at most four).
+            // The entered children, nearest first (insertion sort of at most four) or as they
+            // come.
             let mut order = [(0usize, 0.0f32); WIDTH];
             let mut n = 0;
             while hits != 0 {
@@ -207,14 +238,13 @@ impl Bvh {
                 hits &= hits - 1;
                 let t = near[k];
                 let mut j = n;
-                while j > 0 && order[j - 1].1 > t {
+                while NEAREST_FIRST && j > 0 && order[j - 1].1 > t {
                     order[j] = order[j - 1];
                     j -= 1;
                 }
                 order[j] = (k, t);
                 n += 1;
             }
-            // Leaves at once, nearest first; inner children onto the stack, farthest deepest.
             let mut inner = [0u32; WIDTH];
             let mut m = 0;
             for &(k, t) in &order[..n] {

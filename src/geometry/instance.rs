@@ -293,12 +293,12 @@ impl InstanceSet {
         let world = RayQuery::new(*ray);
         let mut blocked = false;
         let mut t = t_max;
-        self.tlas.traverse(&world, &mut t, |range, t| {
+        self.tlas.traverse_any(&world, &mut t, |range, t| {
             for i in range {
                 let inst = &self.instances[i];
                 let (q, s) = Self::object_query(inst, ray);
                 let mut t_object = *t * s;
-                inst.blas.bvh.traverse(&q, &mut t_object, |tris, t_object| {
+                inst.blas.bvh.traverse_any(&q, &mut t_object, |tris, t_object| {
                     blocked = tris.into_iter().any(|k| {
                         let [a, b, c] = inst.blas.triangles[k];
                         intersect_triangle(&q, a, b, c, *t_object).is_some()

@@ -416,14 +416,14 @@ impl<L: Layout> Geometry<L> {
         let q = RayQuery::new(*ray);
         let mut blocked = false;
         let mut t = t_max;
-        self.sphere_bvh.traverse(&q, &mut t, |slots, t| {
+        self.sphere_bvh.traverse_any(&q, &mut t, |slots, t| {
             blocked = L::any_sphere(&self.spheres, ray, slots, *t);
             !blocked
         });
         if blocked {
             return true;
         }
-        self.triangle_bvh.traverse(&q, &mut t, |slots, t| {
+        self.triangle_bvh.traverse_any(&q, &mut t, |slots, t| {
             blocked = L::any_triangle(&self.triangles, &q, slots, *t);
             !blocked
         });
