@@ -234,7 +234,8 @@ def main():
 
     configs = []
     for spec in args.rondo or ["rondo=target/release/rondo"]:
-        label, _, rest = spec.partition("=")
+        # A bare PATH (as run.sh passes the fresh build) is labelled "rondo".
+        label, _, rest = spec.partition("=") if "=" in spec else ("rondo", "=", spec)
         path, _, sampler = rest.partition(":")
         configs.append((label, path, sampler or None))
 

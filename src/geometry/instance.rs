@@ -298,13 +298,15 @@ impl InstanceSet {
                 let inst = &self.instances[i];
                 let (q, s) = Self::object_query(inst, ray);
                 let mut t_object = *t * s;
-                inst.blas.bvh.traverse_any(&q, &mut t_object, |tris, t_object| {
-                    blocked = tris.into_iter().any(|k| {
-                        let [a, b, c] = inst.blas.triangles[k];
-                        intersect_triangle(&q, a, b, c, *t_object).is_some()
+                inst.blas
+                    .bvh
+                    .traverse_any(&q, &mut t_object, |tris, t_object| {
+                        blocked = tris.into_iter().any(|k| {
+                            let [a, b, c] = inst.blas.triangles[k];
+                            intersect_triangle(&q, a, b, c, *t_object).is_some()
+                        });
+                        !blocked
                     });
-                    !blocked
-                });
                 if blocked {
                     return false;
                 }

@@ -2,7 +2,7 @@
 //! solid-angle samplers of lights (the cone a sphere subtends, spherical triangles).
 
 use glam::{Vec2, Vec3};
-use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+use std::f32::consts::{FRAC_PI_4, PI};
 
 /// Maps the unit square to the unit disk preserving relative areas (Shirley & Chiu, "A Low
 /// Distortion Map Between Disk and Square", 1997).
@@ -12,12 +12,32 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, FRAC_PI_4 * (o.y / o.x))
+    // θ = φ in the first wedge and π/2 − φ in the second, with |φ| ≤ π/4, whose cosine and
+    // sine are short polynomials; cos(π/2 − φ) = sin φ and sin(π/2 − φ) = cos φ.
+    if o.x.abs() > o.y.abs() {
+        let (sin, cos) = sin_cos_quarter(FRAC_PI_4 * (o.y / o.x));
+        o.x * Vec2::new(cos, sin)
     } else {
-        (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y))
-    };
-    r * Vec2::new(theta.cos(), theta.sin())
+        let (sin, cos) = sin_cos_quarter(FRAC_PI_4 * (o.x / o.y));
+        o.y * Vec2::new(sin, cos)
+    }
+}
+
+/// `(sin φ, cos φ)` for |φ| ≤ π/4 by their Taylor polynomials to degree 9 and 10, evaluated by
+/// Horner: the truncation error is below φ¹¹/11! ≈ 1.7·10⁻⁹ and 2·10⁻¹⁰, so the result is as
+/// exact as `f32` allows (within 2 ulp of `f32::sin_cos`, tested) at a fraction of its cost.
+#[inline]
+pub fn sin_cos_quarter(phi: f32) -> (f32, f32) {
+    let x2 = phi * phi;
+    let sin = phi
+        * (1.0
+            + x2 * (-1.0 / 6.0
+                + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362_880.0)))));
+    let cos = 1.0
+        + x2 * (-0.5
+            + x2 * (1.0 / 24.0
+                + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40_320.0 + x2 * (-1.0 / 3_628_800.0)))));
+    (sin, cos)
 }
 
 /// A cosine-distributed direction about +z (pdf cos θ / π), by Malley's method. Its z is always
@@ -199,6 +219,21 @@ pub fn sample_spherical_triangle(v: [Vec3; 3], p: Vec3, u: Vec2) -> Option<[f32;
 mod tests {
     use super::*;
     use crate::shading::rng::Rng;
+
+    #[test]
+    fn quarter_sin_cos_matches_the_library_within_two_ulp() {
+        let ulps = |a: f32, b: f32| (a.to_bits() as i64 - b.to_bits() as i64).abs();
+        for k in -100_000..=100_000 {
+            let phi = std::f32::consts::FRAC_PI_4 * k as f32 / 100_000.0;
+            let (s, c) = sin_cos_quarter(phi);
+            let (es, ec) = f64::from(phi).sin_cos();
+            let (es, ec) = (es as f32, ec as f32);
+            assert!(
+                ulps(s, es) <= 2 && ulps(c, ec) <= 2,
+                "φ = {phi}: {s} {c} against {es} {ec}"
+            );
+        }
+    }
 
     #[test]
     fn cosine_directions_are_unit_and_never_below_the_surface() {
