@@ -346,9 +346,10 @@ impl LightSet {
             }
             HitKind::Triangle | HitKind::Instance { .. } => {
                 let [b0, b1, b2] = match strategy {
-                    Strategy::Spherical { vertices, .. } => {
-                        sample_spherical_triangle(vertices, p_ref, u)?
-                    }
+                    Strategy::Spherical {
+                        vertices,
+                        solid_angle,
+                    } => sample_spherical_triangle(vertices, p_ref, solid_angle, u)?,
                     _ => {
                         let su = u.x.sqrt();
                         let (b0, b1) = (1.0 - su, u.y * su);

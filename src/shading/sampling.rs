@@ -163,22 +163,27 @@ pub fn triangle_solid_angle(v: [Vec3; 3], p: Vec3) -> f32 {
 
 /// Barycentric coordinates of a point of triangle `v` chosen uniformly in the solid angle it
 /// subtends from `p` (Arvo, "Stratified Sampling of Spherical Triangles", 1995; as in pbrt-v4's
-/// `SampleSphericalTriangle`). The density is `1 / triangle_solid_angle(v, p)` per steradian.
-/// `None` when the triangle is degenerate as seen from `p`.
+/// `SampleSphericalTriangle`). `solid_angle` must be `triangle_solid_angle(v, p)`: the sub-triangle
+/// areas are fractions of it, so the density is exactly `1 / solid_angle` per steradian, the
+/// value the light's pdf reports (pbrt-v4 recomputes the area from the angles instead, a second
+/// formula for the same quantity). `None` when the triangle is degenerate as seen from `p`.
 #[inline]
-pub fn sample_spherical_triangle(v: [Vec3; 3], p: Vec3, u: Vec2) -> Option<[f32; 3]> {
+pub fn sample_spherical_triangle(
+    v: [Vec3; 3],
+    p: Vec3,
+    solid_angle: f32,
+    u: Vec2,
+) -> Option<[f32; 3]> {
     let [a, b, c] = v.map(|x| (x - p).normalize_or_zero());
     let (n_ab, n_bc, n_ca) = (a.cross(b), b.cross(c), c.cross(a));
     if [n_ab, n_bc, n_ca].iter().any(|n| n.length_squared() == 0.0) {
         return None;
     }
-    let (n_ab, n_bc, n_ca) = (n_ab.normalize(), n_bc.normalize(), n_ca.normalize());
-    // The spherical triangle's angles at a, b and c; its area is their sum minus π.
+    let (n_ab, n_ca) = (n_ab.normalize(), n_ca.normalize());
+    // The spherical triangle's angle at a. The sub-triangle (a, b, c') of area u.x times the
+    // whole fixes c' on the arc a–c; its angles sum to π plus that area.
     let alpha = angle_between(n_ab, -n_ca);
-    let beta = angle_between(n_bc, -n_ab);
-    let gamma = angle_between(n_ca, -n_bc);
-    // The sub-triangle (a, b, c') of area u.x times the whole fixes c' on the arc a–c.
-    let area_pi = PI + u.x * (alpha + beta + gamma - PI);
+    let area_pi = PI + u.x * solid_angle;
     let (sin_alpha, cos_alpha) = alpha.sin_cos();
     let (sin_area, cos_area) = area_pi.sin_cos();
     let sin_phi = sin_area * cos_alpha - cos_area * sin_alpha;
