@@ -19,7 +19,7 @@ use super::aabb::RayQuery;
 
 /// Traversal stack size that needs no heap allocation; deeper trees fall back to a `Vec`.
 const INLINE_STACK: usize = 64;
-/// Stack size for trees of at most five levels (a few hundred primitives).
+/// Stack size for trees of at most five levels (a few thousand primitives).
 const SHORT_STACK: usize = 16;
 
 /// Children per wide node.
@@ -28,8 +28,9 @@ const WIDTH: usize = 4;
 /// obvhs's medium build, with leaves collapsed for a node visit that costs about as much as
 /// one primitive test (obvhs assumes 3×): a wide node tests four boxes in one SIMD slab test,
 /// while a watertight triangle test is tens of instructions. Fewer primitives per leaf:
-/// −5.6 % instructions on the Cornell box, −3.5 % on `bunnies.ron`, +1.2 % on `stress.ron`
-/// (BENCHMARKS.md, issue 11).
+/// −5.7 % instructions on the Cornell box, −3.5 % on `bunnies.ron`, −3 % on 2,000 random
+/// spheres, +1.2 % on `stress.ron`; leaves then hold ~1.03–1.08 primitives (BENCHMARKS.md,
+/// issue 11).
 const BUILD_PARAMS: BvhBuildParams = BvhBuildParams {
     collapse_traversal_cost: 1.0,
     ..BvhBuildParams::medium_build()
