@@ -535,7 +535,7 @@ pub struct ReloadReport {
 
 impl ReloadReport {
     /// The report of reload `number` of a scene of `spp` samples, before anything happened.
-    fn started(number: u64, trigger: Vec<PathBuf>, spp: u32) -> Self {
+    pub(crate) fn started(number: u64, trigger: Vec<PathBuf>, spp: u32) -> Self {
         Self {
             number,
             trigger,

@@ -200,6 +200,9 @@ struct State {
     clients: Vec<Arc<Client>>,
     /// The progress last sent (rows), to send only changes.
     progress_sent: u64,
+    /// A reload superseded before it showed an image had changed the scene: the next image is
+    /// of another scene than `current` even if its own reload changed nothing more.
+    unshown_change: bool,
 }
 
 struct Shared {
@@ -332,6 +335,12 @@ impl Feed {
     pub fn observe(&self, report: &Report, film: Option<&Film>) {
         let mut state = self.state();
         let shown = state.current.as_ref().map(|c| c.reload);
+        if let Report::Rendered(r) = report
+            && Some(r.number) != shown
+            && !r.changes.is_empty()
+        {
+            state.unshown_change = true;
+        }
         let event = match (report, film) {
             (
                 Report::Started {
@@ -371,9 +380,13 @@ impl Feed {
             ) => {
                 self.restart_progress(&mut state);
                 // A/B's "before": the image before the last save that changed something (a reload
-                // that changed nothing, e.g. a touch, goes on with the same image).
-                if shown.is_some_and(|r| r != *reload) && !changes.is_empty() {
-                    state.previous = state.current.take();
+                // that changed nothing, e.g. a touch, goes on with the same image). A change can
+                // also come from a reload that was superseded before it showed an image.
+                if shown != Some(*reload) {
+                    if shown.is_some() && (!changes.is_empty() || state.unshown_change) {
+                        state.previous = state.current.take();
+                    }
+                    state.unshown_change = false;
                 }
                 state.current = Some(Arc::new(Frame::new(*reload, film.clone())));
                 let render = match state.render.as_mut() {
@@ -514,6 +527,7 @@ fn source_line(file: &Path, line: usize) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::watch::ReloadReport;
 
     #[test]
     fn error_locations_come_from_the_prefix() {
@@ -543,6 +557,59 @@ mod tests {
         assert_eq!(&*got[0], r#"{"i":5}"#);
         assert_eq!(&*got[QUEUE - 1], format!(r#"{{"i":{}}}"#, QUEUE + 4));
         assert!(feed.subscribe(1).is_none(), "the limit holds");
+    }
+
+    /// The reports of a pass of `reload` that changed `materials` or nothing.
+    fn wrote(feed: &Feed, reload: u64, materials: bool, film: &Film) {
+        let changes = ChangeSummary {
+            materials,
+            ..ChangeSummary::default()
+        };
+        let report = Report::Wrote {
+            reload,
+            samples: 1,
+            preview: false,
+            spp: 1,
+            changes,
+            at: Instant::now(),
+        };
+        feed.observe(&report, Some(film));
+    }
+
+    #[test]
+    fn the_image_before_a_save_survives_a_reload_superseded_before_its_first_image() {
+        // CI's browser test: red (0), blue (1), green loaded by reload 2 but superseded before
+        // its first pass by reload 3 of the same file, which therefore changed nothing itself.
+        let feed = Feed::new();
+        let film = Film::new(1, 1);
+        wrote(&feed, 0, true, &film);
+        wrote(&feed, 1, true, &film);
+        let mut superseded = ReloadReport::started(2, Vec::new(), 1);
+        superseded.changes.materials = true;
+        feed.observe(&Report::Rendered(superseded), None);
+        wrote(&feed, 3, false, &film);
+        let before = |feed: &Feed| feed.previous().map(|f| f.reload);
+        assert_eq!(
+            before(&feed),
+            Some(1),
+            "A/B shows the image before the save"
+        );
+        // A touch (a reload that changes nothing, none superseded) keeps the pair.
+        feed.observe(
+            &Report::Rendered(ReloadReport::started(3, Vec::new(), 1)),
+            None,
+        );
+        wrote(&feed, 4, false, &film);
+        assert_eq!(before(&feed), Some(1));
+        // A reload superseded without having changed anything does not count as a change.
+        feed.observe(
+            &Report::Rendered(ReloadReport::started(5, Vec::new(), 1)),
+            None,
+        );
+        wrote(&feed, 6, false, &film);
+        assert_eq!(before(&feed), Some(1));
+        wrote(&feed, 7, true, &film);
+        assert_eq!(before(&feed), Some(6));
     }
 
     #[test]

@@ -186,6 +186,9 @@ async function behaviour(context) {
     const width = await page.evaluate(() => parseFloat(document.getElementById("canvas").style.width));
     check("1:1 zoom shows one screen pixel per pixel", Math.abs(width - 64) < 0.01, String(width));
     await page.close();
+  } catch (e) {
+    // What rondo printed says which reloads ran and what each changed.
+    throw new Error(`${e.message}\nrondo's log:\n${rondo.log.join("")}`);
   } finally {
     const code = await stopRondo(rondo.child);
     check("rondo stops on SIGINT", code === 0, String(code));
