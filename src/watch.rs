@@ -535,7 +535,7 @@ pub struct ReloadReport {
 
 impl ReloadReport {
     /// The report of reload `number` of a scene of `spp` samples, before anything happened.
-    pub(crate) fn started(number: u64, trigger: Vec<PathBuf>, spp: u32) -> Self {
+    fn started(number: u64, trigger: Vec<PathBuf>, spp: u32) -> Self {
         Self {
             number,
             trigger,
@@ -710,6 +710,9 @@ pub enum Report {
         spp: u32,
         /// What the reload changed in the world.
         changes: ChangeSummary,
+        /// Whether this is the first image of a scene other than the last image written: the
+        /// scene changed since, by this reload or by one superseded before it wrote any.
+        new_scene: bool,
         /// When the write finished.
         at: Instant,
     },
@@ -1281,6 +1284,7 @@ impl Watch {
                 match written {
                     Ok(()) => {
                         let at = Instant::now();
+                        let new_scene = self.on_disk == OnDisk::default();
                         self.on_disk = now;
                         r.samples = now.samples;
                         if r.first_image.is_none() {
@@ -1292,6 +1296,7 @@ impl Watch {
                             preview: !now.real,
                             spp: r.spp,
                             changes: r.changes.clone(),
+                            new_scene,
                             at,
                         };
                         out.emit(report, Some(film));
@@ -1474,6 +1479,68 @@ mod tests {
         let line = r.to_string();
         assert!(line.contains("entities reordered |"), "{line}");
         assert!(line.contains("first pass 9.00 ms (preview)"), "{line}");
+    }
+
+    #[test]
+    fn a_reload_superseded_after_applying_its_change_makes_the_next_image_a_new_scene() {
+        // The sequence of CI's browser failure: red, blue, then green applied by a reload whose
+        // pass is cancelled by the next file event, and a reload of the same file that
+        // therefore changes nothing itself. Its image is still of another scene than the last
+        // one written (what the viewer's A/B keys on).
+        let dir = std::env::temp_dir().join(format!("rondo-watch-unit-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let scene = dir.join("scene.ron");
+        let save = |colour: &str| {
+            let text = format!(
+                "Scene(camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0), fov: 40.0),
+                 settings: Settings(width: 8, height: 8, spp: 2, max_depth: 2),
+                 materials: {{ \"wall\": Light(emit: Constant({colour}), intensity: 1.0) }},
+                 entities: [Entity(material: \"wall\", shape: Sphere(center: (0, 0, 0), radius: 1))])"
+            );
+            std::fs::write(&scene, text).expect("write scene");
+        };
+        save("(1, 0, 0)");
+        let mut w = Watch::new(WatchOptions::new(&scene, dir.join("out.png"))).expect("watch");
+        let mut reports = Vec::new();
+        let mut sink = |r: Report| reports.push(r);
+        let mut out = Emitter {
+            observer: None,
+            report: &mut sink,
+        };
+        let render = |w: &mut Watch, out: &mut Emitter<'_>| {
+            assert!(w.reload(&Pending::initial(), out).is_ok(), "loads");
+            while w.job.is_some() {
+                w.step(out);
+            }
+        };
+        render(&mut w, &mut out);
+        save("(0, 0, 1)");
+        render(&mut w, &mut out);
+        save("(0, 1, 0)");
+        assert!(w.reload(&Pending::initial(), &mut out).is_ok(), "loads");
+        w.cancel.store(true, Ordering::SeqCst);
+        w.step(&mut out);
+        render(&mut w, &mut out);
+        drop(out);
+        std::fs::remove_dir_all(&dir).ok();
+        let firsts: Vec<(u64, bool, bool)> = reports
+            .iter()
+            .filter_map(|r| match r {
+                Report::Wrote {
+                    reload,
+                    changes,
+                    new_scene,
+                    ..
+                } => Some((*reload, changes.is_empty(), *new_scene)),
+                _ => None,
+            })
+            .filter(|&(_, _, new_scene)| new_scene)
+            .collect();
+        assert_eq!(
+            firsts,
+            [(0, false, true), (1, false, true), (3, true, true)],
+            "the first image of each scene, with whether its reload changed nothing"
+        );
     }
 
     #[test]

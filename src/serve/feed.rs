@@ -200,9 +200,6 @@ struct State {
     clients: Vec<Arc<Client>>,
     /// The progress last sent (rows), to send only changes.
     progress_sent: u64,
-    /// A reload superseded before it showed an image had changed the scene: the next image is
-    /// of another scene than `current` even if its own reload changed nothing more.
-    unshown_change: bool,
 }
 
 struct Shared {
@@ -335,12 +332,6 @@ impl Feed {
     pub fn observe(&self, report: &Report, film: Option<&Film>) {
         let mut state = self.state();
         let shown = state.current.as_ref().map(|c| c.reload);
-        if let Report::Rendered(r) = report
-            && Some(r.number) != shown
-            && !r.changes.is_empty()
-        {
-            state.unshown_change = true;
-        }
         let event = match (report, film) {
             (
                 Report::Started {
@@ -374,19 +365,16 @@ impl Feed {
                     preview,
                     spp,
                     changes,
+                    new_scene,
                     ..
                 },
                 Some(film),
             ) => {
                 self.restart_progress(&mut state);
                 // A/B's "before": the image before the last save that changed something (a reload
-                // that changed nothing, e.g. a touch, goes on with the same image). A change can
-                // also come from a reload that was superseded before it showed an image.
-                if shown != Some(*reload) {
-                    if shown.is_some() && (!changes.is_empty() || state.unshown_change) {
-                        state.previous = state.current.take();
-                    }
-                    state.unshown_change = false;
+                // that changed nothing, e.g. a touch, goes on with the same image).
+                if *new_scene && shown.is_some() {
+                    state.previous = state.current.take();
                 }
                 state.current = Some(Arc::new(Frame::new(*reload, film.clone())));
                 let render = match state.render.as_mut() {
@@ -527,7 +515,6 @@ fn source_line(file: &Path, line: usize) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::watch::ReloadReport;
 
     #[test]
     fn error_locations_come_from_the_prefix() {
@@ -559,57 +546,41 @@ mod tests {
         assert!(feed.subscribe(1).is_none(), "the limit holds");
     }
 
-    /// The reports of a pass of `reload` that changed `materials` or nothing.
-    fn wrote(feed: &Feed, reload: u64, materials: bool, film: &Film) {
-        let changes = ChangeSummary {
-            materials,
-            ..ChangeSummary::default()
-        };
+    /// A pass of `reload` (the first image of another scene if `new_scene`).
+    fn wrote(feed: &Feed, reload: u64, new_scene: bool, film: &Film) {
         let report = Report::Wrote {
             reload,
             samples: 1,
             preview: false,
             spp: 1,
-            changes,
+            changes: ChangeSummary::default(),
+            new_scene,
             at: Instant::now(),
         };
         feed.observe(&report, Some(film));
     }
 
     #[test]
-    fn the_image_before_a_save_survives_a_reload_superseded_before_its_first_image() {
+    fn the_image_before_a_save_is_the_last_image_of_the_scene_before() {
         // CI's browser test: red (0), blue (1), green loaded by reload 2 but superseded before
-        // its first pass by reload 3 of the same file, which therefore changed nothing itself.
+        // its first pass by reload 3 of the same file, whose image is the first of green.
         let feed = Feed::new();
         let film = Film::new(1, 1);
         wrote(&feed, 0, true, &film);
         wrote(&feed, 1, true, &film);
-        let mut superseded = ReloadReport::started(2, Vec::new(), 1);
-        superseded.changes.materials = true;
-        feed.observe(&Report::Rendered(superseded), None);
-        wrote(&feed, 3, false, &film);
+        wrote(&feed, 3, true, &film);
         let before = |feed: &Feed| feed.previous().map(|f| f.reload);
         assert_eq!(
             before(&feed),
             Some(1),
             "A/B shows the image before the save"
         );
-        // A touch (a reload that changes nothing, none superseded) keeps the pair.
-        feed.observe(
-            &Report::Rendered(ReloadReport::started(3, Vec::new(), 1)),
-            None,
-        );
+        // More passes of the same scene, and a touch (a reload of the same scene), keep the pair.
+        wrote(&feed, 3, false, &film);
         wrote(&feed, 4, false, &film);
         assert_eq!(before(&feed), Some(1));
-        // A reload superseded without having changed anything does not count as a change.
-        feed.observe(
-            &Report::Rendered(ReloadReport::started(5, Vec::new(), 1)),
-            None,
-        );
-        wrote(&feed, 6, false, &film);
-        assert_eq!(before(&feed), Some(1));
         wrote(&feed, 7, true, &film);
-        assert_eq!(before(&feed), Some(6));
+        assert_eq!(before(&feed), Some(4));
     }
 
     #[test]
