@@ -122,8 +122,8 @@ impl Sampler for Rng {
 pub struct SobolSampler {
     /// Hash of (seed, pixel): the root of every dimension's scrambling seeds.
     pixel_seed: u64,
-    /// Sample index within the pixel.
-    index: u32,
+    /// Sample index within the pixel, bit-reversed (the form the index shuffle starts from).
+    index_reversed: u32,
     /// The next dimension to draw from.
     dimension: u32,
 }
@@ -141,8 +141,9 @@ const PASCAL: [u32; 32] = {
     v
 };
 
-/// Sobol' dimension 1 of `index`, as a 32-bit fraction.
-#[inline]
+/// Sobol' dimension 1 of `index`, as a 32-bit fraction (the definition; the sampler uses
+/// [`pascal_reversed`]).
+#[cfg(test)]
 fn sobol_pascal(mut index: u32) -> u32 {
     let mut x = 0;
     while index != 0 {
@@ -150,6 +151,43 @@ fn sobol_pascal(mut index: u32) -> u32 {
         index &= index - 1;
     }
     x
+}
+
+/// [`pascal_reversed`] byte by byte: entry `[k][v]` is the XOR of the reversed direction numbers
+/// that the set bits of `v`, placed as byte `k` of a bit-reversed index, select.
+const PASCAL_REVERSED: [[u32; 256]; 4] = {
+    let mut t = [[0u32; 256]; 4];
+    let mut k = 0;
+    while k < 4 {
+        let mut v = 0;
+        while v < 256 {
+            let mut x = 0u32;
+            let mut bit = 0;
+            while bit < 8 {
+                if (v >> bit) & 1 == 1 {
+                    // Bit `8k + bit` of the reversed index is bit `31 − 8k − bit` of the index.
+                    x ^= PASCAL[31 - 8 * k - bit].reverse_bits();
+                }
+                bit += 1;
+            }
+            t[k][v] = x;
+            v += 1;
+        }
+        k += 1;
+    }
+    t
+};
+
+/// `sobol_pascal(i).reverse_bits()` from `reversed = i.reverse_bits()`: the generator matrix is
+/// linear over bits, so the result is the XOR of four table entries, one per byte, with no
+/// loop over the index's bits and no bit reversal.
+#[inline]
+fn pascal_reversed(reversed: u32) -> u32 {
+    let [b0, b1, b2, b3] = reversed.to_le_bytes();
+    PASCAL_REVERSED[0][usize::from(b0)]
+        ^ PASCAL_REVERSED[1][usize::from(b1)]
+        ^ PASCAL_REVERSED[2][usize::from(b2)]
+        ^ PASCAL_REVERSED[3][usize::from(b3)]
 }
 
 /// Laine–Karras permutation with Vegdahl's constants: bit `j` of the result depends only on
@@ -165,7 +203,7 @@ fn laine_karras(mut x: u32, seed: u32) -> u32 {
 }
 
 /// Owen scrambling of the 32-bit fraction `x`: each bit flipped by a hash of the bits above it.
-#[inline]
+#[cfg(test)]
 fn owen(x: u32, seed: u32) -> u32 {
     laine_karras(x.reverse_bits(), seed).reverse_bits()
 }
@@ -173,9 +211,15 @@ fn owen(x: u32, seed: u32) -> u32 {
 /// A nested permutation of sample indices that maps `[0, 2ᵏ)` onto itself for every `k`: the
 /// Owen scramble of the index (bit `j` flipped by a hash of the bits above it), with the flips
 /// that do not depend on the index (those of the zero bits above its top bit) taken back out.
-#[inline]
+#[cfg(test)]
 fn shuffle(index: u32, seed: u32) -> u32 {
-    (laine_karras(index.reverse_bits(), seed) ^ laine_karras(0, seed)).reverse_bits()
+    shuffle_reversed(index.reverse_bits(), seed).reverse_bits()
+}
+
+/// [`shuffle`] in bit-reversed form: from `index.reverse_bits()` to the reversed result.
+#[inline]
+fn shuffle_reversed(index_reversed: u32, seed: u32) -> u32 {
+    laine_karras(index_reversed, seed) ^ laine_karras(0, seed)
 }
 
 /// The top 24 bits of a 32-bit fraction as an `f32` in `[0, 1)` (exact, never 1).
@@ -202,7 +246,7 @@ impl Sampler for SobolSampler {
     fn start(seed: u64, pixel: u64, sample: u32) -> Self {
         Self {
             pixel_seed: mix64(seed ^ mix64(pixel.wrapping_add(0xd1b5_4a32_d192_ed03))),
-            index: sample,
+            index_reversed: sample.reverse_bits(),
             dimension: 0,
         }
     }
@@ -215,18 +259,21 @@ impl Sampler for SobolSampler {
     #[inline]
     fn next_1d(&mut self) -> f32 {
         let (s, sx, _) = self.dimension_seeds();
-        let i = shuffle(self.index, s);
+        let i = shuffle_reversed(self.index_reversed, s).reverse_bits();
         // Van der Corput is the bit reversal of the index; owen(reverse(i)) = reverse(lk(i)).
         to_unit(laine_karras(i, sx).reverse_bits())
     }
 
+    /// `(owen(vdc(i), sx), owen(pascal(i), sy))` for the shuffled index `i`, computed with three
+    /// bit reversals instead of five: `owen(x) = reverse(lk(reverse(x)))`, `vdc(i) = reverse(i)`,
+    /// and `reverse(pascal(i))` comes straight from `reverse(i)` ([`pascal_reversed`]).
     #[inline]
     fn next_2d(&mut self) -> Vec2 {
         let (s, sx, sy) = self.dimension_seeds();
-        let i = shuffle(self.index, s);
+        let i_reversed = shuffle_reversed(self.index_reversed, s);
         Vec2::new(
-            to_unit(laine_karras(i, sx).reverse_bits()),
-            to_unit(owen(sobol_pascal(i), sy)),
+            to_unit(laine_karras(i_reversed.reverse_bits(), sx).reverse_bits()),
+            to_unit(laine_karras(pascal_reversed(i_reversed), sy).reverse_bits()),
         )
     }
 }
@@ -288,6 +335,42 @@ mod tests {
             for k in 0..32 {
                 assert_eq!((v >> (31 - k)) & 1 == 1, k & j == k, "j {j} k {k}");
             }
+        }
+    }
+
+    #[test]
+    fn the_sampler_computes_the_definition_of_its_points() {
+        // The sampler's shortcuts (reversed index, table-driven Pascal dimension, three bit
+        // reversals) against the definition: shuffle, then Owen-scramble van der Corput and
+        // the Pascal dimension.
+        let mut rng = Rng::new(3, 8);
+        for _ in 0..20_000 {
+            let (seed, pixel, sample) = (
+                u64::from(rng.next_u32()),
+                u64::from(rng.next_u32()),
+                rng.next_u32() >> (rng.next_u32() % 32),
+            );
+            let dimension = rng.next_u32() % 64;
+            let mut s = SobolSampler::start(seed, pixel, sample);
+            s.seek(dimension);
+            let (a, sx, sy) = s.dimension_seeds();
+            let i = shuffle(sample, a);
+            let expected = Vec2::new(
+                to_unit(owen(i.reverse_bits(), sx)),
+                to_unit(owen(sobol_pascal(i), sy)),
+            );
+            s.seek(dimension);
+            assert_eq!(
+                s.next_2d(),
+                expected,
+                "sample {sample} dimension {dimension}"
+            );
+            s.seek(dimension);
+            assert_eq!(
+                s.next_1d(),
+                expected.x,
+                "sample {sample} dimension {dimension}"
+            );
         }
     }
 
