@@ -1,9 +1,9 @@
-//! A 4-wide BVH collapsed from obvhs's binary BVH, with robust closure traversal.
+//! An 8-wide BVH collapsed from obvhs's binary BVH, with robust closure traversal.
 //!
 //! obvhs builds the binary tree (PLOC + reinsertion + leaf collapse); [`Bvh::build`] then
-//! collapses it into nodes of up to four children (each inner node absorbs the children of its
+//! collapses it into nodes of up to eight children (each inner node absorbs the children of its
 //! largest inner children, as in Wald et al.'s "Getting Rid of Packets", 2008), whose boxes are
-//! stored lane by lane so one SIMD slab test ([`RayQuery::enter_boxes`]) tests all four. The
+//! stored lane by lane so two SIMD slab tests ([`RayQuery::enter_boxes`]) test all eight. The
 //! leaves are the binary tree's leaves, unchanged. Traversal is ours, because it must use the
 //! robust slab test of [`RayQuery::enter_box`]: obvhs's own box test is not conservative for
 //! grazing rays. Leaves hand a contiguous range of primitive slots to a closure; the caller
@@ -22,11 +22,13 @@ const INLINE_STACK: usize = 64;
 /// Stack size for trees of at most five levels (a few thousand primitives).
 const SHORT_STACK: usize = 16;
 
-/// Children per wide node.
-const WIDTH: usize = 4;
+/// Children per wide node: two groups of four, each tested by one SIMD slab test.
+const WIDTH: usize = 8;
+/// Children per SIMD slab test.
+const LANES: usize = 4;
 
 /// obvhs's medium build, with leaves collapsed for a node visit that costs about as much as
-/// one primitive test (obvhs assumes 3×): a wide node tests four boxes in one SIMD slab test,
+/// one primitive test (obvhs assumes 3×): a wide node tests four boxes per SIMD slab test,
 /// while a watertight triangle test is tens of instructions. Fewer primitives per leaf:
 /// −5.7 % instructions on the Cornell box, −3.5 % on `bunnies.ron`, −3 % on 2,000 random
 /// spheres, +1.2 % on `stress.ron`; leaves then hold ~1.03–1.08 primitives (BENCHMARKS.md,
@@ -36,11 +38,11 @@ const BUILD_PARAMS: BvhBuildParams = BvhBuildParams {
     ..BvhBuildParams::medium_build()
 };
 
-/// A wide node: the boxes of up to four children lane by lane (`[min_x, min_y, min_z, max_x,
-/// max_y, max_z]`), and what each child is.
+/// A wide node: the boxes of up to eight children in two groups of four, lane by lane
+/// (`[min_x, min_y, min_z, max_x, max_y, max_z]`), and what each child is.
 #[derive(Clone, Copy, Debug)]
 struct WideNode {
-    bounds: [Vec4; 6],
+    bounds: [[Vec4; 6]; WIDTH / LANES],
     /// Per child: a wide node index (`count == 0`) or the first slot of a leaf.
     child: [u32; WIDTH],
     /// Per child: primitives in the leaf, 0 for an inner child.
@@ -55,7 +57,7 @@ pub struct Bvh {
     bvh: Bvh2,
     /// Levels of the wide tree.
     depth: usize,
-    /// The 4-wide tree traversal runs over; node 0 is the root.
+    /// The 8-wide tree traversal runs over; node 0 is the root.
     wide: Vec<WideNode>,
 }
 
@@ -65,7 +67,7 @@ fn collapse(bvh: &Bvh2, n: usize, wide: &mut Vec<WideNode>) -> (u32, usize) {
     let nodes = &bvh.nodes;
     let first = nodes[n].first_index as usize;
     let mut children = vec![first, first + 1];
-    // Open the inner child of largest area until four children (or only leaves) remain.
+    // Open the inner child of largest area until eight children (or only leaves) remain.
     while children.len() < WIDTH {
         let Some((k, _)) = children
             .iter()
@@ -88,7 +90,7 @@ fn collapse(bvh: &Bvh2, n: usize, wide: &mut Vec<WideNode>) -> (u32, usize) {
     children.sort_unstable();
     let index = wide.len();
     wide.push(WideNode {
-        bounds: [Vec4::ZERO; 6],
+        bounds: [[Vec4::ZERO; 6]; WIDTH / LANES],
         child: [0; WIDTH],
         count: [0; WIDTH],
         valid: 0,
@@ -97,9 +99,10 @@ fn collapse(bvh: &Bvh2, n: usize, wide: &mut Vec<WideNode>) -> (u32, usize) {
     let mut depth = 1;
     for (k, &c) in children.iter().enumerate() {
         let b = nodes[c].aabb();
+        let (group, lane) = (k / LANES, k % LANES);
         for axis in 0..3 {
-            node.bounds[axis][k] = b.min[axis];
-            node.bounds[3 + axis][k] = b.max[axis];
+            node.bounds[group][axis][lane] = b.min[axis];
+            node.bounds[group][3 + axis][lane] = b.max[axis];
         }
         node.valid |= 1 << k;
         if nodes[c].is_leaf() {
@@ -197,7 +200,7 @@ impl Bvh {
             leaf(first..first + root.prim_count as usize, t_max);
             return;
         }
-        // Each level pushes at most four children after popping one. The stack is zeroed at
+        // Each level pushes at most eight children after popping one. The stack is zeroed at
         // every query, so a shallow tree gets a short one.
         let needed = (WIDTH - 1) * self.depth + 1;
         if needed <= SHORT_STACK {
@@ -228,9 +231,15 @@ impl Bvh {
         let mut current = 0usize;
         loop {
             let node = &self.wide[current];
-            let (mask, near) = q.enter_boxes(&node.bounds, *t_max);
+            let mut mask = 0;
+            let mut near = [0.0f32; WIDTH];
+            for (group, bounds) in node.bounds.iter().enumerate() {
+                let (m, t) = q.enter_boxes(bounds, *t_max);
+                mask |= m << (group * LANES);
+                near[group * LANES..(group + 1) * LANES].copy_from_slice(&t.to_array());
+            }
             let mut hits = mask & node.valid;
-            // The entered children, nearest first (insertion sort of at most four) or as they
+            // The entered children, nearest first (insertion sort of at most eight) or as they
             // come.
             let mut order = [(0usize, 0.0f32); WIDTH];
             let mut n = 0;
