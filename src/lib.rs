@@ -10,6 +10,7 @@ pub mod app;
 pub mod bench;
 pub mod camera;
 pub mod cli;
+pub mod cpu;
 pub mod ecs;
 pub mod farm;
 pub mod film;

@@ -245,7 +245,7 @@ impl LightSet {
     }
 
     /// How emitter `e` is sampled from shading point `p_ref`.
-    #[inline]
+    #[inline(always)]
     fn strategy<L: Layout>(geometry: &Geometry<L>, e: &Emitter, p_ref: Vec3) -> Strategy {
         let i = e.index as usize;
         match e.kind {
@@ -311,7 +311,7 @@ impl LightSet {
     /// Samples a point seen from shading point `p_ref`: `u_select` picks the emitter; its
     /// remainder within the emitter's share, rescaled to [0, 1), and `u.y` pick the point on it
     /// (`u.x` is not used).
-    #[inline]
+    #[inline(always)]
     pub fn sample<L: Layout>(
         &self,
         geometry: &Geometry<L>,
@@ -388,7 +388,7 @@ impl LightSet {
     /// Density per steradian with which [`LightSet::sample`], called at `p_ref`, picks the
     /// point `p` (unit geometric normal `n`) of primitive `(kind, index)`, as a BSDF-sampled
     /// ray from `p_ref` finds it; 0 if it is not a sampled emitter.
-    #[inline]
+    #[inline(always)]
     pub fn pdf<L: Layout>(
         &self,
         geometry: &Geometry<L>,

@@ -1,5 +1,6 @@
 //! The path tracer: traces camera paths through packed geometry into a [`Film`]. No ECS here.
 
+use std::marker::PhantomData;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -7,6 +8,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::camera::Camera;
+use crate::cpu::{Isa, Kernel};
 use crate::film::{Film, Pixel};
 use crate::geometry::layout::{DefaultLayout, Layout, SphereStore, TriangleStore};
 use crate::geometry::packed::{Geometry, Hit, HitKind, LayoutKind, Surface};
@@ -103,7 +105,7 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
 /// the point is recomputed from the primitive, so its error scales with the primitive's own
 /// coordinates, not with the ray's travel. Public so tests can spawn rays exactly as the
 /// integrator does.
-#[inline]
+#[inline(always)]
 pub fn point_error<L: Layout>(geometry: &Geometry<L>, hit: &Hit, p: Vec3) -> Vec3 {
     let i = hit.index as usize;
     match hit.kind {
@@ -125,7 +127,7 @@ pub fn point_error<L: Layout>(geometry: &Geometry<L>, hit: &Hit, p: Vec3) -> Vec
 
 /// A ray from surface point `p` (geometric normal `n`, error `err`) along `dir`, started on the
 /// side it leaves to: the one way the integrator starts a bounce or a shadow ray.
-#[inline]
+#[inline(always)]
 pub fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
     let side = if dir.dot(n) > 0.0 { n } else { -n };
     Ray::new(spawn_origin(p, side, err), dir)
@@ -140,6 +142,7 @@ pub fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
 /// Emission seen by the camera or after a glass/mirror bounce always counts in full. Russian
 /// roulette (after a few bounces, survival probability = the path's throughput) ends paths
 /// early without bias.
+#[inline(always)]
 pub fn trace_path<L: Layout, S: Sampler>(
     view: &SceneView<L>,
     mut ray: Ray,
@@ -240,6 +243,7 @@ fn leaks(s: &Surface, material: &Material, d: Vec3, wi: Vec3) -> bool {
 /// One light sample at surface `s` for a ray arriving along `d`: emitted radiance from a point
 /// sampled on an emitter, times the BSDF and cosine, over the light density, MIS-weighted
 /// against BSDF sampling under `Method::Mis`.
+#[inline(always)]
 fn direct_light<L: Layout>(
     view: &SceneView<L>,
     s: &Surface,
@@ -339,34 +343,25 @@ fn render_pass_with<L: Layout, S: Sampler>(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<TraceStats, Cancelled> {
     let (width, height) = (film.width, film.height);
+    let isa = Isa::selected();
     let stats = film
         .sum
         .par_chunks_mut(width as usize * BAND_ROWS)
         .enumerate()
         .map(|(band, pixels)| {
-            let mut stats = TraceStats::default();
             if cancel.load(Ordering::Relaxed) {
-                return stats;
+                return TraceStats::default();
             }
             let first = band * BAND_ROWS * width as usize;
-            for (offset, sum) in pixels.iter_mut().enumerate() {
-                let index = first + offset;
-                let (x, y) = (
-                    (index % width as usize) as f32,
-                    (index / width as usize) as f32,
-                );
-                for sample in samples.clone() {
-                    let mut sampler = S::start(seed, index as u64, sample);
-                    let j = sampler.next_2d();
-                    let ray = view.camera.ray(x + j.x, y + j.y, width, height);
-                    let l = trace_path(view, ray, &mut sampler, &mut stats);
-                    if l.is_finite() {
-                        sum.add(l);
-                    } else {
-                        stats.nonfinite += 1;
-                    }
-                }
-            }
+            let stats = isa.run(Band::<L, S> {
+                view,
+                pixels,
+                first,
+                size: (width, height),
+                seed,
+                samples: samples.clone(),
+                sampler: PhantomData,
+            });
             progress((pixels.len() / width as usize) as u64);
             stats
         })
@@ -380,6 +375,47 @@ fn render_pass_with<L: Layout, S: Sampler>(
         stats.layout_passes[slot] += 1;
     }
     Ok(stats)
+}
+
+/// Samples `samples` of the pixels of one band, whose first pixel has index `first`, added to
+/// their sums: the work of a pass that [`Isa::run`] compiles once per instruction set.
+struct Band<'a, L: Layout, S> {
+    view: &'a SceneView<'a, L>,
+    pixels: &'a mut [Pixel],
+    first: usize,
+    size: (u32, u32),
+    seed: u64,
+    samples: Range<u32>,
+    sampler: PhantomData<S>,
+}
+
+impl<L: Layout, S: Sampler> Kernel for Band<'_, L, S> {
+    type Output = TraceStats;
+
+    #[inline(always)]
+    fn run(self) -> TraceStats {
+        let (width, height) = self.size;
+        let mut stats = TraceStats::default();
+        for (offset, sum) in self.pixels.iter_mut().enumerate() {
+            let index = self.first + offset;
+            let (x, y) = (
+                (index % width as usize) as f32,
+                (index / width as usize) as f32,
+            );
+            for sample in self.samples.clone() {
+                let mut sampler = S::start(self.seed, index as u64, sample);
+                let j = sampler.next_2d();
+                let ray = self.view.camera.ray(x + j.x, y + j.y, width, height);
+                let l = trace_path(self.view, ray, &mut sampler, &mut stats);
+                if l.is_finite() {
+                    sum.add(l);
+                } else {
+                    stats.nonfinite += 1;
+                }
+            }
+        }
+        stats
+    }
 }
 
 /// A quick preview for live editing: one sample per `block`×`block` block of pixels, written to

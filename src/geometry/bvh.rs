@@ -118,6 +118,23 @@ fn collapse(bvh: &Bvh2, n: usize, wide: &mut Vec<WideNode>) -> (u32, usize) {
     (index as u32, depth)
 }
 
+/// What a traversal does at each leaf it enters: [`Leaf::visit`] gets the leaf's slot range and
+/// the current `t_max`, lowers `t_max` when it finds a closer hit, and returns `false` to stop.
+/// Closures are leaves; a hot kernel implements it with an always-inlined `visit`, which a
+/// closure cannot have, so the leaf test is compiled into the traversal loop (and into each
+/// copy of the render loop, see [`crate::cpu`]).
+pub trait Leaf {
+    /// Tests the primitives in `slots` against the ray.
+    fn visit(&mut self, slots: Range<usize>, t_max: &mut f32) -> bool;
+}
+
+impl<F: FnMut(Range<usize>, &mut f32) -> bool> Leaf for F {
+    #[inline(always)]
+    fn visit(&mut self, slots: Range<usize>, t_max: &mut f32) -> bool {
+        self(slots, t_max)
+    }
+}
+
 /// An axis-aligned box as `(min, max)`.
 pub type Bounds = (Vec3, Vec3);
 
@@ -170,6 +187,12 @@ impl Bvh {
         self.traverse_in::<true>(q, t_max, leaf);
     }
 
+    /// [`Bvh::traverse`] with a [`Leaf`] instead of a closure.
+    #[inline]
+    pub fn traverse_leaves(&self, q: &RayQuery, t_max: &mut f32, leaf: impl Leaf) {
+        self.traverse_in::<true>(q, t_max, leaf);
+    }
+
     /// [`Bvh::traverse`] for any-hit queries, whose answer does not depend on the order of the
     /// leaves: children in node order, unsorted. The closure returns `false` to stop.
     #[inline]
@@ -182,12 +205,18 @@ impl Bvh {
         self.traverse_in::<false>(q, t_max, leaf);
     }
 
+    /// [`Bvh::traverse_any`] with a [`Leaf`] instead of a closure.
+    #[inline]
+    pub fn traverse_any_leaves(&self, q: &RayQuery, t_max: &mut f32, leaf: impl Leaf) {
+        self.traverse_in::<false>(q, t_max, leaf);
+    }
+
     #[inline(always)]
     fn traverse_in<const NEAREST_FIRST: bool>(
         &self,
         q: &RayQuery,
         t_max: &mut f32,
-        mut leaf: impl FnMut(Range<usize>, &mut f32) -> bool,
+        mut leaf: impl Leaf,
     ) {
         let nodes = &self.bvh.nodes;
         let Some(root) = nodes.first() else { return };
@@ -197,7 +226,7 @@ impl Bvh {
         }
         if root.is_leaf() {
             let first = root.first_index as usize;
-            leaf(first..first + root.prim_count as usize, t_max);
+            leaf.visit(first..first + root.prim_count as usize, t_max);
             return;
         }
         // Each level pushes at most eight children after popping one. The stack is zeroed at
@@ -225,7 +254,7 @@ impl Bvh {
         stack: &mut [u32],
         q: &RayQuery,
         t_max: &mut f32,
-        leaf: &mut impl FnMut(Range<usize>, &mut f32) -> bool,
+        leaf: &mut impl Leaf,
     ) {
         let mut top = 0usize;
         let mut current = 0usize;
@@ -263,7 +292,7 @@ impl Bvh {
                 }
                 if node.count[k] > 0 {
                     let first = node.child[k] as usize;
-                    if !leaf(first..first + node.count[k] as usize, t_max) {
+                    if !leaf.visit(first..first + node.count[k] as usize, t_max) {
                         return;
                     }
                 } else {

@@ -8,12 +8,13 @@
 
 use std::any::Any;
 
+use std::ops::Range;
 use std::sync::Arc;
 
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use super::aabb::RayQuery;
-use super::bvh::Bvh;
+use super::bvh::{Bvh, Leaf};
 use super::instance::{InstanceSet, MeshBlas};
 pub use super::layout::{
     Aos, DefaultLayout, Hybrid, Layout, LayoutKind, Soa, SoaSimd, Sphere, SphereAos, SphereSoa,
@@ -22,7 +23,7 @@ pub use super::layout::{
 use super::plane::{intersect_plane, plane_uv};
 use super::ray::Ray;
 use super::sphere::{intersect_sphere, sphere_uv};
-use super::triangle::intersect_triangle;
+use super::triangle::{TriangleHit, intersect_triangle};
 
 /// A world-space primitive, as produced from a scene shape and its transform.
 #[derive(Clone, Debug, PartialEq)]
@@ -57,6 +58,40 @@ pub enum Primitive {
         /// Object to world.
         world_from_object: Affine3A,
     },
+}
+
+/// The closest-hit leaf test over triangles, as a [`Leaf`] whose test is compiled into the
+/// traversal loop: records the closest triangle hit (slot and hit) in `closest`.
+struct ClosestTriangle<'a, L: Layout> {
+    triangles: &'a L::Triangles,
+    q: &'a RayQuery,
+    closest: &'a mut Option<(usize, TriangleHit)>,
+}
+
+impl<L: Layout> Leaf for ClosestTriangle<'_, L> {
+    #[inline(always)]
+    fn visit(&mut self, slots: Range<usize>, t_max: &mut f32) -> bool {
+        if let Some(hit) = L::closest_triangle(self.triangles, self.q, slots, t_max) {
+            *self.closest = Some(hit);
+        }
+        true
+    }
+}
+
+/// The any-hit leaf test over triangles, as a [`Leaf`]: sets `blocked` and stops the traversal
+/// at the first triangle hit.
+struct AnyTriangle<'a, L: Layout> {
+    triangles: &'a L::Triangles,
+    q: &'a RayQuery,
+    blocked: &'a mut bool,
+}
+
+impl<L: Layout> Leaf for AnyTriangle<'_, L> {
+    #[inline(always)]
+    fn visit(&mut self, slots: Range<usize>, t_max: &mut f32) -> bool {
+        *self.blocked = L::any_triangle(self.triangles, self.q, slots, *t_max);
+        !*self.blocked
+    }
 }
 
 /// Which kind of primitive a [`Hit`] refers to.
@@ -337,7 +372,7 @@ impl<L: Layout> Geometry<L> {
     }
 
     /// The closest hit along `ray` closer than `t_max`.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         let q = RayQuery::new(*ray);
         let mut best: Option<Hit> = None;
@@ -357,19 +392,25 @@ impl<L: Layout> Geometry<L> {
             });
         }
         if !self.triangle_owner.is_empty() {
-            self.triangle_bvh
-                .traverse(&q, &mut t_best, |slots, t_best| {
-                    if let Some((i, h)) = L::closest_triangle(&self.triangles, &q, slots, t_best) {
-                        best = Some(Hit {
-                            t: h.t,
-                            kind: HitKind::Triangle,
-                            index: i as u32,
-                            b1: h.b1,
-                            b2: h.b2,
-                        });
-                    }
-                    true
+            let mut closest = None;
+            self.triangle_bvh.traverse_leaves(
+                &q,
+                &mut t_best,
+                ClosestTriangle::<L> {
+                    triangles: &self.triangles,
+                    q: &q,
+                    closest: &mut closest,
+                },
+            );
+            if let Some((i, h)) = closest {
+                best = Some(Hit {
+                    t: h.t,
+                    kind: HitKind::Triangle,
+                    index: i as u32,
+                    b1: h.b1,
+                    b2: h.b2,
                 });
+            }
         }
         self.intersect_outside_bvhs(ray, t_best, best)
     }
@@ -411,7 +452,7 @@ impl<L: Layout> Geometry<L> {
     }
 
     /// Whether anything blocks `ray` before `t_max`.
-    #[inline]
+    #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         let q = RayQuery::new(*ray);
         let mut blocked = false;
@@ -423,10 +464,15 @@ impl<L: Layout> Geometry<L> {
         if blocked {
             return true;
         }
-        self.triangle_bvh.traverse_any(&q, &mut t, |slots, t| {
-            blocked = L::any_triangle(&self.triangles, &q, slots, *t);
-            !blocked
-        });
+        self.triangle_bvh.traverse_any_leaves(
+            &q,
+            &mut t,
+            AnyTriangle::<L> {
+                triangles: &self.triangles,
+                q: &q,
+                blocked: &mut blocked,
+            },
+        );
         blocked
             || self
                 .planes
@@ -471,7 +517,7 @@ impl<L: Layout> Geometry<L> {
     }
 
     /// Local geometry at `hit`.
-    #[inline]
+    #[inline(always)]
     pub fn surface(&self, ray: &Ray, hit: &Hit) -> Surface {
         let i = hit.index as usize;
         match hit.kind {

@@ -49,7 +49,7 @@ pub const fn gamma(n: f32) -> f32 {
 /// before, on top of the error bound: 256 ulps are 9.8·10⁻⁴ at |p| ≈ 60 (a sphere of radius
 /// 10⁻³ was jumped over) and 0.016 at |p| ≈ 555 (rays leaked through a quad 5·10⁻⁴ away); see
 /// `tests/stability.rs`.
-#[inline]
+#[inline(always)]
 pub fn spawn_origin(p: Vec3, n: Vec3, err: Vec3) -> Vec3 {
     let d = n.abs().dot(err);
     let po = p + d * n;

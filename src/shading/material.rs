@@ -155,7 +155,7 @@ impl Material {
     /// BSDF times the cosine at the surface, and the density [`Material::scatter`] would give,
     /// for light arriving from `wi` and leaving against `d` (the incoming ray's direction).
     /// `None` where the BSDF has no density to evaluate (delta or fuzzed lobes).
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, d: Vec3, wi: Vec3, n: Vec3, uv: Vec2) -> Option<(Vec3, f32)> {
         match self {
             Self::Diffuse { albedo } => {
@@ -202,7 +202,7 @@ impl Material {
 
     /// Samples the continuation of a ray travelling along unit `d` that hit a surface with unit
     /// geometric normal `n`. `None` if the path ends here (absorbed, or an emitter).
-    #[inline]
+    #[inline(always)]
     pub fn scatter(
         &self,
         d: Vec3,
