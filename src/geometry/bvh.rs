@@ -19,8 +19,8 @@ use super::aabb::RayQuery;
 
 /// Traversal stack size that needs no heap allocation; deeper trees fall back to a `Vec`.
 const INLINE_STACK: usize = 64;
-/// Stack size for trees of at most five levels (a few thousand primitives).
-const SHORT_STACK: usize = 16;
+/// Stack size for trees of at most three levels (a few hundred primitives).
+const SHORT_STACK: usize = 22;
 
 /// Children per wide node: two groups of four, each tested by one SIMD slab test.
 const WIDTH: usize = 8;
@@ -260,14 +260,13 @@ impl Bvh {
         let mut current = 0usize;
         loop {
             let node = &self.wide[current];
-            let mut mask = 0;
-            let mut near = [0.0f32; WIDTH];
-            for (group, bounds) in node.bounds.iter().enumerate() {
-                let (m, t) = q.enter_boxes(bounds, *t_max);
-                mask |= m << (group * LANES);
-                near[group * LANES..(group + 1) * LANES].copy_from_slice(&t.to_array());
-            }
-            let mut hits = mask & node.valid;
+            let [low, high] = &node.bounds;
+            let (mask_low, near_low) = q.enter_boxes(low, *t_max);
+            let (mask_high, near_high) = q.enter_boxes(high, *t_max);
+            let [a, b, c, d] = near_low.to_array();
+            let [e, f, g, h] = near_high.to_array();
+            let near = [a, b, c, d, e, f, g, h];
+            let mut hits = (mask_low | mask_high << LANES) & node.valid;
             // The entered children, nearest first (insertion sort of at most eight) or as they
             // come.
             let mut order = [(0usize, 0.0f32); WIDTH];
