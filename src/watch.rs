@@ -382,23 +382,29 @@ impl FileWatcher {
     }
 
     /// Makes `files` the watched set: watches the directories it needs that are not watched yet,
-    /// unwatches those no longer needed. Returns whether a directory was added, and a warning
-    /// per directory that cannot be watched (the others still are).
+    /// unwatches those no longer needed. Returns whether anything is watched now that was not
+    /// (a directory, a file or a missing directory on the way to one), and a warning per
+    /// directory that cannot be watched (the others still are).
+    ///
+    /// Until this call, events for the new paths are dropped as irrelevant, so a caller that
+    /// read those files before must read them again when this returns `true`: a file deleted or
+    /// written between the read and this call would otherwise never be noticed.
     pub fn set_files(&mut self, files: &[PathBuf]) -> (bool, Vec<String>) {
         self.files = files.to_vec();
         let plan = Plan::new(files);
         let wanted = plan.directories();
-        {
+        let mut added = {
             let mut filter = self.filter();
+            let added = !plan.files.is_subset(&filter.files) || !plan.arms.is_subset(&filter.arms);
             filter.files = plan.files;
             filter.arms = plan.arms;
-        }
+            added
+        };
         for dir in self.watched.difference(&wanted) {
             // The directory may be gone already; nothing to do then.
             let _ = self.watcher.unwatch(dir);
         }
         let mut warnings = Vec::new();
-        let mut added = false;
         let mut watched = BTreeSet::new();
         for dir in wanted {
             if self.watched.contains(&dir) {
@@ -1126,7 +1132,7 @@ impl Watch {
         }
     }
 
-    /// Watches `files`; returns whether a directory was added.
+    /// Watches `files`; returns whether anything new is watched (see [`FileWatcher::set_files`]).
     fn watch_files(&mut self, files: &[PathBuf], out: &mut Emitter<'_>) -> bool {
         let (dirs, count) = (self.watcher.directories(), self.watcher.file_count());
         let (added, warnings) = self.watcher.set_files(files);
@@ -1167,8 +1173,9 @@ impl Watch {
         let scene = self.options.scene.clone();
         let decodes = self.renderer.texture_decodes();
         let before = self.renderer.counters();
-        // Read again at once if the load made us watch a new directory: a file in it written
-        // between the read and the watch would go unnoticed.
+        // Read again at once if the load made us watch something new (a directory, or a file the
+        // last load did not read): a change to it between the read and the watch would go
+        // unnoticed, as its events were dropped until then.
         let mut retried = false;
         let (info, parse) = loop {
             if matches!(std::fs::metadata(&scene), Err(e) if e.kind() == std::io::ErrorKind::NotFound)
@@ -1573,5 +1580,47 @@ mod tests {
             "a watched directory is armed"
         );
         assert!(plan.files.contains(&canonical.join("b.ron")));
+    }
+
+    #[test]
+    fn watching_a_file_not_watched_before_asks_for_a_second_read() {
+        // The race behind it (seen in `watch_differential`, seed 14): a reload reads a prefab the
+        // last scene did not use, the prefab's directory is deleted before the watcher knows the
+        // file, so the deletion's events are dropped and the image shows a prefab that is gone.
+        let dir = std::env::temp_dir().join(format!("rondo-set-files-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("prefabs")).expect("mkdir");
+        let (scene, wall, door) = (
+            dir.join("scene.ron"),
+            dir.join("prefabs/wall.ron"),
+            dir.join("prefabs/door.ron"),
+        );
+        let (tx, _rx) = std::sync::mpsc::channel();
+        let mut w = FileWatcher::new(Arc::new(AtomicBool::new(false)), tx).expect("watcher");
+        assert!(w.set_files(std::slice::from_ref(&scene)).0, "first files");
+        assert!(
+            !w.set_files(std::slice::from_ref(&scene)).0,
+            "the same files"
+        );
+        assert!(
+            w.set_files(&[scene.clone(), wall.clone()]).0,
+            "a new directory"
+        );
+        assert!(
+            w.set_files(&[scene.clone(), wall.clone(), door.clone()]).0,
+            "a new file in a watched directory"
+        );
+        assert!(
+            !w.set_files(&[scene.clone(), wall.clone()]).0,
+            "fewer files"
+        );
+        // The race itself: the last scene used no prefab, and the prefab read just now has lost
+        // its directory before being watched.
+        w.set_files(std::slice::from_ref(&scene));
+        std::fs::remove_dir_all(dir.join("prefabs")).expect("rm -rf");
+        assert!(
+            w.set_files(&[scene.clone(), wall.clone()]).0,
+            "a new file whose directory is gone: the missing directory is new to watch for"
+        );
+        std::fs::remove_dir_all(&dir).expect("clean up");
     }
 }
