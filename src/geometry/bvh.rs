@@ -272,7 +272,8 @@ impl Bvh {
             let mut order = [(0usize, 0.0f32); WIDTH];
             let mut n = 0;
             while hits != 0 {
-                let k = hits.trailing_zeros() as usize;
+                // `hits` has bits below `WIDTH` only; the mask tells the compiler so.
+                let k = hits.trailing_zeros() as usize & (WIDTH - 1);
                 hits &= hits - 1;
                 let t = near[k];
                 let mut j = n;

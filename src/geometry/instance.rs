@@ -245,11 +245,18 @@ impl InstanceSet {
     }
 
     /// The closest instanced triangle hit before `t_max`.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<InstanceHit> {
         if self.instances.is_empty() {
             return None;
         }
+        self.intersect_instances(ray, t_max)
+    }
+
+    /// [`InstanceSet::intersect`] for a non-empty set (out of line: scenes without instances
+    /// pay only for the emptiness test).
+    #[inline(never)]
+    fn intersect_instances(&self, ray: &Ray, t_max: f32) -> Option<InstanceHit> {
         let world = RayQuery::new(*ray);
         let mut best = None;
         let mut t_best = t_max;
@@ -285,11 +292,17 @@ impl InstanceSet {
     }
 
     /// Whether any instance blocks `ray` before `t_max`.
-    #[inline]
+    #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         if self.instances.is_empty() {
             return false;
         }
+        self.occluded_instances(ray, t_max)
+    }
+
+    /// [`InstanceSet::occluded`] for a non-empty set (out of line, as `intersect_instances`).
+    #[inline(never)]
+    fn occluded_instances(&self, ray: &Ray, t_max: f32) -> bool {
         let world = RayQuery::new(*ray);
         let mut blocked = false;
         let mut t = t_max;

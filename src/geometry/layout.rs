@@ -203,9 +203,12 @@ pub trait Layout: Copy + Default + fmt::Debug + Send + Sync + 'static {
         slots: Range<usize>,
         t_max: f32,
     ) -> bool {
-        triangles
-            .leaf(slots)
-            .any(|[a, b, c]| intersect_triangle(q, a, b, c, t_max).is_some())
+        for [a, b, c] in triangles.leaf(slots) {
+            if intersect_triangle(q, a, b, c, t_max).is_some() {
+                return true;
+            }
+        }
+        false
     }
 }
 
