@@ -266,7 +266,7 @@ impl Sampler for SobolSampler {
 
     /// `(owen(vdc(i), sx), owen(pascal(i), sy))` for the shuffled index `i`, computed with three
     /// bit reversals instead of five: `owen(x) = reverse(lk(reverse(x)))`, `vdc(i) = reverse(i)`,
-    /// and `reverse(pascal(i))` comes straight from `reverse(i)` ([`pascal_reversed`]).
+    /// and `reverse(pascal(i))` comes straight from `reverse(i)` (`pascal_reversed`).
     #[inline]
     fn next_2d(&mut self) -> Vec2 {
         let (s, sx, sy) = self.dimension_seeds();
