@@ -125,6 +125,32 @@ pub struct Hit {
     pub b2: f32,
 }
 
+impl Hit {
+    /// A hit at distance `t` of slot `index` of a kind without barycentrics (sphere, plane).
+    #[inline(always)]
+    fn at(kind: HitKind, index: usize, t: f32) -> Self {
+        Self {
+            t,
+            kind,
+            index: index as u32,
+            b1: 0.0,
+            b2: 0.0,
+        }
+    }
+
+    /// The hit `h` of triangle slot `index`.
+    #[inline(always)]
+    fn triangle(index: usize, h: TriangleHit) -> Self {
+        Self {
+            t: h.t,
+            kind: HitKind::Triangle,
+            index: index as u32,
+            b1: h.b1,
+            b2: h.b2,
+        }
+    }
+}
+
 /// Local geometry at a hit point, as shading needs it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Surface {
@@ -380,13 +406,7 @@ impl<L: Layout> Geometry<L> {
         if !self.sphere_owner.is_empty() {
             self.sphere_bvh.traverse(&q, &mut t_best, |slots, t_best| {
                 if let Some(i) = L::closest_sphere(&self.spheres, ray, slots, t_best) {
-                    best = Some(Hit {
-                        t: *t_best,
-                        kind: HitKind::Sphere,
-                        index: i as u32,
-                        b1: 0.0,
-                        b2: 0.0,
-                    });
+                    best = Some(Hit::at(HitKind::Sphere, i, *t_best));
                 }
                 true
             });
@@ -403,13 +423,7 @@ impl<L: Layout> Geometry<L> {
                 },
             );
             if let Some((i, h)) = closest {
-                best = Some(Hit {
-                    t: h.t,
-                    kind: HitKind::Triangle,
-                    index: i as u32,
-                    b1: h.b1,
-                    b2: h.b2,
-                });
+                best = Some(Hit::triangle(i, h));
             }
         }
         self.intersect_outside_bvhs(ray, t_best, best)
@@ -428,13 +442,7 @@ impl<L: Layout> Geometry<L> {
         for (i, plane) in self.planes.iter().enumerate() {
             if let Some(t) = intersect_plane(ray, plane.point, plane.normal, t_best) {
                 t_best = t;
-                best = Some(Hit {
-                    t,
-                    kind: HitKind::Plane,
-                    index: i as u32,
-                    b1: 0.0,
-                    b2: 0.0,
-                });
+                best = Some(Hit::at(HitKind::Plane, i, t));
             }
         }
         if let Some(h) = self.instances.intersect(ray, t_best) {
@@ -491,26 +499,14 @@ impl<L: Layout> Geometry<L> {
             let (c, r) = self.spheres.get(i);
             if let Some(t) = intersect_sphere(ray, c, r, t_best) {
                 t_best = t;
-                best = Some(Hit {
-                    t,
-                    kind: HitKind::Sphere,
-                    index: i as u32,
-                    b1: 0.0,
-                    b2: 0.0,
-                });
+                best = Some(Hit::at(HitKind::Sphere, i, t));
             }
         }
         for i in 0..self.triangles.len() {
             let [p0, p1, p2] = self.triangles.get(i);
             if let Some(h) = intersect_triangle(&q, p0, p1, p2, t_best) {
                 t_best = h.t;
-                best = Some(Hit {
-                    t: h.t,
-                    kind: HitKind::Triangle,
-                    index: i as u32,
-                    b1: h.b1,
-                    b2: h.b2,
-                });
+                best = Some(Hit::triangle(i, h));
             }
         }
         self.intersect_outside_bvhs(ray, t_best, best)

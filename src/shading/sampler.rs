@@ -213,13 +213,21 @@ fn owen(x: u32, seed: u32) -> u32 {
 /// that do not depend on the index (those of the zero bits above its top bit) taken back out.
 #[cfg(test)]
 fn shuffle(index: u32, seed: u32) -> u32 {
-    shuffle_reversed(index.reverse_bits(), seed).reverse_bits()
+    (laine_karras(index.reverse_bits(), seed) ^ laine_karras(0, seed)).reverse_bits()
 }
 
-/// [`shuffle`] in bit-reversed form: from `index.reverse_bits()` to the reversed result.
+/// The index shuffle in bit-reversed form: from `index.reverse_bits()` to the reversed result
+/// (the sampler's form of `shuffle`, the definition the tests hold it to).
 #[inline]
 fn shuffle_reversed(index_reversed: u32, seed: u32) -> u32 {
     laine_karras(index_reversed, seed) ^ laine_karras(0, seed)
+}
+
+/// Owen-scrambled van der Corput of the shuffled index given bit-reversed: `owen(vdc(i)) =
+/// reverse(lk(i))`, as a 32-bit fraction.
+#[inline]
+fn scrambled_vdc(i_reversed: u32, seed: u32) -> u32 {
+    laine_karras(i_reversed.reverse_bits(), seed).reverse_bits()
 }
 
 /// The top 24 bits of a 32-bit fraction as an `f32` in `[0, 1)` (exact, never 1).
@@ -259,9 +267,7 @@ impl Sampler for SobolSampler {
     #[inline]
     fn next_1d(&mut self) -> f32 {
         let (s, sx, _) = self.dimension_seeds();
-        let i = shuffle_reversed(self.index_reversed, s).reverse_bits();
-        // Van der Corput is the bit reversal of the index; owen(reverse(i)) = reverse(lk(i)).
-        to_unit(laine_karras(i, sx).reverse_bits())
+        to_unit(scrambled_vdc(shuffle_reversed(self.index_reversed, s), sx))
     }
 
     /// `(owen(vdc(i), sx), owen(pascal(i), sy))` for the shuffled index `i`, computed with three
@@ -272,7 +278,7 @@ impl Sampler for SobolSampler {
         let (s, sx, sy) = self.dimension_seeds();
         let i_reversed = shuffle_reversed(self.index_reversed, s);
         Vec2::new(
-            to_unit(laine_karras(i_reversed.reverse_bits(), sx).reverse_bits()),
+            to_unit(scrambled_vdc(i_reversed, sx)),
             to_unit(laine_karras(pascal_reversed(i_reversed), sy).reverse_bits()),
         )
     }
