@@ -17,7 +17,7 @@ use crate::lights::LightSet;
 use crate::scene::format::Method;
 use crate::shading::material::Material;
 use crate::shading::rng::Rng;
-use crate::shading::sampler::{Sampler, SamplerKind, SobolSampler};
+use crate::shading::sampler::{IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};
 
 /// Rows per parallel work item. Small enough to balance two cores and to cancel promptly.
 const BAND_ROWS: usize = 4;
@@ -326,15 +326,15 @@ pub fn render_pass<L: Layout>(
     // Matched once per pass, like the layout: each sampler gets its own copy of the loop.
     match view.sampler {
         SamplerKind::Independent => {
-            render_pass_with::<L, Rng>(view, film, seed, samples, cancel, progress)
+            render_pass_with::<L, IndependentPixel>(view, film, seed, samples, cancel, progress)
         }
         SamplerKind::Sobol => {
-            render_pass_with::<L, SobolSampler>(view, film, seed, samples, cancel, progress)
+            render_pass_with::<L, SobolPixel>(view, film, seed, samples, cancel, progress)
         }
     }
 }
 
-fn render_pass_with<L: Layout, S: Sampler>(
+fn render_pass_with<L: Layout, S: PixelSampler>(
     view: &SceneView<L>,
     film: &mut Film,
     seed: u64,
@@ -389,7 +389,7 @@ struct Band<'a, L: Layout, S> {
     sampler: PhantomData<S>,
 }
 
-impl<L: Layout, S: Sampler> Kernel for Band<'_, L, S> {
+impl<L: Layout, S: PixelSampler> Kernel for Band<'_, L, S> {
     type Output = TraceStats;
 
     #[inline(always)]
@@ -402,8 +402,9 @@ impl<L: Layout, S: Sampler> Kernel for Band<'_, L, S> {
                 (index % width as usize) as f32,
                 (index / width as usize) as f32,
             );
+            let mut pixel = S::for_pixel(self.seed, index as u64);
             for sample in self.samples.clone() {
-                let mut sampler = S::start(self.seed, index as u64, sample);
+                let mut sampler = pixel.start_sample(sample);
                 let j = sampler.next_2d();
                 let ray = self.view.camera.ray(x + j.x, y + j.y, width, height);
                 let l = trace_path(self.view, ray, &mut sampler, &mut stats);

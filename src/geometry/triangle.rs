@@ -36,7 +36,9 @@ pub fn intersect_triangle(
     let mut e0 = b.x * c.y - b.y * c.x;
     let mut e1 = c.x * a.y - c.y * a.x;
     let mut e2 = a.x * b.y - a.y * b.x;
-    if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
+    // Non-short-circuit `|` and `&` throughout: one branch per test instead of one per
+    // comparison, whose outcomes a ray's triangles make unpredictable.
+    if (e0 == 0.0) | (e1 == 0.0) | (e2 == 0.0) {
         let dop = |px: f32, py: f32, qx: f32, qy: f32| {
             (f64::from(px) * f64::from(qy) - f64::from(py) * f64::from(qx)) as f32
         };
@@ -44,19 +46,17 @@ pub fn intersect_triangle(
         e1 = dop(c.x, c.y, a.x, a.y);
         e2 = dop(a.x, a.y, b.x, b.y);
     }
-    if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+    if ((e0 < 0.0) | (e1 < 0.0) | (e2 < 0.0)) & ((e0 > 0.0) | (e1 > 0.0) | (e2 > 0.0)) {
         return None;
     }
     let det = e0 + e1 + e2;
-    if det == 0.0 {
-        return None;
-    }
-
     let t_scaled = e0 * a.z + e1 * b.z + e2 * c.z;
-    if det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det) {
-        return None;
-    }
-    if det > 0.0 && (t_scaled <= 0.0 || t_scaled > t_max * det) {
+    let behind_or_beyond = if det < 0.0 {
+        (t_scaled >= 0.0) | (t_scaled < t_max * det)
+    } else {
+        (t_scaled <= 0.0) | (t_scaled > t_max * det)
+    };
+    if (det == 0.0) | behind_or_beyond {
         return None;
     }
     let inv_det = 1.0 / det;

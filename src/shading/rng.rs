@@ -21,9 +21,22 @@ impl Rng {
     /// thread runs it, so renders are identical whatever the thread count.
     #[inline]
     pub fn for_sample(seed: u64, pixel: u64, sample: u64) -> Self {
-        let a = mix64(seed ^ mix64(pixel.wrapping_add(0x9e37_79b9_7f4a_7c15)));
-        let b = mix64(a ^ sample.wrapping_mul(0xd1b5_4a32_d192_ed03));
-        Self::new(a, b)
+        Self::for_pixel_sample(Self::pixel_seed(seed, pixel), sample)
+    }
+
+    /// The part of [`for_sample`](Self::for_sample)'s seeding that depends only on the pixel.
+    #[inline]
+    pub fn pixel_seed(seed: u64, pixel: u64) -> u64 {
+        mix64(seed ^ mix64(pixel.wrapping_add(0x9e37_79b9_7f4a_7c15)))
+    }
+
+    /// `for_sample(seed, pixel, sample)` from `pixel_seed(seed, pixel)`.
+    #[inline]
+    pub fn for_pixel_sample(pixel_seed: u64, sample: u64) -> Self {
+        Self::new(
+            pixel_seed,
+            mix64(pixel_seed ^ sample.wrapping_mul(0xd1b5_4a32_d192_ed03)),
+        )
     }
 
     /// PCG32 with initial state `state` and stream `stream`.

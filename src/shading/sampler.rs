@@ -82,10 +82,6 @@ impl FromStr for SamplerKind {
 
 /// A source of sample values for one path.
 pub trait Sampler {
-    /// The generator for sample `sample` of pixel `pixel` under `seed`.
-    fn start(seed: u64, pixel: u64, sample: u32) -> Self
-    where
-        Self: Sized;
     /// Moves to dimension `dimension` of the layout; the next value comes from there.
     fn seek(&mut self, dimension: u32);
     /// A value uniform in `[0, 1)` from the current dimension; moves to the next one.
@@ -94,12 +90,21 @@ pub trait Sampler {
     fn next_2d(&mut self) -> Vec2;
 }
 
-impl Sampler for Rng {
-    #[inline]
-    fn start(seed: u64, pixel: u64, sample: u32) -> Self {
-        Rng::for_sample(seed, pixel, u64::from(sample))
-    }
+/// The generators of one pixel's samples: what they share (the pixel's seeds) is derived once
+/// per pixel and kept from one sample to the next. A sample's values depend only on (seed, pixel,
+/// sample index), never on which samples the pixel served before.
+pub trait PixelSampler {
+    /// The generator of one sample, borrowing what the pixel keeps.
+    type Path<'a>: Sampler
+    where
+        Self: 'a;
+    /// The samples of pixel `pixel` under `seed`.
+    fn for_pixel(seed: u64, pixel: u64) -> Self;
+    /// The generator of sample `sample` of the pixel, at dimension 0.
+    fn start_sample(&mut self, sample: u32) -> Self::Path<'_>;
+}
 
+impl Sampler for Rng {
     /// Independent numbers need no layout: the stream just goes on.
     #[inline]
     fn seek(&mut self, _dimension: u32) {}
@@ -117,15 +122,99 @@ impl Sampler for Rng {
     }
 }
 
-/// Padded Owen-scrambled Sobol' samples (see the module docs).
+/// Independent numbers per sample: the stream of [`Rng::for_sample`] for (seed, pixel, sample),
+/// with the pixel's part of the seeding done once per pixel.
 #[derive(Clone, Copy, Debug)]
-pub struct SobolSampler {
+pub struct IndependentPixel {
+    /// The pixel's stream seed ([`Rng::pixel_seed`]).
+    pixel_seed: u64,
+}
+
+impl PixelSampler for IndependentPixel {
+    type Path<'a> = Rng;
+
+    #[inline]
+    fn for_pixel(seed: u64, pixel: u64) -> Self {
+        Self {
+            pixel_seed: Rng::pixel_seed(seed, pixel),
+        }
+    }
+
+    #[inline]
+    fn start_sample(&mut self, sample: u32) -> Rng {
+        Rng::for_pixel_sample(self.pixel_seed, u64::from(sample))
+    }
+}
+
+/// The Owen-scrambled Sobol' samples of one pixel (see the module docs): the root of its
+/// scrambling seeds, and each dimension's seeds once a sample has drawn from it.
+#[derive(Clone, Debug)]
+pub struct SobolPixel {
     /// Hash of (seed, pixel): the root of every dimension's scrambling seeds.
     pixel_seed: u64,
+    /// The seeds of the first [`CACHED_DIMENSIONS`] dimensions, each derived the first time a
+    /// sample of the pixel draws from it (they are the same for every sample of the pixel).
+    seeds: [DimensionSeeds; CACHED_DIMENSIONS],
+    /// Bit `d` set once `seeds[d]` holds dimension `d`'s seeds.
+    cached: u32,
+}
+
+impl SobolPixel {
+    /// The seeds of dimension `d`.
+    #[inline(always)]
+    fn seeds(&mut self, d: u32) -> DimensionSeeds {
+        match self.seeds.get_mut(d as usize) {
+            Some(slot) => {
+                if self.cached & (1 << d) == 0 {
+                    *slot = DimensionSeeds::derive(self.pixel_seed, d);
+                    self.cached |= 1 << d;
+                }
+                *slot
+            }
+            None => DimensionSeeds::derive(self.pixel_seed, d),
+        }
+    }
+}
+
+/// Padded Owen-scrambled Sobol' values of one sample of a [`SobolPixel`].
+#[derive(Debug)]
+pub struct SobolSampler<'a> {
+    /// The pixel, which keeps the dimensions' seeds.
+    pixel: &'a mut SobolPixel,
     /// Sample index within the pixel, bit-reversed (the form the index shuffle starts from).
     index_reversed: u32,
     /// The next dimension to draw from.
     dimension: u32,
+}
+
+/// How many dimensions' seeds a [`SobolPixel`] keeps: every dimension a path of the
+/// default depth draws from (the pixel, then four per bounce).
+const CACHED_DIMENSIONS: usize = 32;
+
+/// The seeds of one dimension: the index shuffle's, its value at index 0, and the two
+/// coordinates' scrambles.
+#[derive(Clone, Copy, Debug, Default)]
+struct DimensionSeeds {
+    shuffle: u32,
+    shuffle_zero: u32,
+    x: u32,
+    y: u32,
+}
+
+impl DimensionSeeds {
+    /// The seeds of dimension `dimension` of the pixel whose root seed is `pixel_seed`.
+    #[inline]
+    fn derive(pixel_seed: u64, dimension: u32) -> Self {
+        let a = mix64(pixel_seed ^ u64::from(dimension).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+        let b = mix64(a);
+        let shuffle = a as u32;
+        Self {
+            shuffle,
+            shuffle_zero: laine_karras(0, shuffle),
+            x: (a >> 32) as u32,
+            y: b as u32,
+        }
+    }
 }
 
 /// Direction numbers of Sobol' dimension 1 (generator matrix: Pascal's triangle mod 2), column
@@ -217,10 +306,11 @@ fn shuffle(index: u32, seed: u32) -> u32 {
 }
 
 /// The index shuffle in bit-reversed form: from `index.reverse_bits()` to the reversed result
-/// (the sampler's form of `shuffle`, the definition the tests hold it to).
+/// (the sampler's form of `shuffle`, the definition the tests hold it to), given the dimension's
+/// seeds (with `laine_karras(0, seeds.shuffle)` precomputed).
 #[inline]
-fn shuffle_reversed(index_reversed: u32, seed: u32) -> u32 {
-    laine_karras(index_reversed, seed) ^ laine_karras(0, seed)
+fn shuffle_reversed(index_reversed: u32, seeds: &DimensionSeeds) -> u32 {
+    laine_karras(index_reversed, seeds.shuffle) ^ seeds.shuffle_zero
 }
 
 /// Owen-scrambled van der Corput of the shuffled index given bit-reversed: `owen(vdc(i)) =
@@ -236,51 +326,64 @@ fn to_unit(x: u32) -> f32 {
     (x >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }
 
-impl SobolSampler {
-    /// Three 32-bit seeds for the current dimension (index shuffle, x scramble, y scramble),
-    /// then moves to the next dimension.
-    #[inline]
-    fn dimension_seeds(&mut self) -> (u32, u32, u32) {
-        let a =
-            mix64(self.pixel_seed ^ u64::from(self.dimension).wrapping_mul(0x9e37_79b9_7f4a_7c15));
-        let b = mix64(a);
+impl SobolSampler<'_> {
+    /// The seeds of the current dimension, then moves to the next dimension.
+    #[inline(always)]
+    fn dimension_seeds(&mut self) -> DimensionSeeds {
+        let d = self.dimension;
         self.dimension += 1;
-        (a as u32, (a >> 32) as u32, b as u32)
+        self.pixel.seeds(d)
     }
 }
 
-impl Sampler for SobolSampler {
-    #[inline]
-    fn start(seed: u64, pixel: u64, sample: u32) -> Self {
-        Self {
-            pixel_seed: mix64(seed ^ mix64(pixel.wrapping_add(0xd1b5_4a32_d192_ed03))),
-            index_reversed: sample.reverse_bits(),
-            dimension: 0,
-        }
-    }
-
-    #[inline]
+impl Sampler for SobolSampler<'_> {
+    #[inline(always)]
     fn seek(&mut self, dimension: u32) {
         self.dimension = dimension;
     }
 
-    #[inline]
+    #[inline(always)]
     fn next_1d(&mut self) -> f32 {
-        let (s, sx, _) = self.dimension_seeds();
-        to_unit(scrambled_vdc(shuffle_reversed(self.index_reversed, s), sx))
+        let seeds = self.dimension_seeds();
+        to_unit(scrambled_vdc(
+            shuffle_reversed(self.index_reversed, &seeds),
+            seeds.x,
+        ))
     }
 
     /// `(owen(vdc(i), sx), owen(pascal(i), sy))` for the shuffled index `i`, computed with three
     /// bit reversals instead of five: `owen(x) = reverse(lk(reverse(x)))`, `vdc(i) = reverse(i)`,
     /// and `reverse(pascal(i))` comes straight from `reverse(i)` (`pascal_reversed`).
-    #[inline]
+    #[inline(always)]
     fn next_2d(&mut self) -> Vec2 {
-        let (s, sx, sy) = self.dimension_seeds();
-        let i_reversed = shuffle_reversed(self.index_reversed, s);
+        let seeds = self.dimension_seeds();
+        let i_reversed = shuffle_reversed(self.index_reversed, &seeds);
         Vec2::new(
-            to_unit(scrambled_vdc(i_reversed, sx)),
-            to_unit(laine_karras(pascal_reversed(i_reversed), sy).reverse_bits()),
+            to_unit(scrambled_vdc(i_reversed, seeds.x)),
+            to_unit(laine_karras(pascal_reversed(i_reversed), seeds.y).reverse_bits()),
         )
+    }
+}
+
+impl PixelSampler for SobolPixel {
+    type Path<'a> = SobolSampler<'a>;
+
+    #[inline]
+    fn for_pixel(seed: u64, pixel: u64) -> Self {
+        Self {
+            pixel_seed: mix64(seed ^ mix64(pixel.wrapping_add(0xd1b5_4a32_d192_ed03))),
+            seeds: [DimensionSeeds::default(); CACHED_DIMENSIONS],
+            cached: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn start_sample(&mut self, sample: u32) -> SobolSampler<'_> {
+        SobolSampler {
+            pixel: self,
+            index_reversed: sample.reverse_bits(),
+            dimension: 0,
+        }
     }
 }
 
@@ -314,20 +417,22 @@ mod tests {
             .all(|&v| !std::mem::replace(&mut seen[((v * n as f32) as usize).min(n - 1)], true))
     }
 
-    fn draw_2d<S: Sampler>(seed: u64, pixel: u64, dimension: u32, n: u32) -> Vec<Vec2> {
+    fn draw_2d<P: PixelSampler>(seed: u64, pixel: u64, dimension: u32, n: u32) -> Vec<Vec2> {
         (0..n)
             .map(|i| {
-                let mut s = S::start(seed, pixel, i);
+                let mut p = P::for_pixel(seed, pixel);
+                let mut s = p.start_sample(i);
                 s.seek(dimension);
                 s.next_2d()
             })
             .collect()
     }
 
-    fn draw_1d<S: Sampler>(seed: u64, pixel: u64, dimension: u32, n: u32) -> Vec<f32> {
+    fn draw_1d<P: PixelSampler>(seed: u64, pixel: u64, dimension: u32, n: u32) -> Vec<f32> {
         (0..n)
             .map(|i| {
-                let mut s = S::start(seed, pixel, i);
+                let mut p = P::for_pixel(seed, pixel);
+                let mut s = p.start_sample(i);
                 s.seek(dimension);
                 s.next_1d()
             })
@@ -357,13 +462,14 @@ mod tests {
                 rng.next_u32() >> (rng.next_u32() % 32),
             );
             let dimension = rng.next_u32() % 64;
-            let mut s = SobolSampler::start(seed, pixel, sample);
+            let mut p = SobolPixel::for_pixel(seed, pixel);
+            let mut s = p.start_sample(sample);
             s.seek(dimension);
-            let (a, sx, sy) = s.dimension_seeds();
-            let i = shuffle(sample, a);
+            let seeds = s.dimension_seeds();
+            let i = shuffle(sample, seeds.shuffle);
             let expected = Vec2::new(
-                to_unit(owen(i.reverse_bits(), sx)),
-                to_unit(owen(sobol_pascal(i), sy)),
+                to_unit(owen(i.reverse_bits(), seeds.x)),
+                to_unit(owen(sobol_pascal(i), seeds.y)),
             );
             s.seek(dimension);
             assert_eq!(
@@ -378,6 +484,43 @@ mod tests {
                 "sample {sample} dimension {dimension}"
             );
         }
+    }
+
+    /// Every value of `S` for (seed, pixel, sample, dimension) drawn by one generator serving
+    /// the samples of a pixel in a random order, each with random seeks, against a fresh
+    /// generator per draw: what the pixel's generator keeps between samples changes nothing.
+    fn served_in_any_order_equals_fresh<P: PixelSampler>() {
+        let mut rng = Rng::new(11, 2);
+        for pixel in 0..50 {
+            let mut served_pixel = P::for_pixel(9, pixel);
+            for _ in 0..40 {
+                let sample = rng.next_u32() % 16;
+                let mut served = served_pixel.start_sample(sample);
+                let mut fresh_pixel = P::for_pixel(9, pixel);
+                let mut fresh = fresh_pixel.start_sample(sample);
+                for _ in 0..6 {
+                    let dimension = rng.next_u32() % 48;
+                    served.seek(dimension);
+                    fresh.seek(dimension);
+                    assert_eq!(
+                        served.next_2d(),
+                        fresh.next_2d(),
+                        "pixel {pixel} sample {sample}"
+                    );
+                    assert_eq!(
+                        served.next_1d(),
+                        fresh.next_1d(),
+                        "pixel {pixel} sample {sample}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_pixel_s_generator_serves_each_sample_as_a_fresh_one_would() {
+        served_in_any_order_equals_fresh::<SobolPixel>();
+        served_in_any_order_equals_fresh::<IndependentPixel>();
     }
 
     #[test]
@@ -400,12 +543,12 @@ mod tests {
         for (seed, pixel, dimension) in [(0, 0, 0), (7, 123, 1), (99, 4095, 6), (1, 77, 37)] {
             for m in 0..=10 {
                 let n = 1 << m;
-                let p = draw_2d::<SobolSampler>(seed, pixel, dimension, n);
+                let p = draw_2d::<SobolPixel>(seed, pixel, dimension, n);
                 assert!(
                     is_net(&p),
                     "2D seed {seed} pixel {pixel} dim {dimension}, n {n}"
                 );
-                let v = draw_1d::<SobolSampler>(seed, pixel, dimension, n);
+                let v = draw_1d::<SobolPixel>(seed, pixel, dimension, n);
                 assert!(
                     is_stratified(&v),
                     "1D seed {seed} pixel {pixel} dim {dimension}, n {n}"
@@ -418,10 +561,10 @@ mod tests {
     fn the_net_check_rejects_independent_points() {
         // The check can fail: independent points are not nets beyond a handful of samples.
         let failures = (0..20)
-            .filter(|&pixel| !is_net(&draw_2d::<Rng>(3, pixel, 0, 64)))
+            .filter(|&pixel| !is_net(&draw_2d::<IndependentPixel>(3, pixel, 0, 64)))
             .count();
         assert_eq!(failures, 20);
-        assert!(!is_stratified(&draw_1d::<Rng>(3, 0, 0, 64)));
+        assert!(!is_stratified(&draw_1d::<IndependentPixel>(3, 0, 0, 64)));
     }
 
     #[test]
@@ -431,7 +574,8 @@ mod tests {
         let n = 20_000;
         let (mut sx, mut sxy, mut sab) = (0.0f64, 0.0f64, 0.0f64);
         for pixel in 0..n {
-            let mut s = SobolSampler::start(42, pixel, 5);
+            let mut p = SobolPixel::for_pixel(42, pixel);
+            let mut s = p.start_sample(5);
             s.seek(3);
             let a = s.next_2d();
             s.seek(9);
@@ -454,16 +598,17 @@ mod tests {
 
     #[test]
     fn neighbouring_pixels_and_dimensions_are_scrambled_differently() {
-        let a = draw_2d::<SobolSampler>(0, 10, 0, 4);
-        assert_ne!(a, draw_2d::<SobolSampler>(0, 11, 0, 4));
-        assert_ne!(a, draw_2d::<SobolSampler>(0, 10, 1, 4));
-        assert_ne!(a, draw_2d::<SobolSampler>(1, 10, 0, 4));
+        let a = draw_2d::<SobolPixel>(0, 10, 0, 4);
+        assert_ne!(a, draw_2d::<SobolPixel>(0, 11, 0, 4));
+        assert_ne!(a, draw_2d::<SobolPixel>(0, 10, 1, 4));
+        assert_ne!(a, draw_2d::<SobolPixel>(1, 10, 0, 4));
     }
 
     #[test]
     fn independent_sampler_draws_its_stream_in_order() {
         let mut rng = Rng::for_sample(5, 6, 7);
-        let mut s = <Rng as Sampler>::start(5, 6, 7);
+        let mut p = IndependentPixel::for_pixel(5, 6);
+        let mut s = p.start_sample(7);
         s.seek(40);
         let (x, y, z) = (rng.next_f32(), rng.next_f32(), rng.next_f32());
         assert_eq!(s.next_2d(), Vec2::new(x, y));
