@@ -8,6 +8,10 @@ use super::ray::Ray;
 /// `gamma(3)`), used to widen the far slab distance.
 const GAMMA3: f32 = 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
+/// The watertight test's axes `[x, y, z]` by the index of the axis that becomes z (entry 3 is
+/// never chosen; it pads the table to a power of two).
+const FRAME_AXES: [[usize; 3]; 4] = [[1, 2, 0], [2, 0, 1], [0, 1, 2], [0, 1, 2]];
+
 /// A ray with the per-ray constants every box and triangle test needs, computed once.
 #[derive(Clone, Copy, Debug)]
 pub struct RayQuery {
@@ -35,16 +39,17 @@ impl RayQuery {
     pub fn new(ray: Ray) -> Self {
         let d = ray.direction;
         let a = d.abs();
-        // z is the axis of the largest |d| component; x and y follow it cyclically.
-        let kz = if a.x > a.y {
-            if a.x > a.z { 0 } else { 2 }
-        } else if a.y > a.z {
-            1
-        } else {
-            2
-        };
-        let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
-        let shear = Vec3::new(-d[kx] / d[kz], -d[ky] / d[kz], 1.0 / d[kz]);
+        // z is the axis of the largest |d| component (x before y before z on ties); x and y
+        // follow it cyclically. Chosen without branches: ray directions make them unpredictable.
+        let x_over_y = a.x > a.y;
+        let x_largest = x_over_y & (a.x > a.z);
+        let y_largest = !x_over_y & (a.y > a.z);
+        let kz = 2 - 2 * usize::from(x_largest) - usize::from(y_largest);
+        let [kx, ky, kz] = FRAME_AXES[kz & 3];
+        // Indices masked to the array's length index without bounds checks.
+        let d4 = [d.x, d.y, d.z, 0.0];
+        let (dx, dy, dz) = (d4[kx & 3], d4[ky & 3], d4[kz & 3]);
+        let shear = Vec3::new(-dx / dz, -dy / dz, 1.0 / dz);
         let inv_dir = Vec3A::ONE / Vec3A::from(d);
         Self {
             ray,
@@ -61,9 +66,9 @@ impl RayQuery {
     /// then shear, one multiply and one add per coordinate.
     #[inline(always)]
     pub fn to_ray_frame(&self, p: Vec3) -> Vec3 {
-        let rel = (p - self.ray.origin).to_array();
+        let rel = (p - self.ray.origin).extend(0.0).to_array();
         let [kx, ky, kz] = self.axes;
-        let (x, y, z) = (rel[kx], rel[ky], rel[kz]);
+        let (x, y, z) = (rel[kx & 3], rel[ky & 3], rel[kz & 3]);
         let s = self.shear;
         Vec3::new(x + s.x * z, y + s.y * z, s.z * z)
     }

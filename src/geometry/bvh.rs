@@ -268,41 +268,48 @@ impl Bvh {
             let near = [a, b, c, d, e, f, g, h];
             let mut hits = (mask_low | mask_high << LANES) & node.valid;
             // The entered children, nearest first (insertion sort of at most eight) or as they
-            // come.
-            let mut order = [(0usize, 0.0f32); WIDTH];
+            // come. A key is the entry distance's bits above the child's index: distances are
+            // never negative (nor NaN), so keys order as (distance, index) do, and equal
+            // distances keep node order.
+            let mut order = [0u64; WIDTH];
             let mut n = 0;
             while hits != 0 {
                 // `hits` has bits below `WIDTH` only; the mask tells the compiler so.
                 let k = hits.trailing_zeros() as usize & (WIDTH - 1);
                 hits &= hits - 1;
-                let t = near[k];
+                let key = u64::from(near[k].to_bits()) << 32 | k as u64;
                 let mut j = n;
-                while NEAREST_FIRST && j > 0 && order[j - 1].1 > t {
+                while NEAREST_FIRST && j > 0 && order[j - 1] > key {
                     order[j] = order[j - 1];
                     j -= 1;
                 }
-                order[j] = (k, t);
+                order[j] = key;
                 n += 1;
             }
-            let mut inner = [0u32; WIDTH];
-            let mut m = 0;
-            for &(k, t) in &order[..n] {
-                if t > *t_max {
-                    continue;
-                }
-                if node.count[k] > 0 {
+            let child = |key: u64| {
+                (
+                    key as usize & (WIDTH - 1),
+                    f32::from_bits((key >> 32) as u32),
+                )
+            };
+            // Leaves first, nearest first, each against the `t_max` its predecessors left.
+            for &key in &order[..n] {
+                let (k, t) = child(key);
+                if node.count[k] > 0 && t <= *t_max {
                     let first = node.child[k] as usize;
                     if !leaf.visit(first..first + node.count[k] as usize, t_max) {
                         return;
                     }
-                } else {
-                    inner[m] = node.child[k];
-                    m += 1;
                 }
             }
-            for &entry in inner[..m].iter().rev() {
-                stack[top] = entry;
-                top += 1;
+            // Then the inner children still in reach, farthest deepest. A child the leaves'
+            // hits put out of reach would only have been popped and culled later.
+            for &key in order[..n].iter().rev() {
+                let (k, t) = child(key);
+                if node.count[k] == 0 && t <= *t_max {
+                    stack[top] = node.child[k];
+                    top += 1;
+                }
             }
             if top == 0 {
                 return;
