@@ -8,7 +8,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::camera::Camera;
-use crate::cpu::{Isa, Kernel};
+use crate::cpu::{Isa, Kernel, Lanes, Sse};
 use crate::film::{Film, Pixel};
 use crate::geometry::layout::{DefaultLayout, Layout, SphereStore, TriangleStore};
 use crate::geometry::packed::{Geometry, Hit, HitKind, LayoutKind, Surface};
@@ -145,6 +145,18 @@ pub fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
 #[inline(always)]
 pub fn trace_path<L: Layout, S: Sampler>(
     view: &SceneView<L>,
+    ray: Ray,
+    sampler: &mut S,
+    stats: &mut TraceStats,
+) -> Vec3 {
+    trace_path_with(Sse, view, ray, sampler, stats)
+}
+
+/// [`trace_path`] with the BVHs' box tests as wide as `lanes`.
+#[inline(always)]
+fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
+    lanes: W,
+    view: &SceneView<L>,
     mut ray: Ray,
     sampler: &mut S,
     stats: &mut TraceStats,
@@ -156,7 +168,7 @@ pub fn trace_path<L: Layout, S: Sampler>(
     let sample_lights = view.method != Method::Naive && !view.lights.is_empty();
     for depth in 0..view.max_depth {
         stats.rays += 1;
-        let Some(hit) = view.geometry.intersect(&ray, f32::INFINITY) else {
+        let Some(hit) = view.geometry.intersect_with(lanes, &ray, f32::INFINITY) else {
             radiance += throughput * view.background;
             break;
         };
@@ -189,8 +201,13 @@ pub fn trace_path<L: Layout, S: Sampler>(
         let dimension = 1 + depth * BOUNCE_DIMENSIONS;
         if sample_lights && material.samples_lights() {
             sampler.seek(dimension + LIGHT_DIMENSION);
-            radiance +=
-                throughput * direct_light(view, &s, err, ray.direction, material, sampler, stats);
+            let vertex = Vertex {
+                surface: &s,
+                err,
+                d: ray.direction,
+                material,
+            };
+            radiance += throughput * direct_light(lanes, view, vertex, sampler, stats);
         }
         sampler.seek(dimension + BSDF_DIMENSION);
         let Some(scatter) =
@@ -240,19 +257,33 @@ fn leaks(s: &Surface, material: &Material, d: Vec3, wi: Vec3) -> bool {
         && wi.dot(s.n) * d.dot(s.n) >= 0.0
 }
 
-/// One light sample at surface `s` for a ray arriving along `d`: emitted radiance from a point
-/// sampled on an emitter, times the BSDF and cosine, over the light density, MIS-weighted
-/// against BSDF sampling under `Method::Mis`.
-#[inline(always)]
-fn direct_light<L: Layout>(
-    view: &SceneView<L>,
-    s: &Surface,
+/// A vertex a path continues from: the surface it hit, that point's error bound, the direction
+/// the ray arrived along, and the surface's material.
+#[derive(Clone, Copy)]
+struct Vertex<'a> {
+    surface: &'a Surface,
     err: Vec3,
     d: Vec3,
-    material: &Material,
+    material: &'a Material,
+}
+
+/// One light sample at a vertex's surface `s` for a ray arriving along `d`: emitted radiance
+/// from a point sampled on an emitter, times the BSDF and cosine, over the light density,
+/// MIS-weighted against BSDF sampling under `Method::Mis`.
+#[inline(always)]
+fn direct_light<L: Layout, W: Lanes>(
+    lanes: W,
+    view: &SceneView<L>,
+    vertex: Vertex,
     sampler: &mut impl Sampler,
     stats: &mut TraceStats,
 ) -> Vec3 {
+    let Vertex {
+        surface: s,
+        err,
+        d,
+        material,
+    } = vertex;
     // One 2D sample picks the emitter and the point on it, so both are stratified together.
     let u = sampler.next_2d();
     let Some(light) = view.lights.sample(view.geometry, s.p, u.x, u) else {
@@ -296,7 +327,7 @@ fn direct_light<L: Layout>(
         || length <= 0.0
         || view
             .geometry
-            .occluded(&Ray::new(from, span / length), length)
+            .occluded_with(lanes, &Ray::new(from, span / length), length)
     {
         return Vec3::ZERO;
     }
@@ -393,7 +424,7 @@ impl<L: Layout, S: PixelSampler> Kernel for Band<'_, L, S> {
     type Output = TraceStats;
 
     #[inline(always)]
-    fn run(self) -> TraceStats {
+    fn run<W: Lanes>(self, lanes: W) -> TraceStats {
         let (width, height) = self.size;
         let mut stats = TraceStats::default();
         for (offset, sum) in self.pixels.iter_mut().enumerate() {
@@ -407,7 +438,7 @@ impl<L: Layout, S: PixelSampler> Kernel for Band<'_, L, S> {
                 let mut sampler = pixel.start_sample(sample);
                 let j = sampler.next_2d();
                 let ray = self.view.camera.ray(x + j.x, y + j.y, width, height);
-                let l = trace_path(self.view, ray, &mut sampler, &mut stats);
+                let l = trace_path_with(lanes, self.view, ray, &mut sampler, &mut stats);
                 if l.is_finite() {
                     sum.add(l);
                 } else {

@@ -1,8 +1,9 @@
 //! Ray queries and the robust ray–box slab test.
 
-use glam::{Vec3, Vec3A, Vec4};
+use glam::{Vec3, Vec3A};
 
 use super::ray::Ray;
+use crate::cpu::Lanes;
 
 /// Bound on the relative error of three floating-point operations, `3u / (1 - 3u)` (pbrt's
 /// `gamma(3)`), used to widen the far slab distance.
@@ -104,34 +105,28 @@ impl RayQuery {
         (near <= far).then_some(near)
     }
 
-    /// [`RayQuery::enter_box`] for four boxes at once, given as `[min_x, min_y, min_z, max_x,
-    /// max_y, max_z]` lanes: bit `k` of the returned mask is set if the ray enters box `k` before
-    /// `t_max`, and lane `k` of the vector is then its entry distance. Each lane performs exactly
-    /// the operations of `enter_box`, so the answers are the same bits.
+    /// [`RayQuery::enter_box`] for eight boxes at once, given lane by lane as `[min_x, min_y,
+    /// min_z, max_x, max_y, max_z]`: bit `k` of the returned mask is set if the ray enters box `k`
+    /// before `t_max`, and lane `k` of the array is then its entry distance. Each lane performs
+    /// exactly the operations of `enter_box`, so the answers are the same bits, whatever `lanes`.
     #[inline(always)]
-    pub fn enter_boxes(&self, b: &[Vec4; 6], t_max: f32) -> (u32, Vec4) {
+    pub fn enter_boxes<W: Lanes>(
+        &self,
+        lanes: W,
+        b: &[[f32; 8]; 6],
+        t_max: f32,
+    ) -> (u32, [f32; 8]) {
         if self.axis_parallel {
             return self.enter_boxes_axis_parallel(b, t_max);
         }
-        let (o, inv) = (self.origin, self.inv_dir);
-        let slab = |lo: Vec4, hi: Vec4, o: f32, inv: f32| {
-            let t0 = (lo - Vec4::splat(o)) * Vec4::splat(inv);
-            let t1 = (hi - Vec4::splat(o)) * Vec4::splat(inv);
-            (t0.min(t1), t0.max(t1))
-        };
-        let (nx, fx) = slab(b[0], b[3], o.x, inv.x);
-        let (ny, fy) = slab(b[1], b[4], o.y, inv.y);
-        let (nz, fz) = slab(b[2], b[5], o.z, inv.z);
-        let near = nx.max(ny).max(nz).max(Vec4::ZERO);
-        let far = (fx.min(fy).min(fz) * (1.0 + 2.0 * GAMMA3)).min(Vec4::splat(t_max));
-        (near.cmple(far).bitmask(), near)
+        lanes.enter_boxes(b, self.origin, self.inv_dir, 1.0 + 2.0 * GAMMA3, t_max)
     }
 
     /// [`RayQuery::enter_boxes`] for rays with a zero direction component: box by box.
     #[cold]
-    fn enter_boxes_axis_parallel(&self, b: &[Vec4; 6], t_max: f32) -> (u32, Vec4) {
+    fn enter_boxes_axis_parallel(&self, b: &[[f32; 8]; 6], t_max: f32) -> (u32, [f32; 8]) {
         let mut mask = 0;
-        let mut near = [0.0f32; 4];
+        let mut near = [0.0f32; 8];
         for (k, t) in near.iter_mut().enumerate() {
             let min = Vec3A::new(b[0][k], b[1][k], b[2][k]);
             let max = Vec3A::new(b[3][k], b[4][k], b[5][k]);
@@ -140,7 +135,7 @@ impl RayQuery {
                 *t = t_enter;
             }
         }
-        (mask, Vec4::from_array(near))
+        (mask, near)
     }
 
     /// The slab test for rays with a zero direction component. A ray lying in a slab plane makes
@@ -178,6 +173,7 @@ impl RayQuery {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cpu::{Isa, Kernel};
 
     fn query(o: Vec3, d: Vec3) -> RayQuery {
         RayQuery::new(Ray::new(o, d.normalize()))
@@ -212,41 +208,57 @@ mod tests {
         );
     }
 
-    #[test]
-    fn four_boxes_at_once_give_the_single_box_answers() {
-        let mut rng = crate::shading::rng::Rng::new(3, 8);
-        let mut f = || rng.next_f32() * 4.0 - 2.0;
-        for k in 0..2000 {
-            let mut d = Vec3::new(f(), f(), f());
-            if k % 7 == 0 {
-                d.x = 0.0;
-            }
-            let q = query(Vec3::new(f(), f(), f()), d);
-            let mut lanes = [Vec4::ZERO; 6];
-            let mut boxes = [(Vec3A::ZERO, Vec3A::ZERO); 4];
-            for (j, bx) in boxes.iter_mut().enumerate() {
-                let a = Vec3A::new(f(), f(), f());
-                let b = a + Vec3A::new(f(), f(), f()).abs() * if j == 3 { 0.0 } else { 1.0 };
-                *bx = (a, b);
-                for axis in 0..3 {
-                    lanes[axis][j] = a[axis];
-                    lanes[3 + axis][j] = b[axis];
+    /// Eight random boxes (one of them flat) per random ray, some rays axis-parallel, tested at
+    /// once with `lanes` and one by one.
+    struct EightBoxes;
+
+    impl Kernel for EightBoxes {
+        type Output = ();
+
+        #[inline(always)]
+        fn run<W: Lanes>(self, lanes: W) {
+            let mut rng = crate::shading::rng::Rng::new(3, 8);
+            let mut f = || rng.next_f32() * 4.0 - 2.0;
+            for k in 0..4000 {
+                let mut d = Vec3::new(f(), f(), f());
+                if k % 7 == 0 {
+                    d.x = 0.0;
                 }
-            }
-            let t_max = if k % 3 == 0 {
-                f32::INFINITY
-            } else {
-                f().abs() * 2.0
-            };
-            let (mask, near) = q.enter_boxes(&lanes, t_max);
-            for (j, &(a, b)) in boxes.iter().enumerate() {
-                let single = q.enter_box(a, b, t_max);
-                assert_eq!(mask & (1 << j) != 0, single.is_some(), "ray {k} box {j}");
-                if let Some(t) = single {
-                    assert_eq!(near[j].to_bits(), t.to_bits());
+                let q = query(Vec3::new(f(), f(), f()), d);
+                let mut rows = [[0.0f32; 8]; 6];
+                let mut boxes = [(Vec3A::ZERO, Vec3A::ZERO); 8];
+                for (j, bx) in boxes.iter_mut().enumerate() {
+                    let a = Vec3A::new(f(), f(), f());
+                    let flat = if j == 3 { 0.0 } else { 1.0 };
+                    let b = a + Vec3A::new(f(), f(), f()).abs() * flat;
+                    *bx = (a, b);
+                    for axis in 0..3 {
+                        rows[axis][j] = a[axis];
+                        rows[3 + axis][j] = b[axis];
+                    }
+                }
+                let t_max = if k % 3 == 0 {
+                    f32::INFINITY
+                } else {
+                    f().abs() * 2.0
+                };
+                let (mask, near) = q.enter_boxes(lanes, &rows, t_max);
+                for (j, &(a, b)) in boxes.iter().enumerate() {
+                    let single = q.enter_box(a, b, t_max);
+                    assert_eq!(mask & (1 << j) != 0, single.is_some(), "ray {k} box {j}");
+                    if let Some(t) = single {
+                        assert_eq!(near[j].to_bits(), t.to_bits());
+                    }
                 }
             }
         }
+    }
+
+    #[test]
+    fn eight_boxes_at_once_give_the_single_box_answers_in_every_copy() {
+        // The baseline copy (4 lanes), then the best this CPU has (8 lanes with AVX).
+        Isa::BASELINE.run(EightBoxes);
+        Isa::detect().run(EightBoxes);
     }
 
     #[test]

@@ -3,7 +3,8 @@
 //! obvhs builds the binary tree (PLOC + reinsertion + leaf collapse); [`Bvh::build`] then
 //! collapses it into nodes of up to eight children (each inner node absorbs the children of its
 //! largest inner children, as in Wald et al.'s "Getting Rid of Packets", 2008), whose boxes are
-//! stored lane by lane so two SIMD slab tests ([`RayQuery::enter_boxes`]) test all eight. The
+//! stored lane by lane so one SIMD slab test ([`RayQuery::enter_boxes`]: two of four lanes, or
+//! one of eight with AVX) tests all eight. The
 //! leaves are the binary tree's leaves, unchanged. Traversal is ours, because it must use the
 //! robust slab test of [`RayQuery::enter_box`]: obvhs's own box test is not conservative for
 //! grazing rays. Leaves hand a contiguous range of primitive slots to a closure; the caller
@@ -12,20 +13,19 @@
 
 use std::ops::Range;
 
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2};
 
 use super::aabb::RayQuery;
+use crate::cpu::{Lanes, Sse};
 
 /// Traversal stack size that needs no heap allocation; deeper trees fall back to a `Vec`.
 const INLINE_STACK: usize = 64;
 /// Stack size for trees of at most three levels (a few hundred primitives).
 const SHORT_STACK: usize = 22;
 
-/// Children per wide node: two groups of four, each tested by one SIMD slab test.
+/// Children per wide node.
 const WIDTH: usize = 8;
-/// Children per SIMD slab test.
-const LANES: usize = 4;
 
 /// obvhs's medium build, with leaves collapsed for a node visit that costs about as much as
 /// one primitive test (obvhs assumes 3×): a wide node tests four boxes per SIMD slab test,
@@ -38,11 +38,12 @@ const BUILD_PARAMS: BvhBuildParams = BvhBuildParams {
     ..BvhBuildParams::medium_build()
 };
 
-/// A wide node: the boxes of up to eight children in two groups of four, lane by lane
-/// (`[min_x, min_y, min_z, max_x, max_y, max_z]`), and what each child is.
+/// A wide node: the boxes of up to eight children lane by lane (`[min_x, min_y, min_z, max_x,
+/// max_y, max_z]`, eight lanes each, a row per AVX register), and what each child is.
 #[derive(Clone, Copy, Debug)]
+#[repr(align(32))]
 struct WideNode {
-    bounds: [[Vec4; 6]; WIDTH / LANES],
+    bounds: [[f32; WIDTH]; 6],
     /// Per child: a wide node index (`count == 0`) or the first slot of a leaf.
     child: [u32; WIDTH],
     /// Per child: primitives in the leaf, 0 for an inner child.
@@ -90,7 +91,7 @@ fn collapse(bvh: &Bvh2, n: usize, wide: &mut Vec<WideNode>) -> (u32, usize) {
     children.sort_unstable();
     let index = wide.len();
     wide.push(WideNode {
-        bounds: [[Vec4::ZERO; 6]; WIDTH / LANES],
+        bounds: [[0.0; WIDTH]; 6],
         child: [0; WIDTH],
         count: [0; WIDTH],
         valid: 0,
@@ -99,10 +100,9 @@ fn collapse(bvh: &Bvh2, n: usize, wide: &mut Vec<WideNode>) -> (u32, usize) {
     let mut depth = 1;
     for (k, &c) in children.iter().enumerate() {
         let b = nodes[c].aabb();
-        let (group, lane) = (k / LANES, k % LANES);
         for axis in 0..3 {
-            node.bounds[group][axis][lane] = b.min[axis];
-            node.bounds[group][3 + axis][lane] = b.max[axis];
+            node.bounds[axis][k] = b.min[axis];
+            node.bounds[3 + axis][k] = b.max[axis];
         }
         node.valid |= 1 << k;
         if nodes[c].is_leaf() {
@@ -184,13 +184,19 @@ impl Bvh {
         t_max: &mut f32,
         leaf: impl FnMut(Range<usize>, &mut f32) -> bool,
     ) {
-        self.traverse_in::<true>(q, t_max, leaf);
+        self.traverse_in::<true, _>(Sse, q, t_max, leaf);
     }
 
-    /// [`Bvh::traverse`] with a [`Leaf`] instead of a closure.
+    /// [`Bvh::traverse`] with a [`Leaf`] instead of a closure, and box tests as wide as `lanes`.
     #[inline]
-    pub fn traverse_leaves(&self, q: &RayQuery, t_max: &mut f32, leaf: impl Leaf) {
-        self.traverse_in::<true>(q, t_max, leaf);
+    pub fn traverse_leaves<W: Lanes>(
+        &self,
+        lanes: W,
+        q: &RayQuery,
+        t_max: &mut f32,
+        leaf: impl Leaf,
+    ) {
+        self.traverse_in::<true, W>(lanes, q, t_max, leaf);
     }
 
     /// [`Bvh::traverse`] for any-hit queries, whose answer does not depend on the order of the
@@ -202,18 +208,26 @@ impl Bvh {
         t_max: &mut f32,
         leaf: impl FnMut(Range<usize>, &mut f32) -> bool,
     ) {
-        self.traverse_in::<false>(q, t_max, leaf);
+        self.traverse_in::<false, _>(Sse, q, t_max, leaf);
     }
 
-    /// [`Bvh::traverse_any`] with a [`Leaf`] instead of a closure.
+    /// [`Bvh::traverse_any`] with a [`Leaf`] instead of a closure, and box tests as wide as
+    /// `lanes`.
     #[inline]
-    pub fn traverse_any_leaves(&self, q: &RayQuery, t_max: &mut f32, leaf: impl Leaf) {
-        self.traverse_in::<false>(q, t_max, leaf);
+    pub fn traverse_any_leaves<W: Lanes>(
+        &self,
+        lanes: W,
+        q: &RayQuery,
+        t_max: &mut f32,
+        leaf: impl Leaf,
+    ) {
+        self.traverse_in::<false, W>(lanes, q, t_max, leaf);
     }
 
     #[inline(always)]
-    fn traverse_in<const NEAREST_FIRST: bool>(
+    fn traverse_in<const NEAREST_FIRST: bool, W: Lanes>(
         &self,
+        lanes: W,
         q: &RayQuery,
         t_max: &mut f32,
         mut leaf: impl Leaf,
@@ -234,13 +248,13 @@ impl Bvh {
         let needed = (WIDTH - 1) * self.depth + 1;
         if needed <= SHORT_STACK {
             let mut stack = [0u32; SHORT_STACK];
-            self.traverse_wide::<NEAREST_FIRST>(&mut stack, q, t_max, &mut leaf);
+            self.traverse_wide::<NEAREST_FIRST, W>(lanes, &mut stack, q, t_max, &mut leaf);
         } else if needed <= INLINE_STACK {
             let mut stack = [0u32; INLINE_STACK];
-            self.traverse_wide::<NEAREST_FIRST>(&mut stack, q, t_max, &mut leaf);
+            self.traverse_wide::<NEAREST_FIRST, W>(lanes, &mut stack, q, t_max, &mut leaf);
         } else {
             let mut stack = vec![0u32; needed];
-            self.traverse_wide::<NEAREST_FIRST>(&mut stack, q, t_max, &mut leaf);
+            self.traverse_wide::<NEAREST_FIRST, W>(lanes, &mut stack, q, t_max, &mut leaf);
         }
     }
 
@@ -249,8 +263,9 @@ impl Bvh {
     /// With `NEAREST_FIRST`, a node's entered children are visited nearest first (leaves at
     /// once, inner nodes pushed farthest deepest); without, in node order.
     #[inline(always)]
-    fn traverse_wide<const NEAREST_FIRST: bool>(
+    fn traverse_wide<const NEAREST_FIRST: bool, W: Lanes>(
         &self,
+        lanes: W,
         stack: &mut [u32],
         q: &RayQuery,
         t_max: &mut f32,
@@ -260,13 +275,8 @@ impl Bvh {
         let mut current = 0usize;
         loop {
             let node = &self.wide[current];
-            let [low, high] = &node.bounds;
-            let (mask_low, near_low) = q.enter_boxes(low, *t_max);
-            let (mask_high, near_high) = q.enter_boxes(high, *t_max);
-            let [a, b, c, d] = near_low.to_array();
-            let [e, f, g, h] = near_high.to_array();
-            let near = [a, b, c, d, e, f, g, h];
-            let mut hits = (mask_low | mask_high << LANES) & node.valid;
+            let (mask, near) = q.enter_boxes(lanes, &node.bounds, *t_max);
+            let mut hits = mask & node.valid;
             // The entered children, nearest first (insertion sort of at most eight) or as they
             // come. A key is the entry distance's bits above the child's index: distances are
             // never negative (nor NaN), so keys order as (distance, index) do, and equal

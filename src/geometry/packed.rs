@@ -24,6 +24,7 @@ use super::plane::{intersect_plane, plane_uv};
 use super::ray::Ray;
 use super::sphere::{intersect_sphere, sphere_uv};
 use super::triangle::{TriangleHit, intersect_triangle};
+use crate::cpu::{Lanes, Sse};
 
 /// A world-space primitive, as produced from a scene shape and its transform.
 #[derive(Clone, Debug, PartialEq)]
@@ -400,20 +401,28 @@ impl<L: Layout> Geometry<L> {
     /// The closest hit along `ray` closer than `t_max`.
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        self.intersect_with(Sse, ray, t_max)
+    }
+
+    /// [`Geometry::intersect`] with the triangle BVH's box tests as wide as `lanes`.
+    #[inline(always)]
+    pub fn intersect_with<W: Lanes>(&self, lanes: W, ray: &Ray, t_max: f32) -> Option<Hit> {
         let q = RayQuery::new(*ray);
         let mut best: Option<Hit> = None;
         let mut t_best = t_max;
         if !self.sphere_owner.is_empty() {
-            self.sphere_bvh.traverse(&q, &mut t_best, |slots, t_best| {
-                if let Some(i) = L::closest_sphere(&self.spheres, ray, slots, t_best) {
-                    best = Some(Hit::at(HitKind::Sphere, i, *t_best));
-                }
-                true
-            });
+            self.sphere_bvh
+                .traverse_leaves(lanes, &q, &mut t_best, |slots, t_best: &mut f32| {
+                    if let Some(i) = L::closest_sphere(&self.spheres, ray, slots, t_best) {
+                        best = Some(Hit::at(HitKind::Sphere, i, *t_best));
+                    }
+                    true
+                });
         }
         if !self.triangle_owner.is_empty() {
             let mut closest = None;
             self.triangle_bvh.traverse_leaves(
+                lanes,
                 &q,
                 &mut t_best,
                 ClosestTriangle::<L> {
@@ -462,17 +471,25 @@ impl<L: Layout> Geometry<L> {
     /// Whether anything blocks `ray` before `t_max`.
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.occluded_with(Sse, ray, t_max)
+    }
+
+    /// [`Geometry::occluded`] with the triangle BVH's box tests as wide as `lanes`.
+    #[inline(always)]
+    pub fn occluded_with<W: Lanes>(&self, lanes: W, ray: &Ray, t_max: f32) -> bool {
         let q = RayQuery::new(*ray);
         let mut blocked = false;
         let mut t = t_max;
-        self.sphere_bvh.traverse_any(&q, &mut t, |slots, t| {
-            blocked = L::any_sphere(&self.spheres, ray, slots, *t);
-            !blocked
-        });
+        self.sphere_bvh
+            .traverse_any_leaves(lanes, &q, &mut t, |slots, t: &mut f32| {
+                blocked = L::any_sphere(&self.spheres, ray, slots, *t);
+                !blocked
+            });
         if blocked {
             return true;
         }
         self.triangle_bvh.traverse_any_leaves(
+            lanes,
             &q,
             &mut t,
             AnyTriangle::<L> {
