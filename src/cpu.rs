@@ -101,6 +101,9 @@ pub trait Kernel {
 /// x86-64 CPU, and every other target) or [`Avx`] (8 lanes, only in the x86-64-v3 copy). Both
 /// compute the same bits.
 pub trait Lanes: Copy {
+    /// How many `f32` lanes one operation processes.
+    const WIDTH: usize;
+
     /// The robust slab test of eight boxes for a ray from `origin` with inverse direction
     /// `inv_dir`, both finite: `b` holds the boxes lane by lane (`[min_x, min_y, min_z, max_x,
     /// max_y, max_z]`). Per box, `near = max(min(t0, t1) over the axes, 0)` and `far =
@@ -123,6 +126,8 @@ pub trait Lanes: Copy {
 pub struct Sse;
 
 impl Lanes for Sse {
+    const WIDTH: usize = 4;
+
     #[inline(always)]
     fn enter_boxes(
         self,
@@ -161,6 +166,8 @@ pub struct Avx(());
 
 #[cfg(target_arch = "x86_64")]
 impl Lanes for Avx {
+    const WIDTH: usize = 8;
+
     #[inline(always)]
     fn enter_boxes(
         self,

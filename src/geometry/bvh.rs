@@ -177,7 +177,7 @@ impl Bvh {
     /// Calls `leaf(slots, t_max)` for every leaf the ray of `q` enters before `*t_max`, nearest
     /// child first. The closure shrinks `*t_max` when it finds a closer hit and returns `false` to
     /// stop the traversal.
-    #[inline]
+    #[inline(always)]
     pub fn traverse(
         &self,
         q: &RayQuery,
@@ -188,7 +188,7 @@ impl Bvh {
     }
 
     /// [`Bvh::traverse`] with a [`Leaf`] instead of a closure, and box tests as wide as `lanes`.
-    #[inline]
+    #[inline(always)]
     pub fn traverse_leaves<W: Lanes>(
         &self,
         lanes: W,
@@ -201,7 +201,7 @@ impl Bvh {
 
     /// [`Bvh::traverse`] for any-hit queries, whose answer does not depend on the order of the
     /// leaves: children in node order, unsorted. The closure returns `false` to stop.
-    #[inline]
+    #[inline(always)]
     pub fn traverse_any(
         &self,
         q: &RayQuery,
@@ -213,7 +213,7 @@ impl Bvh {
 
     /// [`Bvh::traverse_any`] with a [`Leaf`] instead of a closure, and box tests as wide as
     /// `lanes`.
-    #[inline]
+    #[inline(always)]
     pub fn traverse_any_leaves<W: Lanes>(
         &self,
         lanes: W,
@@ -234,13 +234,26 @@ impl Bvh {
     ) {
         let nodes = &self.bvh.nodes;
         let Some(root) = nodes.first() else { return };
-        let b = root.aabb();
-        if q.enter_box(b.min, b.max, *t_max).is_none() {
+        if root.is_leaf() {
+            let b = root.aabb();
+            if q.enter_box(b.min, b.max, *t_max).is_some() {
+                let first = root.first_index as usize;
+                leaf.visit(first..first + root.prim_count as usize, t_max);
+            }
             return;
         }
-        if root.is_leaf() {
-            let first = root.first_index as usize;
-            leaf.visit(first..first + root.prim_count as usize, t_max);
+        // A ray that misses the root box misses every box inside it (the slab test is monotone
+        // in the bounds), so the wide root's test of its children rejects it too. With eight
+        // lanes that is one test, as cheap as the root box's; with four, the root box's spares
+        // misses the second half.
+        if W::WIDTH < WIDTH {
+            let b = root.aabb();
+            if q.enter_box(b.min, b.max, *t_max).is_none() {
+                return;
+            }
+        }
+        let entered = q.enter_boxes(lanes, &self.wide[0].bounds, *t_max);
+        if entered.0 & self.wide[0].valid == 0 {
             return;
         }
         // Each level pushes at most eight children after popping one. The stack is zeroed at
@@ -248,34 +261,35 @@ impl Bvh {
         let needed = (WIDTH - 1) * self.depth + 1;
         if needed <= SHORT_STACK {
             let mut stack = [0u32; SHORT_STACK];
-            self.traverse_wide::<NEAREST_FIRST, W>(lanes, &mut stack, q, t_max, &mut leaf);
+            self.traverse_wide::<NEAREST_FIRST, W>(lanes, entered, &mut stack, q, t_max, &mut leaf);
         } else if needed <= INLINE_STACK {
             let mut stack = [0u32; INLINE_STACK];
-            self.traverse_wide::<NEAREST_FIRST, W>(lanes, &mut stack, q, t_max, &mut leaf);
+            self.traverse_wide::<NEAREST_FIRST, W>(lanes, entered, &mut stack, q, t_max, &mut leaf);
         } else {
             let mut stack = vec![0u32; needed];
-            self.traverse_wide::<NEAREST_FIRST, W>(lanes, &mut stack, q, t_max, &mut leaf);
+            self.traverse_wide::<NEAREST_FIRST, W>(lanes, entered, &mut stack, q, t_max, &mut leaf);
         }
     }
 
-    /// Traversal of the wide tree from its root. A node popped from `stack` tests its children
-    /// against the `t_max` of that moment, which culls what a closer hit has put out of reach.
-    /// With `NEAREST_FIRST`, a node's entered children are visited nearest first (leaves at
-    /// once, inner nodes pushed farthest deepest); without, in node order.
+    /// Traversal of the wide tree from its root, whose children `root` tested. A node popped
+    /// from `stack` tests its children against the `t_max` of that moment, which culls what a
+    /// closer hit has put out of reach. With `NEAREST_FIRST`, a node's entered children are
+    /// visited nearest first (leaves at once, inner nodes pushed farthest deepest); without, in
+    /// node order.
     #[inline(always)]
     fn traverse_wide<const NEAREST_FIRST: bool, W: Lanes>(
         &self,
         lanes: W,
+        root: (u32, [f32; WIDTH]),
         stack: &mut [u32],
         q: &RayQuery,
         t_max: &mut f32,
         leaf: &mut impl Leaf,
     ) {
         let mut top = 0usize;
-        let mut current = 0usize;
+        let mut node = &self.wide[0];
+        let (mut mask, mut near) = root;
         loop {
-            let node = &self.wide[current];
-            let (mask, near) = q.enter_boxes(lanes, &node.bounds, *t_max);
             let mut hits = mask & node.valid;
             // The entered children, nearest first (insertion sort of at most eight) or as they
             // come. A key is the entry distance's bits above the child's index: distances are
@@ -325,7 +339,8 @@ impl Bvh {
                 return;
             }
             top -= 1;
-            current = stack[top] as usize;
+            node = &self.wide[stack[top] as usize];
+            (mask, near) = q.enter_boxes(lanes, &node.bounds, *t_max);
         }
     }
 }
