@@ -168,6 +168,10 @@ pub struct Avx(());
 impl Lanes for Avx {
     const WIDTH: usize = 8;
 
+    /// The same operations as [`Sse`]'s, eight lanes per instruction (`vminps`/`vmaxps` return
+    /// the second operand on NaN, like `minps`/`maxps`). The intrinsics are called directly,
+    /// not through a `#[target_feature]` function, which the compiler would not inline into the
+    /// traversal loops: once this method is inlined into the x86-64-v3 copy, each of them is.
     #[inline(always)]
     fn enter_boxes(
         self,
@@ -177,55 +181,47 @@ impl Lanes for Avx {
         widen: f32,
         t_max: f32,
     ) -> (u32, [f32; 8]) {
-        // SAFETY: an `Avx` exists only on a CPU with AVX (see the type).
-        unsafe { enter_boxes_avx(b, origin, inv_dir, widen, t_max) }
+        use std::arch::x86_64::{
+            _CMP_LE_OQ, _mm256_cmp_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps,
+            _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_storeu_ps,
+            _mm256_sub_ps,
+        };
+        // SAFETY: an `Avx` exists only on a CPU with AVX (see the type), and every row of `b`
+        // and `out` is eight contiguous `f32`s, which unaligned loads and stores may access.
+        unsafe {
+            macro_rules! slab {
+                ($axis:expr) => {{
+                    let o = _mm256_set1_ps(origin[$axis]);
+                    let inv = _mm256_set1_ps(inv_dir[$axis]);
+                    let t0 =
+                        _mm256_mul_ps(_mm256_sub_ps(_mm256_loadu_ps(b[$axis].as_ptr()), o), inv);
+                    let t1 = _mm256_mul_ps(
+                        _mm256_sub_ps(_mm256_loadu_ps(b[3 + $axis].as_ptr()), o),
+                        inv,
+                    );
+                    (_mm256_min_ps(t0, t1), _mm256_max_ps(t0, t1))
+                }};
+            }
+            let (nx, fx) = slab!(0);
+            let (ny, fy) = slab!(1);
+            let (nz, fz) = slab!(2);
+            let near = _mm256_max_ps(
+                _mm256_max_ps(_mm256_max_ps(nx, ny), nz),
+                _mm256_setzero_ps(),
+            );
+            let far = _mm256_min_ps(
+                _mm256_mul_ps(
+                    _mm256_min_ps(_mm256_min_ps(fx, fy), fz),
+                    _mm256_set1_ps(widen),
+                ),
+                _mm256_set1_ps(t_max),
+            );
+            let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near, far)) as u32;
+            let mut out = [0.0f32; 8];
+            _mm256_storeu_ps(out.as_mut_ptr(), near);
+            (mask, out)
+        }
     }
-}
-
-/// [`Lanes::enter_boxes`] in AVX: the same operations as [`Sse`]'s, eight lanes per instruction
-/// (`vminps`/`vmaxps` return the second operand on NaN, like `minps`/`maxps`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-#[inline]
-fn enter_boxes_avx(
-    b: &[[f32; 8]; 6],
-    origin: Vec3A,
-    inv_dir: Vec3A,
-    widen: f32,
-    t_max: f32,
-) -> (u32, [f32; 8]) {
-    use std::arch::x86_64::{
-        _CMP_LE_OQ, _mm256_cmp_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps,
-        _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_storeu_ps,
-        _mm256_sub_ps,
-    };
-    // SAFETY: each row of `b` is eight contiguous `f32`s, which an unaligned load may read.
-    let lanes = |axis: usize| unsafe { _mm256_loadu_ps(b[axis].as_ptr()) };
-    let slab = |axis: usize| {
-        let (o, inv) = (_mm256_set1_ps(origin[axis]), _mm256_set1_ps(inv_dir[axis]));
-        let t0 = _mm256_mul_ps(_mm256_sub_ps(lanes(axis), o), inv);
-        let t1 = _mm256_mul_ps(_mm256_sub_ps(lanes(3 + axis), o), inv);
-        (_mm256_min_ps(t0, t1), _mm256_max_ps(t0, t1))
-    };
-    let (nx, fx) = slab(0);
-    let (ny, fy) = slab(1);
-    let (nz, fz) = slab(2);
-    let near = _mm256_max_ps(
-        _mm256_max_ps(_mm256_max_ps(nx, ny), nz),
-        _mm256_setzero_ps(),
-    );
-    let far = _mm256_min_ps(
-        _mm256_mul_ps(
-            _mm256_min_ps(_mm256_min_ps(fx, fy), fz),
-            _mm256_set1_ps(widen),
-        ),
-        _mm256_set1_ps(t_max),
-    );
-    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near, far)) as u32;
-    let mut out = [0.0f32; 8];
-    // SAFETY: `out` is eight contiguous `f32`s, which an unaligned store may write.
-    unsafe { _mm256_storeu_ps(out.as_mut_ptr(), near) };
-    (mask, out)
 }
 
 /// `kernel.run()` compiled with the x86-64-v3 features.

@@ -67,7 +67,8 @@ impl RayQuery {
     /// then shear, one multiply and one add per coordinate.
     #[inline(always)]
     pub fn to_ray_frame(&self, p: Vec3) -> Vec3 {
-        let rel = (p - self.ray.origin).extend(0.0).to_array();
+        let r = p - self.ray.origin;
+        let rel = [r.x, r.y, r.z, 0.0];
         let [kx, ky, kz] = self.axes;
         let (x, y, z) = (rel[kx & 3], rel[ky & 3], rel[kz & 3]);
         let s = self.shear;

@@ -62,10 +62,11 @@ pub fn spawn_origin(p: Vec3, n: Vec3, err: Vec3) -> Vec3 {
 /// box renders 40 % slower with such origins.
 const TINY: f32 = 1e-20;
 
-/// `x` one ulp towards the side `n` points to (unchanged where `n` is 0 or NaN), and ±[`TINY`]
-/// instead of anything smaller: `x.next_up()` / `x.next_down()` with that floor, computed with
-/// selects on the bits instead of branches, which the normals of random bounces make
-/// unpredictable.
+/// Finite `x` one ulp towards the side `n` points to (unchanged where `n` is 0 or NaN), and
+/// ±[`TINY`] instead of anything smaller: `x.next_up()` / `x.next_down()` with that floor,
+/// computed with selects on the bits instead of branches, which the normals of random bounces
+/// make unpredictable. (A ray origin is finite; the standard library's steps also handle ±∞ and
+/// NaN, which only cost here.)
 #[inline(always)]
 fn away(x: f32, n: f32) -> f32 {
     let up = n > 0.0;
@@ -83,9 +84,7 @@ fn away(x: f32, n: f32) -> f32 {
     } else {
         stepped
     };
-    // NaN stays, and so does an infinity stepped further out.
-    let stays = !(up | (n < 0.0)) | x.is_nan() | (x.is_infinite() & ((x > 0.0) == up));
-    if stays { x } else { y }
+    if up | (n < 0.0) { y } else { x }
 }
 
 #[cfg(test)]
@@ -123,12 +122,11 @@ mod tests {
             555.0,
             f32::MAX,
             f32::MIN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::NAN,
         ];
         let mut rng = Rng::new(4, 9);
-        let random = (0..100_000).map(|_| f32::from_bits(rng.next_u32()));
+        let random = (0..100_000)
+            .map(|_| f32::from_bits(rng.next_u32()))
+            .filter(|x| x.is_finite());
         for x in special.into_iter().chain(random) {
             for n in [1.0, 0.3, 0.0, -0.0, -0.7, f32::NAN] {
                 let (got, want) = (away(x, n), away_by_definition(x, n));
