@@ -365,6 +365,7 @@ impl InstanceSet {
             p: inst.world_from_object.transform_point3(p_obj),
             n,
             ns,
+            smooth: ns != n,
             uv,
             owner: inst.owner,
         }

@@ -162,6 +162,8 @@ pub struct Surface {
     /// Unit shading normal: interpolated vertex normals of meshes that have them, else `n`.
     /// On the same side as `n`.
     pub ns: Vec3,
+    /// Whether `ns` differs from `n` (kept so shading need not compare the two vectors).
+    pub smooth: bool,
     /// Texture coordinates.
     pub uv: Vec2,
     /// Owner (scene entity slot) of the primitive.
@@ -544,6 +546,7 @@ impl<L: Layout> Geometry<L> {
                     p: c + r * n,
                     n,
                     ns: n,
+                    smooth: false,
                     uv,
                     owner: self.sphere_owner[i],
                 }
@@ -557,6 +560,7 @@ impl<L: Layout> Geometry<L> {
                     p: b0 * p0 + hit.b1 * p1 + hit.b2 * p2,
                     n,
                     ns: n,
+                    smooth: false,
                     uv: b0 * t0 + hit.b1 * t1 + hit.b2 * t2,
                     owner: self.triangle_owner[i],
                 }
@@ -569,6 +573,7 @@ impl<L: Layout> Geometry<L> {
                     p,
                     n: pl.normal,
                     ns: pl.normal,
+                    smooth: false,
                     uv: plane_uv(p, pl.point, pl.tangent, pl.bitangent),
                     owner: pl.owner,
                 }
