@@ -3,9 +3,9 @@
 //! obvhs builds the binary tree (PLOC + reinsertion + leaf collapse); [`Bvh::build`] then
 //! collapses it into nodes of up to eight children (each inner node absorbs the children of its
 //! largest inner children, as in Wald et al.'s "Getting Rid of Packets", 2008), whose boxes are
-//! stored lane by lane so one SIMD slab test ([`RayQuery::enter_boxes`]: two of four lanes, or
-//! one of eight with AVX) tests all eight. The
-//! leaves are the binary tree's leaves, unchanged. Traversal is ours, because it must use the
+//! stored lane by lane so one call of [`RayQuery::enter_boxes`] tests all eight (two SIMD slab
+//! tests of four lanes, or one of eight with AVX). The leaves are the binary tree's leaves,
+//! unchanged. Traversal is ours, because it must use the
 //! robust slab test of [`RayQuery::enter_box`]: obvhs's own box test is not conservative for
 //! grazing rays. Leaves hand a contiguous range of primitive slots to a closure; the caller
 //! stores its primitives in BVH order (see [`Bvh::build`], which returns the order) so that range
@@ -28,8 +28,8 @@ const SHORT_STACK: usize = 22;
 const WIDTH: usize = 8;
 
 /// obvhs's medium build, with leaves collapsed for a node visit that costs about as much as
-/// one primitive test (obvhs assumes 3×): a wide node tests four boxes per SIMD slab test,
-/// while a watertight triangle test is tens of instructions. Fewer primitives per leaf:
+/// one primitive test (obvhs assumes 3×): a wide node tests four or eight boxes per SIMD slab
+/// test, while a watertight triangle test is tens of instructions. Fewer primitives per leaf:
 /// −5.7 % instructions on the Cornell box, −3.5 % on `bunnies.ron`, −3 % on 2,000 random
 /// spheres, +1.2 % on `stress.ron`; leaves then hold ~1.03–1.08 primitives (BENCHMARKS.md,
 /// issue 11).
@@ -177,7 +177,7 @@ impl Bvh {
     /// Calls `leaf(slots, t_max)` for every leaf the ray of `q` enters before `*t_max`, nearest
     /// child first. The closure shrinks `*t_max` when it finds a closer hit and returns `false` to
     /// stop the traversal.
-    #[inline(always)]
+    #[inline]
     pub fn traverse(
         &self,
         q: &RayQuery,
@@ -188,7 +188,7 @@ impl Bvh {
     }
 
     /// [`Bvh::traverse`] with a [`Leaf`] instead of a closure, and box tests as wide as `lanes`.
-    #[inline(always)]
+    #[inline]
     pub fn traverse_leaves<W: Lanes>(
         &self,
         lanes: W,
@@ -201,7 +201,7 @@ impl Bvh {
 
     /// [`Bvh::traverse`] for any-hit queries, whose answer does not depend on the order of the
     /// leaves: children in node order, unsorted. The closure returns `false` to stop.
-    #[inline(always)]
+    #[inline]
     pub fn traverse_any(
         &self,
         q: &RayQuery,
@@ -213,7 +213,7 @@ impl Bvh {
 
     /// [`Bvh::traverse_any`] with a [`Leaf`] instead of a closure, and box tests as wide as
     /// `lanes`.
-    #[inline(always)]
+    #[inline]
     pub fn traverse_any_leaves<W: Lanes>(
         &self,
         lanes: W,
@@ -273,9 +273,9 @@ impl Bvh {
 
     /// Traversal of the wide tree from its root, whose children `root` tested. A node popped
     /// from `stack` tests its children against the `t_max` of that moment, which culls what a
-    /// closer hit has put out of reach. With `NEAREST_FIRST`, a node's entered children are
-    /// visited nearest first (leaves at once, inner nodes pushed farthest deepest); without, in
-    /// node order.
+    /// closer hit has put out of reach. A node's entered leaves are visited first, then its inner
+    /// children still in reach are pushed; with `NEAREST_FIRST` both go nearest first (inner
+    /// children pushed farthest deepest), without, in node order.
     #[inline(always)]
     fn traverse_wide<const NEAREST_FIRST: bool, W: Lanes>(
         &self,
