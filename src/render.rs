@@ -220,7 +220,7 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         }
         previous = scatter.pdf.map(|pdf| (s.p, pdf));
         throughput *= scatter.attenuation;
-        if is_zero(throughput) {
+        if throughput == Vec3::ZERO {
             break;
         }
         if view.roulette && depth >= ROULETTE_DEPTH {
@@ -252,13 +252,9 @@ fn shading_normal(s: &Surface, material: &Material) -> Vec3 {
 /// following it would leak light through the mesh, so such directions carry nothing.
 #[inline]
 fn leaks(s: &Surface, material: &Material, d: Vec3, wi: Vec3) -> bool {
-    s.smooth && !matches!(material, Material::Dielectric { .. }) && wi.dot(s.n) * d.dot(s.n) >= 0.0
-}
-
-/// `v == Vec3::ZERO` with one branch instead of one per component.
-#[inline(always)]
-fn is_zero(v: Vec3) -> bool {
-    (v.x == 0.0) & (v.y == 0.0) & (v.z == 0.0)
+    s.ns != s.n
+        && !matches!(material, Material::Dielectric { .. })
+        && wi.dot(s.n) * d.dot(s.n) >= 0.0
 }
 
 /// A vertex a path continues from: the surface it hit, that point's error bound, the direction
@@ -300,7 +296,7 @@ fn direct_light<L: Layout, W: Lanes>(
     }
     let wi = to_light / dist2.sqrt();
     let emitted = view.materials[light.material as usize].emitted(wi, light.n, light.uv);
-    if is_zero(emitted) {
+    if emitted == Vec3::ZERO {
         return Vec3::ZERO;
     }
     if leaks(s, material, d, wi) {
@@ -309,7 +305,7 @@ fn direct_light<L: Layout, W: Lanes>(
     let Some((f_cos, pdf_bsdf)) = material.eval(d, wi, shading_normal(s, material), s.uv) else {
         return Vec3::ZERO;
     };
-    if is_zero(f_cos) {
+    if f_cos == Vec3::ZERO {
         return Vec3::ZERO;
     }
     let pdf_light = light.pdf;

@@ -365,7 +365,6 @@ impl InstanceSet {
             p: inst.world_from_object.transform_point3(p_obj),
             n,
             ns,
-            smooth: ns != n,
             uv,
             owner: inst.owner,
         }

@@ -162,8 +162,6 @@ pub struct Surface {
     /// Unit shading normal: interpolated vertex normals of meshes that have them, else `n`.
     /// On the same side as `n`.
     pub ns: Vec3,
-    /// Whether `ns` differs from `n` (kept so shading need not compare the two vectors).
-    pub smooth: bool,
     /// Texture coordinates.
     pub uv: Vec2,
     /// Owner (scene entity slot) of the primitive.
@@ -406,7 +404,7 @@ impl<L: Layout> Geometry<L> {
         self.intersect_with(Sse, ray, t_max)
     }
 
-    /// [`Geometry::intersect`] with the triangle BVH's box tests as wide as `lanes`.
+    /// [`Geometry::intersect`] with the sphere and triangle BVHs' box tests as wide as `lanes`.
     #[inline(always)]
     pub fn intersect_with<W: Lanes>(&self, lanes: W, ray: &Ray, t_max: f32) -> Option<Hit> {
         let q = RayQuery::new(*ray);
@@ -476,7 +474,7 @@ impl<L: Layout> Geometry<L> {
         self.occluded_with(Sse, ray, t_max)
     }
 
-    /// [`Geometry::occluded`] with the triangle BVH's box tests as wide as `lanes`.
+    /// [`Geometry::occluded`] with the sphere and triangle BVHs' box tests as wide as `lanes`.
     #[inline(always)]
     pub fn occluded_with<W: Lanes>(&self, lanes: W, ray: &Ray, t_max: f32) -> bool {
         let q = RayQuery::new(*ray);
@@ -546,7 +544,6 @@ impl<L: Layout> Geometry<L> {
                     p: c + r * n,
                     n,
                     ns: n,
-                    smooth: false,
                     uv,
                     owner: self.sphere_owner[i],
                 }
@@ -560,7 +557,6 @@ impl<L: Layout> Geometry<L> {
                     p: b0 * p0 + hit.b1 * p1 + hit.b2 * p2,
                     n,
                     ns: n,
-                    smooth: false,
                     uv: b0 * t0 + hit.b1 * t1 + hit.b2 * t2,
                     owner: self.triangle_owner[i],
                 }
@@ -573,7 +569,6 @@ impl<L: Layout> Geometry<L> {
                     p,
                     n: pl.normal,
                     ns: pl.normal,
-                    smooth: false,
                     uv: plane_uv(p, pl.point, pl.tangent, pl.bitangent),
                     owner: pl.owner,
                 }
