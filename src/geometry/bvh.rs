@@ -234,23 +234,20 @@ impl Bvh {
     ) {
         let nodes = &self.bvh.nodes;
         let Some(root) = nodes.first() else { return };
-        if root.is_leaf() {
-            let b = root.aabb();
-            if q.enter_box(b.min, b.max, *t_max).is_some() {
-                let first = root.first_index as usize;
-                leaf.visit(first..first + root.prim_count as usize, t_max);
-            }
-            return;
-        }
         // A ray that misses the root box misses every box inside it (the slab test is monotone
         // in the bounds), so the wide root's test of its children rejects it too. With eight
         // lanes that is one test, as cheap as the root box's; with four, the root box's spares
         // misses the second half.
-        if W::WIDTH < WIDTH {
+        if root.is_leaf() || W::WIDTH < WIDTH {
             let b = root.aabb();
             if q.enter_box(b.min, b.max, *t_max).is_none() {
                 return;
             }
+        }
+        if root.is_leaf() {
+            let first = root.first_index as usize;
+            leaf.visit(first..first + root.prim_count as usize, t_max);
+            return;
         }
         let entered = q.enter_boxes(lanes, &self.wide[0].bounds, *t_max);
         if entered.0 & self.wide[0].valid == 0 {
