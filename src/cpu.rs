@@ -10,14 +10,14 @@
 //! What the dispatched copy reaches is what the compiler inlines into it: the integrator, the
 //! BVH traversal, the triangle and box tests, the samplers and the materials (the hot functions
 //! are `#[inline]` and called from one place each). Code written once for both copies stays
-//! 4 lanes wide (SSE2) in both; where 8 lanes pay, the kernel takes a [`Lanes`] type, and the
-//! x86-64-v3 copy gets [`Avx`], whose operations are AVX intrinsics: so far the slab test of a
-//! BVH node's eight boxes ([`Lanes::enter_boxes`]).
+//! 4 lanes wide (SSE2) in both; where 8 lanes pay, the kernel is written over a [`Lanes`] type,
+//! and the x86-64-v3 copy gets [`Avx`], whose operations are AVX intrinsics: so far the slab
+//! test of a BVH node's eight boxes (`RayQuery::enter_boxes`).
 #![allow(unsafe_code)]
 
 use std::sync::OnceLock;
 
-use glam::{Vec3A, Vec4};
+use glam::Vec4;
 
 /// An instruction set the render loop is compiled for. Only [`Isa::BASELINE`] can be named;
 /// any other value comes from [`Isa::detect`], so holding one proves the CPU can run it.
@@ -97,69 +97,82 @@ pub trait Kernel {
     fn run<W: Lanes>(self, lanes: W) -> Self::Output;
 }
 
-/// SIMD operations whose width depends on the copy of the render loop: [`Sse`] (4 lanes, any
-/// x86-64 CPU, and every other target) or [`Avx`] (8 lanes, only in the x86-64-v3 copy). Both
-/// compute the same bits.
+/// Eight `f32` lanes whose registers depend on the copy of the render loop: [`Sse`] (two SSE
+/// registers, any x86-64 CPU, and every other target) or [`Avx`] (one AVX register, only in the
+/// x86-64-v3 copy). Each operation is the same IEEE operation per lane in both, so kernels
+/// written once over `Lanes` compute the same bits in either copy.
 pub trait Lanes: Copy {
-    /// How many `f32` lanes one operation processes.
+    /// How many lanes one instruction processes.
     const WIDTH: usize;
+    /// Eight lanes.
+    type F8: Copy;
 
-    /// The robust slab test of eight boxes for a ray from `origin` with inverse direction
-    /// `inv_dir`, both finite: `b` holds the boxes lane by lane (`[min_x, min_y, min_z, max_x,
-    /// max_y, max_z]`). Per box, `near = max(min(t0, t1) over the axes, 0)` and `far =
-    /// min(min(max(t0, t1) over the axes) · widen, t_max)`, with `t0 = (min − o) · inv` and `t1
-    /// = (max − o) · inv` per axis, each `min`/`max` the SSE instruction's (the second operand
-    /// when either is NaN). Bit `k` of the mask is set if `near ≤ far` for box `k`; lane `k` of
-    /// the array is its `near`.
-    fn enter_boxes(
-        self,
-        b: &[[f32; 8]; 6],
-        origin: Vec3A,
-        inv_dir: Vec3A,
-        widen: f32,
-        t_max: f32,
-    ) -> (u32, [f32; 8]);
+    /// The lanes of `row`.
+    fn load(self, row: &[f32; 8]) -> Self::F8;
+    /// `x` in every lane.
+    fn splat(self, x: f32) -> Self::F8;
+    /// `a − b` per lane.
+    fn sub(self, a: Self::F8, b: Self::F8) -> Self::F8;
+    /// `a · b` per lane.
+    fn mul(self, a: Self::F8, b: Self::F8) -> Self::F8;
+    /// `minps`/`vminps`: the smaller, or `b` when either is NaN.
+    fn min(self, a: Self::F8, b: Self::F8) -> Self::F8;
+    /// `maxps`/`vmaxps`: the larger, or `b` when either is NaN.
+    fn max(self, a: Self::F8, b: Self::F8) -> Self::F8;
+    /// Bit `k` set where lane `k` of `a` is `≤` lane `k` of `b` (false on NaN).
+    fn le_mask(self, a: Self::F8, b: Self::F8) -> u32;
+    /// The lanes as an array.
+    fn to_array(self, a: Self::F8) -> [f32; 8];
 }
 
-/// Four lanes at a time: SSE2 through glam's `Vec4` on x86-64, scalar code elsewhere.
+/// Eight lanes as two of glam's `Vec4` (SSE2 on x86-64, scalar code elsewhere).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Sse;
 
 impl Lanes for Sse {
     const WIDTH: usize = 4;
+    type F8 = [Vec4; 2];
 
     #[inline(always)]
-    fn enter_boxes(
-        self,
-        b: &[[f32; 8]; 6],
-        origin: Vec3A,
-        inv_dir: Vec3A,
-        widen: f32,
-        t_max: f32,
-    ) -> (u32, [f32; 8]) {
-        let half = |h: usize| {
-            let lanes = |axis: usize| Vec4::from_slice(&b[axis][4 * h..4 * h + 4]);
-            let slab = |axis: usize| {
-                let (o, inv) = (Vec4::splat(origin[axis]), Vec4::splat(inv_dir[axis]));
-                let t0 = (lanes(axis) - o) * inv;
-                let t1 = (lanes(3 + axis) - o) * inv;
-                (t0.min(t1), t0.max(t1))
-            };
-            let (nx, fx) = slab(0);
-            let (ny, fy) = slab(1);
-            let (nz, fz) = slab(2);
-            let near = nx.max(ny).max(nz).max(Vec4::ZERO);
-            let far = (fx.min(fy).min(fz) * widen).min(Vec4::splat(t_max));
-            (near.cmple(far).bitmask(), near.to_array())
-        };
-        let ((mask_low, [a, b, c, d]), (mask_high, [e, f, g, h])) = (half(0), half(1));
-        (mask_low | mask_high << 4, [a, b, c, d, e, f, g, h])
+    fn load(self, row: &[f32; 8]) -> [Vec4; 2] {
+        [Vec4::from_slice(&row[..4]), Vec4::from_slice(&row[4..])]
+    }
+    #[inline(always)]
+    fn splat(self, x: f32) -> [Vec4; 2] {
+        [Vec4::splat(x); 2]
+    }
+    #[inline(always)]
+    fn sub(self, [a0, a1]: [Vec4; 2], [b0, b1]: [Vec4; 2]) -> [Vec4; 2] {
+        [a0 - b0, a1 - b1]
+    }
+    #[inline(always)]
+    fn mul(self, [a0, a1]: [Vec4; 2], [b0, b1]: [Vec4; 2]) -> [Vec4; 2] {
+        [a0 * b0, a1 * b1]
+    }
+    #[inline(always)]
+    fn min(self, [a0, a1]: [Vec4; 2], [b0, b1]: [Vec4; 2]) -> [Vec4; 2] {
+        [a0.min(b0), a1.min(b1)]
+    }
+    #[inline(always)]
+    fn max(self, [a0, a1]: [Vec4; 2], [b0, b1]: [Vec4; 2]) -> [Vec4; 2] {
+        [a0.max(b0), a1.max(b1)]
+    }
+    #[inline(always)]
+    fn le_mask(self, [a0, a1]: [Vec4; 2], [b0, b1]: [Vec4; 2]) -> u32 {
+        a0.cmple(b0).bitmask() | a1.cmple(b1).bitmask() << 4
+    }
+    #[inline(always)]
+    fn to_array(self, [a0, a1]: [Vec4; 2]) -> [f32; 8] {
+        let ([a, b, c, d], [e, f, g, h]) = (a0.to_array(), a1.to_array());
+        [a, b, c, d, e, f, g, h]
     }
 }
 
-/// Eight lanes at a time with AVX. Only [`Isa::run`] makes one, in the copy of the kernel it
+/// Eight lanes in one AVX register. Only [`Isa::run`] makes one, in the copy of the kernel it
 /// compiles for x86-64-v3 after [`Isa::detect`] found the CPU's features: holding an `Avx`
-/// proves the CPU has AVX.
+/// proves the CPU has AVX. The intrinsics are called in these always-inlined methods, not
+/// through `#[target_feature]` functions, which the compiler would not inline into the
+/// traversal loops: once a method is inlined into the x86-64-v3 copy, its intrinsic is.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug)]
 pub struct Avx(());
@@ -167,60 +180,44 @@ pub struct Avx(());
 #[cfg(target_arch = "x86_64")]
 impl Lanes for Avx {
     const WIDTH: usize = 8;
+    type F8 = std::arch::x86_64::__m256;
 
-    /// The same operations as [`Sse`]'s, eight lanes per instruction (`vminps`/`vmaxps` return
-    /// the second operand on NaN, like `minps`/`maxps`). The intrinsics are called directly,
-    /// not through a `#[target_feature]` function, which the compiler would not inline into the
-    /// traversal loops: once this method is inlined into the x86-64-v3 copy, each of them is.
+    // SAFETY (every method): an `Avx` exists only on a CPU with AVX (see the type); the loads
+    // and stores access eight contiguous `f32`s, which unaligned loads and stores may.
     #[inline(always)]
-    fn enter_boxes(
-        self,
-        b: &[[f32; 8]; 6],
-        origin: Vec3A,
-        inv_dir: Vec3A,
-        widen: f32,
-        t_max: f32,
-    ) -> (u32, [f32; 8]) {
-        use std::arch::x86_64::{
-            _CMP_LE_OQ, _mm256_cmp_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_min_ps,
-            _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_storeu_ps,
-            _mm256_sub_ps,
-        };
-        // SAFETY: an `Avx` exists only on a CPU with AVX (see the type), and every row of `b`
-        // and `out` is eight contiguous `f32`s, which unaligned loads and stores may access.
-        unsafe {
-            macro_rules! slab {
-                ($axis:expr) => {{
-                    let o = _mm256_set1_ps(origin[$axis]);
-                    let inv = _mm256_set1_ps(inv_dir[$axis]);
-                    let t0 =
-                        _mm256_mul_ps(_mm256_sub_ps(_mm256_loadu_ps(b[$axis].as_ptr()), o), inv);
-                    let t1 = _mm256_mul_ps(
-                        _mm256_sub_ps(_mm256_loadu_ps(b[3 + $axis].as_ptr()), o),
-                        inv,
-                    );
-                    (_mm256_min_ps(t0, t1), _mm256_max_ps(t0, t1))
-                }};
-            }
-            let (nx, fx) = slab!(0);
-            let (ny, fy) = slab!(1);
-            let (nz, fz) = slab!(2);
-            let near = _mm256_max_ps(
-                _mm256_max_ps(_mm256_max_ps(nx, ny), nz),
-                _mm256_setzero_ps(),
-            );
-            let far = _mm256_min_ps(
-                _mm256_mul_ps(
-                    _mm256_min_ps(_mm256_min_ps(fx, fy), fz),
-                    _mm256_set1_ps(widen),
-                ),
-                _mm256_set1_ps(t_max),
-            );
-            let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near, far)) as u32;
-            let mut out = [0.0f32; 8];
-            _mm256_storeu_ps(out.as_mut_ptr(), near);
-            (mask, out)
-        }
+    fn load(self, row: &[f32; 8]) -> Self::F8 {
+        unsafe { std::arch::x86_64::_mm256_loadu_ps(row.as_ptr()) }
+    }
+    #[inline(always)]
+    fn splat(self, x: f32) -> Self::F8 {
+        unsafe { std::arch::x86_64::_mm256_set1_ps(x) }
+    }
+    #[inline(always)]
+    fn sub(self, a: Self::F8, b: Self::F8) -> Self::F8 {
+        unsafe { std::arch::x86_64::_mm256_sub_ps(a, b) }
+    }
+    #[inline(always)]
+    fn mul(self, a: Self::F8, b: Self::F8) -> Self::F8 {
+        unsafe { std::arch::x86_64::_mm256_mul_ps(a, b) }
+    }
+    #[inline(always)]
+    fn min(self, a: Self::F8, b: Self::F8) -> Self::F8 {
+        unsafe { std::arch::x86_64::_mm256_min_ps(a, b) }
+    }
+    #[inline(always)]
+    fn max(self, a: Self::F8, b: Self::F8) -> Self::F8 {
+        unsafe { std::arch::x86_64::_mm256_max_ps(a, b) }
+    }
+    #[inline(always)]
+    fn le_mask(self, a: Self::F8, b: Self::F8) -> u32 {
+        use std::arch::x86_64::{_CMP_LE_OQ, _mm256_cmp_ps, _mm256_movemask_ps};
+        unsafe { _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(a, b)) as u32 }
+    }
+    #[inline(always)]
+    fn to_array(self, a: Self::F8) -> [f32; 8] {
+        let mut out = [0.0f32; 8];
+        unsafe { std::arch::x86_64::_mm256_storeu_ps(out.as_mut_ptr(), a) };
+        out
     }
 }
 

@@ -120,7 +120,26 @@ impl RayQuery {
         if self.axis_parallel {
             return self.enter_boxes_axis_parallel(b, t_max);
         }
-        lanes.enter_boxes(b, self.origin, self.inv_dir, 1.0 + 2.0 * GAMMA3, t_max)
+        let l = lanes;
+        let (nx, fx) = self.slab(l, b, 0);
+        let (ny, fy) = self.slab(l, b, 1);
+        let (nz, fz) = self.slab(l, b, 2);
+        let near = l.max(l.max(l.max(nx, ny), nz), l.splat(0.0));
+        let far = l.min(
+            l.mul(l.min(l.min(fx, fy), fz), l.splat(1.0 + 2.0 * GAMMA3)),
+            l.splat(t_max),
+        );
+        (l.le_mask(near, far), l.to_array(near))
+    }
+
+    /// The near and far distances of the eight boxes' slabs on `axis`. Always inlined, not a
+    /// closure: the AVX copy's intrinsics are inlined only where every call above them is.
+    #[inline(always)]
+    fn slab<W: Lanes>(&self, l: W, b: &[[f32; 8]; 6], axis: usize) -> (W::F8, W::F8) {
+        let (o, inv) = (l.splat(self.origin[axis]), l.splat(self.inv_dir[axis]));
+        let t0 = l.mul(l.sub(l.load(&b[axis]), o), inv);
+        let t1 = l.mul(l.sub(l.load(&b[3 + axis]), o), inv);
+        (l.min(t0, t1), l.max(t0, t1))
     }
 
     /// [`RayQuery::enter_boxes`] for rays with a zero direction component: box by box.
