@@ -56,6 +56,9 @@ struct Emitter {
     index: u32,
     area: f32,
     material: u32,
+    /// Centroid of a triangle emitter's world-space vertices (zero for spheres), for the
+    /// choice of strategy.
+    centroid: Vec3,
 }
 
 /// A point sampled on an emitter.
@@ -124,6 +127,12 @@ fn triangle_area([a, b, c]: [Vec3; 3]) -> f32 {
     0.5 * (b - a).cross(c - a).length()
 }
 
+/// Centroid of triangle `[a, b, c]`.
+#[inline]
+fn centroid([a, b, c]: [Vec3; 3]) -> Vec3 {
+    (a + b + c) * (1.0 / 3.0)
+}
+
 impl LightSet {
     /// Collects the emitters of `geometry` given each owner's material: cost linear in the
     /// number of primitives and emitting mesh triangles.
@@ -149,29 +158,34 @@ impl LightSet {
         };
         let mut powers: Vec<f64> = Vec::new();
         // Adds an emitter, returning its index; one of no (or no finite) power is never picked.
-        let mut add =
-            |set: &mut Self, kind: HitKind, index: usize, area: f32, (material, power)| {
-                let p = f64::from(area) * f64::from(power);
-                powers.push(if p > 0.0 && p.is_finite() { p } else { 0.0 });
-                set.emitters.push(Emitter {
-                    kind,
-                    index: index as u32,
-                    area,
-                    material,
-                });
-                (set.emitters.len() - 1) as u32
-            };
+        let mut add = |set: &mut Self,
+                       (kind, index): (HitKind, usize),
+                       (area, centroid): (f32, Vec3),
+                       (material, power)| {
+            let p = f64::from(area) * f64::from(power);
+            powers.push(if p > 0.0 && p.is_finite() { p } else { 0.0 });
+            set.emitters.push(Emitter {
+                kind,
+                index: index as u32,
+                area,
+                material,
+                centroid,
+            });
+            (set.emitters.len() - 1) as u32
+        };
         for (i, &owner) in geometry.sphere_owner.iter().enumerate() {
             if let Some(emission) = power_of(owner) {
                 let (_, r) = geometry.spheres.get(i);
                 let area = 4.0 * std::f32::consts::PI * r * r;
-                set.sphere_emitter[i] = add(&mut set, HitKind::Sphere, i, area, emission);
+                let shape = (area, Vec3::ZERO);
+                set.sphere_emitter[i] = add(&mut set, (HitKind::Sphere, i), shape, emission);
             }
         }
         for (i, &owner) in geometry.triangle_owner.iter().enumerate() {
             if let Some(emission) = power_of(owner) {
-                let area = triangle_area(geometry.triangles.get(i));
-                set.triangle_emitter[i] = add(&mut set, HitKind::Triangle, i, area, emission);
+                let v = geometry.triangles.get(i);
+                let shape = (triangle_area(v), centroid(v));
+                set.triangle_emitter[i] = add(&mut set, (HitKind::Triangle, i), shape, emission);
             }
         }
         for i in 0..geometry.instances.len() {
@@ -183,9 +197,14 @@ impl LightSet {
             // emitter by offset.
             set.instance_emitter[i] = set.emitters.len() as u32;
             for t in 0..inst.blas.len() as u32 {
-                let area = triangle_area(geometry.instances.world_triangle(i as u32, t));
+                let v = geometry.instances.world_triangle(i as u32, t);
                 let kind = HitKind::Instance { triangle: t };
-                add(&mut set, kind, i, area, emission);
+                add(
+                    &mut set,
+                    (kind, i),
+                    (triangle_area(v), centroid(v)),
+                    emission,
+                );
             }
         }
         let total: f64 = powers.iter().sum();
@@ -261,14 +280,13 @@ impl LightSet {
                 }
             }
             HitKind::Triangle | HitKind::Instance { .. } => {
-                let v = Self::vertices(geometry, e);
                 // Far from the shading point (area / distance² small), area sampling's density
                 // hardly varies over the triangle: the spherical construction would cost more
                 // than it saves.
-                let centroid = (v[0] + v[1] + v[2]) * (1.0 / 3.0);
-                if e.area < SPHERICAL_MIN_AREA_RATIO * (centroid - p_ref).length_squared() {
+                if e.area < SPHERICAL_MIN_AREA_RATIO * (e.centroid - p_ref).length_squared() {
                     return Strategy::Area;
                 }
+                let v = Self::vertices(geometry, e);
                 let solid_angle = triangle_solid_angle(v, p_ref);
                 if (SPHERICAL_MIN..=SPHERICAL_MAX).contains(&solid_angle) {
                     Strategy::Spherical {
@@ -363,7 +381,7 @@ impl LightSet {
                 } else {
                     let [a, b, c] = geometry.triangles.get(i);
                     let [ta, tb, tc] = geometry.triangle_uv[i];
-                    let n = (b - a).cross(c - a).normalize();
+                    let n = geometry.triangle_normal[i];
                     let err = gamma(7.0) * ((b0 * a).abs() + (b1 * b).abs() + (b2 * c).abs());
                     (
                         b0 * a + b1 * b + b2 * c,

@@ -61,6 +61,12 @@ pub enum Primitive {
     },
 }
 
+/// The unit geometric normal of triangle `[a, b, c]`: `(b − a) × (c − a)`, normalised.
+#[inline]
+pub fn triangle_normal([a, b, c]: [Vec3; 3]) -> Vec3 {
+    (b - a).cross(c - a).normalize()
+}
+
 /// The closest-hit leaf test over triangles, as a [`Leaf`] whose test is compiled into the
 /// traversal loop: records the closest triangle hit (slot and hit) in `closest`.
 struct ClosestTriangle<'a, L: Layout> {
@@ -243,6 +249,9 @@ pub struct Geometry<L: Layout = DefaultLayout> {
     pub triangle_owner: Vec<u32>,
     /// Texture coordinates per triangle vertex.
     pub triangle_uv: Vec<[Vec2; 3]>,
+    /// Unit geometric normal per triangle, [`triangle_normal`] of its vertices: computed once
+    /// here rather than at every hit and every light sample.
+    pub triangle_normal: Vec<Vec3>,
     /// BVH over the triangles.
     pub triangle_bvh: Bvh,
     /// Infinite planes.
@@ -329,11 +338,13 @@ impl<L: Layout> Geometry<L> {
         g.triangles.reserve(triangles.len());
         g.triangle_owner.reserve(triangles.len());
         g.triangle_uv.reserve(triangles.len());
+        g.triangle_normal.reserve(triangles.len());
         for &i in &plan.triangle_order {
             if let (owner, &Primitive::Triangle { p, uv }) = triangles[i as usize] {
                 g.triangles.push(p);
                 g.triangle_owner.push(owner);
                 g.triangle_uv.push(uv);
+                g.triangle_normal.push(triangle_normal(p));
             }
         }
         g
@@ -360,6 +371,7 @@ impl<L: Layout> Geometry<L> {
             triangles,
             triangle_owner: self.triangle_owner.clone(),
             triangle_uv: self.triangle_uv.clone(),
+            triangle_normal: self.triangle_normal.clone(),
             triangle_bvh: self.triangle_bvh.clone(),
             planes: self.planes.clone(),
             instances: self.instances.clone(),
@@ -552,7 +564,7 @@ impl<L: Layout> Geometry<L> {
                 let [p0, p1, p2] = self.triangles.get(i);
                 let b0 = 1.0 - hit.b1 - hit.b2;
                 let [t0, t1, t2] = self.triangle_uv[i];
-                let n = (p1 - p0).cross(p2 - p0).normalize();
+                let n = self.triangle_normal[i];
                 Surface {
                     p: b0 * p0 + hit.b1 * p1 + hit.b2 * p2,
                     n,
