@@ -195,10 +195,10 @@ const CACHED_DIMENSIONS: usize = 32;
 /// coordinates' scrambles.
 #[derive(Clone, Copy, Debug, Default)]
 struct DimensionSeeds {
-    shuffle: Scramble,
+    shuffle: u32,
     shuffle_zero: u32,
-    x: Scramble,
-    y: Scramble,
+    x: u32,
+    y: u32,
 }
 
 impl DimensionSeeds {
@@ -207,12 +207,12 @@ impl DimensionSeeds {
     fn derive(pixel_seed: u64, dimension: u32) -> Self {
         let a = mix64(pixel_seed ^ u64::from(dimension).wrapping_mul(0x9e37_79b9_7f4a_7c15));
         let b = mix64(a);
-        let shuffle = Scramble::new(a as u32);
+        let shuffle = a as u32;
         Self {
             shuffle,
             shuffle_zero: laine_karras(0, shuffle),
-            x: Scramble::new((a >> 32) as u32),
-            y: Scramble::new(b as u32),
+            x: (a >> 32) as u32,
+            y: b as u32,
         }
     }
 }
@@ -279,30 +279,13 @@ fn pascal_reversed(reversed: u32) -> u32 {
         ^ PASCAL_REVERSED[3][usize::from(b3)]
 }
 
-/// The seed of a [`laine_karras`] permutation, with the odd multiplier it derives taken once.
-#[derive(Clone, Copy, Debug, Default)]
-struct Scramble {
-    seed: u32,
-    odd: u32,
-}
-
-impl Scramble {
-    #[inline]
-    fn new(seed: u32) -> Self {
-        Self {
-            seed,
-            odd: (seed >> 16) | 1,
-        }
-    }
-}
-
 /// Laine–Karras permutation with Vegdahl's constants: bit `j` of the result depends only on
 /// bits `0..=j` of `x`, so applied to bit-reversed values it is a nested uniform scramble.
 #[inline]
-fn laine_karras(mut x: u32, s: Scramble) -> u32 {
+fn laine_karras(mut x: u32, seed: u32) -> u32 {
     x ^= x.wrapping_mul(0x3d20_adea);
-    x = x.wrapping_add(s.seed);
-    x = x.wrapping_mul(s.odd);
+    x = x.wrapping_add(seed);
+    x = x.wrapping_mul((seed >> 16) | 1);
     x ^= x.wrapping_mul(0x0552_6c56);
     x ^= x.wrapping_mul(0x53a2_2864);
     x
@@ -311,7 +294,7 @@ fn laine_karras(mut x: u32, s: Scramble) -> u32 {
 /// Owen scrambling of the 32-bit fraction `x`: each bit flipped by a hash of the bits above it.
 #[cfg(test)]
 fn owen(x: u32, seed: u32) -> u32 {
-    laine_karras(x.reverse_bits(), Scramble::new(seed)).reverse_bits()
+    laine_karras(x.reverse_bits(), seed).reverse_bits()
 }
 
 /// A nested permutation of sample indices that maps `[0, 2ᵏ)` onto itself for every `k`: the
@@ -319,7 +302,6 @@ fn owen(x: u32, seed: u32) -> u32 {
 /// that do not depend on the index (those of the zero bits above its top bit) taken back out.
 #[cfg(test)]
 fn shuffle(index: u32, seed: u32) -> u32 {
-    let seed = Scramble::new(seed);
     (laine_karras(index.reverse_bits(), seed) ^ laine_karras(0, seed)).reverse_bits()
 }
 
@@ -334,7 +316,7 @@ fn shuffle_reversed(index_reversed: u32, seeds: &DimensionSeeds) -> u32 {
 /// Owen-scrambled van der Corput of the shuffled index given bit-reversed: `owen(vdc(i)) =
 /// reverse(lk(i))`, as a 32-bit fraction.
 #[inline]
-fn scrambled_vdc(i_reversed: u32, seed: Scramble) -> u32 {
+fn scrambled_vdc(i_reversed: u32, seed: u32) -> u32 {
     laine_karras(i_reversed.reverse_bits(), seed).reverse_bits()
 }
 
@@ -484,10 +466,10 @@ mod tests {
             let mut s = p.start_sample(sample);
             s.seek(dimension);
             let seeds = s.dimension_seeds();
-            let i = shuffle(sample, seeds.shuffle.seed);
+            let i = shuffle(sample, seeds.shuffle);
             let expected = Vec2::new(
-                to_unit(owen(i.reverse_bits(), seeds.x.seed)),
-                to_unit(owen(sobol_pascal(i), seeds.y.seed)),
+                to_unit(owen(i.reverse_bits(), seeds.x)),
+                to_unit(owen(sobol_pascal(i), seeds.y)),
             );
             s.seek(dimension);
             assert_eq!(
