@@ -142,6 +142,14 @@ impl Bvh {
     /// Builds a BVH over primitive boxes. Returns it with `order`: slot `i` of the BVH holds
     /// input primitive `order[i]`, so the caller must permute its primitive arrays by `order`.
     pub fn build(bounds: &[Bounds]) -> (Self, Vec<u32>) {
+        Self::build_groups(bounds, |_| 1)
+    }
+
+    /// Builds a BVH over groups of primitives that a leaf never splits: group `g` has box
+    /// `bounds[g]` and `size(g)` slots. Returns it with the group `order`: the BVH's slots hold
+    /// the primitives of group `order[0]`, then those of `order[1]`, and so on, so a leaf's slot
+    /// range covers whole groups.
+    pub fn build_groups(bounds: &[Bounds], size: impl Fn(usize) -> u32) -> (Self, Vec<u32>) {
         if bounds.is_empty() {
             return (Self::default(), Vec::new());
         }
@@ -150,8 +158,24 @@ impl Bvh {
             .map(|&(min, max)| Aabb::new(min.into(), max.into()))
             .collect();
         let mut unused = std::time::Duration::ZERO;
-        let bvh = obvhs::bvh2::builder::build_bvh2(&aabbs, BUILD_PARAMS, &mut unused);
+        let mut bvh = obvhs::bvh2::builder::build_bvh2(&aabbs, BUILD_PARAMS, &mut unused);
         let order = bvh.primitive_indices.clone();
+        // The leaves index groups in BVH order; make them slot ranges.
+        let mut first_slot = Vec::with_capacity(order.len() + 1);
+        first_slot.push(0u32);
+        for &g in &order {
+            first_slot.push(first_slot[first_slot.len() - 1] + size(g as usize));
+        }
+        if first_slot.len() - 1 != first_slot[first_slot.len() - 1] as usize {
+            for node in bvh.nodes.iter_mut().filter(|n| n.is_leaf()) {
+                let (first, end) = (
+                    node.first_index as usize,
+                    (node.first_index + node.prim_count) as usize,
+                );
+                node.first_index = first_slot[first];
+                node.prim_count = first_slot[end] - first_slot[first];
+            }
+        }
         let mut wide = Vec::new();
         let depth = if bvh.nodes.first().is_some_and(|root| !root.is_leaf()) {
             collapse(&bvh, 0, &mut wide).1
@@ -359,6 +383,45 @@ mod tests {
         let mut sorted = order.clone();
         sorted.sort_unstable();
         assert_eq!(sorted, (0..1000).collect::<Vec<u32>>());
+        assert!(bvh.node_count() > 1);
+    }
+
+    #[test]
+    fn a_group_is_never_split_between_leaves_and_every_slot_is_in_one() {
+        // Groups of one to three slots, as for quads (two triangles) among single triangles.
+        let sizes: Vec<u32> = (0..500).map(|i| 1 + (i * 7 % 3)).collect();
+        let bounds: Vec<Bounds> = (0..sizes.len())
+            .map(|i| {
+                let c = Vec3::new((i % 8) as f32, (i / 8 % 8) as f32, (i / 64) as f32);
+                (c, c + Vec3::splat(0.5))
+            })
+            .collect();
+        let (bvh, order) = Bvh::build_groups(&bounds, |g| sizes[g]);
+        let mut sorted = order.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..sizes.len() as u32).collect::<Vec<u32>>());
+        // Slot ranges of the groups in BVH order.
+        let mut start = 0;
+        let ranges: Vec<Range<usize>> = order
+            .iter()
+            .map(|&g| {
+                let r = start..start + sizes[g as usize] as usize;
+                start = r.end;
+                r
+            })
+            .collect();
+        let mut covered = vec![0u32; start];
+        for leaf in bvh.leaves() {
+            for s in leaf.clone() {
+                covered[s] += 1;
+            }
+            for r in &ranges {
+                let inside = r.start >= leaf.start && r.end <= leaf.end;
+                let outside = r.end <= leaf.start || r.start >= leaf.end;
+                assert!(inside || outside, "leaf {leaf:?} splits group {r:?}");
+            }
+        }
+        assert!(covered.iter().all(|&c| c == 1));
         assert!(bvh.node_count() > 1);
     }
 

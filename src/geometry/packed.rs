@@ -14,7 +14,7 @@ use std::sync::Arc;
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use super::aabb::RayQuery;
-use super::bvh::{Bvh, Leaf};
+use super::bvh::{Bounds, Bvh, Leaf};
 use super::instance::{InstanceSet, MeshBlas};
 pub use super::layout::{
     Aos, DefaultLayout, Hybrid, Layout, LayoutKind, Soa, SoaSimd, Sphere, SphereAos, SphereSoa,
@@ -59,6 +59,14 @@ pub enum Primitive {
         /// Object to world.
         world_from_object: Affine3A,
     },
+}
+
+/// Whether triangles `p` and `q` are the halves `(a, b, c)` and `(a, c, d)` of a quad: `q`
+/// starts with `p`'s first and last vertex, bit for bit.
+#[inline]
+fn is_quad_pair(p: [Vec3; 3], q: [Vec3; 3]) -> bool {
+    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+    bits(q[0]) == bits(p[0]) && bits(q[1]) == bits(p[2])
 }
 
 /// The unit geometric normal of triangle `[a, b, c]`: `(b − a) × (c − a)`, normalised.
@@ -204,19 +212,46 @@ impl BvhPlan {
     pub fn new(primitives: &[(u32, Primitive)]) -> Self {
         let mut spheres = Vec::new();
         let mut triangles = Vec::new();
-        for (_, prim) in primitives {
+        for (owner, prim) in primitives {
             match *prim {
                 Primitive::Sphere { center, radius, .. } => {
                     spheres.push((center - Vec3::splat(radius), center + Vec3::splat(radius)));
                 }
-                Primitive::Triangle { p, .. } => {
-                    triangles.push((p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2])));
-                }
+                Primitive::Triangle { p, .. } => triangles.push((*owner, p)),
                 Primitive::Plane { .. } | Primitive::Instance { .. } => {}
             }
         }
         let (sphere_bvh, sphere_order) = Bvh::build(&spheres);
-        let (triangle_bvh, triangle_order) = Bvh::build(&triangles);
+        // A quad's two triangles (a, b, c) and (a, c, d) are one group of the BVH, so they
+        // always share a leaf: whatever enters the quad's box tests both, in one leaf visit.
+        let mut groups: Vec<(u32, Bounds)> = Vec::with_capacity(triangles.len());
+        let mut i = 0;
+        while i < triangles.len() {
+            let (owner, p) = triangles[i];
+            let mut bounds = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+            let paired = triangles
+                .get(i + 1)
+                .is_some_and(|&(o, q)| o == owner && is_quad_pair(p, q));
+            if paired {
+                let d = triangles[i + 1].1[2];
+                bounds = (bounds.0.min(d), bounds.1.max(d));
+            }
+            groups.push((i as u32, bounds));
+            i += if paired { 2 } else { 1 };
+        }
+        let size = |g: usize| {
+            let end = groups.get(g + 1).map_or(triangles.len() as u32, |n| n.0);
+            end - groups[g].0
+        };
+        let bounds: Vec<Bounds> = groups.iter().map(|g| g.1).collect();
+        let (triangle_bvh, group_order) = Bvh::build_groups(&bounds, size);
+        let triangle_order = group_order
+            .iter()
+            .flat_map(|&g| {
+                let first = groups[g as usize].0;
+                first..first + size(g as usize)
+            })
+            .collect();
         Self {
             sphere_bvh,
             sphere_order,
