@@ -166,15 +166,13 @@ impl Bvh {
         for &g in &order {
             first_slot.push(first_slot[first_slot.len() - 1] + size(g as usize));
         }
-        if first_slot.len() - 1 != first_slot[first_slot.len() - 1] as usize {
-            for node in bvh.nodes.iter_mut().filter(|n| n.is_leaf()) {
-                let (first, end) = (
-                    node.first_index as usize,
-                    (node.first_index + node.prim_count) as usize,
-                );
-                node.first_index = first_slot[first];
-                node.prim_count = first_slot[end] - first_slot[first];
-            }
+        for node in bvh.nodes.iter_mut().filter(|n| n.is_leaf()) {
+            let (first, end) = (
+                node.first_index as usize,
+                (node.first_index + node.prim_count) as usize,
+            );
+            node.first_index = first_slot[first];
+            node.prim_count = first_slot[end] - first_slot[first];
         }
         let mut wide = Vec::new();
         let depth = if bvh.nodes.first().is_some_and(|root| !root.is_leaf()) {

@@ -224,33 +224,29 @@ impl BvhPlan {
         let (sphere_bvh, sphere_order) = Bvh::build(&spheres);
         // A quad's two triangles (a, b, c) and (a, c, d) are one group of the BVH, so they
         // always share a leaf: whatever enters the quad's box tests both, in one leaf visit.
-        let mut groups: Vec<(u32, Bounds)> = Vec::with_capacity(triangles.len());
+        let mut groups: Vec<Range<u32>> = Vec::with_capacity(triangles.len());
+        let mut bounds: Vec<Bounds> = Vec::with_capacity(triangles.len());
         let mut i = 0;
         while i < triangles.len() {
             let (owner, p) = triangles[i];
-            let mut bounds = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
-            let paired = triangles
-                .get(i + 1)
-                .is_some_and(|&(o, q)| o == owner && is_quad_pair(p, q));
-            if paired {
-                let d = triangles[i + 1].1[2];
-                bounds = (bounds.0.min(d), bounds.1.max(d));
+            let mut b = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+            let mut end = i + 1;
+            if let Some(&(o, q)) = triangles.get(i + 1)
+                && o == owner
+                && is_quad_pair(p, q)
+            {
+                b = (b.0.min(q[2]), b.1.max(q[2]));
+                end += 1;
             }
-            groups.push((i as u32, bounds));
-            i += if paired { 2 } else { 1 };
+            groups.push(i as u32..end as u32);
+            bounds.push(b);
+            i = end;
         }
-        let size = |g: usize| {
-            let end = groups.get(g + 1).map_or(triangles.len() as u32, |n| n.0);
-            end - groups[g].0
-        };
-        let bounds: Vec<Bounds> = groups.iter().map(|g| g.1).collect();
-        let (triangle_bvh, group_order) = Bvh::build_groups(&bounds, size);
+        let (triangle_bvh, group_order) =
+            Bvh::build_groups(&bounds, |g| groups[g].end - groups[g].start);
         let triangle_order = group_order
             .iter()
-            .flat_map(|&g| {
-                let first = groups[g as usize].0;
-                first..first + size(g as usize)
-            })
+            .flat_map(|&g| groups[g as usize].clone())
             .collect();
         Self {
             sphere_bvh,
