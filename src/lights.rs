@@ -56,8 +56,8 @@ struct Emitter {
     index: u32,
     area: f32,
     material: u32,
-    /// Centroid of a triangle emitter's world-space vertices (zero for spheres), for the
-    /// choice of strategy.
+    /// A sphere's centre, or the centroid of a triangle's world-space vertices: where the
+    /// choice of strategy measures the distance from.
     centroid: Vec3,
 }
 
@@ -127,10 +127,17 @@ fn triangle_area([a, b, c]: [Vec3; 3]) -> f32 {
     0.5 * (b - a).cross(c - a).length()
 }
 
-/// Centroid of triangle `[a, b, c]`.
-#[inline]
-fn centroid([a, b, c]: [Vec3; 3]) -> Vec3 {
-    (a + b + c) * (1.0 / 3.0)
+impl Emitter {
+    /// The triangle emitter `(kind, index)` with world-space vertices `v`.
+    fn triangle(kind: HitKind, index: usize, v: [Vec3; 3], material: u32) -> Self {
+        Self {
+            kind,
+            index: index as u32,
+            area: triangle_area(v),
+            material,
+            centroid: (v[0] + v[1] + v[2]) * (1.0 / 3.0),
+        }
+    }
 }
 
 impl LightSet {
@@ -158,39 +165,35 @@ impl LightSet {
         };
         let mut powers: Vec<f64> = Vec::new();
         // Adds an emitter, returning its index; one of no (or no finite) power is never picked.
-        let mut add = |set: &mut Self,
-                       (kind, index): (HitKind, usize),
-                       (area, centroid): (f32, Vec3),
-                       (material, power)| {
-            let p = f64::from(area) * f64::from(power);
+        let mut add = |set: &mut Self, emitter: Emitter, power: f32| {
+            let p = f64::from(emitter.area) * f64::from(power);
             powers.push(if p > 0.0 && p.is_finite() { p } else { 0.0 });
-            set.emitters.push(Emitter {
-                kind,
-                index: index as u32,
-                area,
-                material,
-                centroid,
-            });
+            set.emitters.push(emitter);
             (set.emitters.len() - 1) as u32
         };
         for (i, &owner) in geometry.sphere_owner.iter().enumerate() {
-            if let Some(emission) = power_of(owner) {
-                let (_, r) = geometry.spheres.get(i);
-                let area = 4.0 * std::f32::consts::PI * r * r;
-                let shape = (area, Vec3::ZERO);
-                set.sphere_emitter[i] = add(&mut set, (HitKind::Sphere, i), shape, emission);
+            if let Some((material, power)) = power_of(owner) {
+                let (c, r) = geometry.spheres.get(i);
+                let emitter = Emitter {
+                    kind: HitKind::Sphere,
+                    index: i as u32,
+                    area: 4.0 * std::f32::consts::PI * r * r,
+                    material,
+                    centroid: c,
+                };
+                set.sphere_emitter[i] = add(&mut set, emitter, power);
             }
         }
         for (i, &owner) in geometry.triangle_owner.iter().enumerate() {
-            if let Some(emission) = power_of(owner) {
+            if let Some((material, power)) = power_of(owner) {
                 let v = geometry.triangles.get(i);
-                let shape = (triangle_area(v), centroid(v));
-                set.triangle_emitter[i] = add(&mut set, (HitKind::Triangle, i), shape, emission);
+                let emitter = Emitter::triangle(HitKind::Triangle, i, v, material);
+                set.triangle_emitter[i] = add(&mut set, emitter, power);
             }
         }
         for i in 0..geometry.instances.len() {
             let inst = geometry.instances.get(i);
-            let Some(emission) = power_of(inst.owner) else {
+            let Some((material, power)) = power_of(inst.owner) else {
                 continue;
             };
             // The instance's triangles take consecutive emitter indices, so a hit finds its
@@ -199,12 +202,7 @@ impl LightSet {
             for t in 0..inst.blas.len() as u32 {
                 let v = geometry.instances.world_triangle(i as u32, t);
                 let kind = HitKind::Instance { triangle: t };
-                add(
-                    &mut set,
-                    (kind, i),
-                    (triangle_area(v), centroid(v)),
-                    emission,
-                );
+                add(&mut set, Emitter::triangle(kind, i, v, material), power);
             }
         }
         let total: f64 = powers.iter().sum();
