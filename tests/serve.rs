@@ -395,8 +395,10 @@ fn a_save_streams_a_pass_and_a_broken_save_an_error_while_the_image_stays() {
 
 #[test]
 fn idle_and_stalled_clients_do_not_hold_up_the_render() {
-    // Eight passes (preview, 1, 2, …, 64 spp) of a 128² image: 196 KiB per /image.f32.
-    let rondo = Rondo::start("stalled", &scene(RED, 128, 64), &[]);
+    // Eight passes (preview, 1, 2, …, 64 spp) of a 256² image: 768 KiB per /image.f32. The
+    // image is large enough that each reload renders for several of the feed's 50 ms progress
+    // ticks (at 128² a fast machine finished a reload between two ticks).
+    let rondo = Rondo::start("stalled", &scene(RED, 256, 64), &[]);
     let events = rondo.events();
     events.done(0);
     // Twenty event streams that never read a byte.
@@ -407,7 +409,7 @@ fn idle_and_stalled_clients_do_not_hold_up_the_render() {
             s
         })
         .collect();
-    // And one client that asks for 100 images (20 MB, far more than loopback buffers hold) and
+    // And one client that asks for 100 images (79 MB, far more than loopback buffers hold) and
     // never reads: its connection's writer blocks for good.
     let mut stalled = TcpStream::connect(rondo.addr).expect("connect");
     let pipelined = "GET /image.f32 HTTP/1.1\r\nHost: localhost\r\n\r\n".repeat(100);
@@ -420,7 +422,7 @@ fn idle_and_stalled_clients_do_not_hold_up_the_render() {
     .expect("send");
 
     for (reload, wall) in [(1, BLUE), (2, GREEN), (3, RED)] {
-        rondo.save(&scene(wall, 128, 64));
+        rondo.save(&scene(wall, 256, 64));
         let (_, seen) = events.done(reload);
         let spp: Vec<u64> = seen
             .iter()
