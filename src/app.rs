@@ -180,6 +180,16 @@ impl Renderer {
         self.world.resource_mut::<PackedGeometry>().instancing = on;
     }
 
+    /// Whether meshes are placed as instances ([`Renderer::set_instancing`]).
+    pub fn instancing(&self) -> bool {
+        self.world.resource::<PackedGeometry>().instancing
+    }
+
+    /// Whether Russian roulette is on ([`Renderer::set_roulette`]).
+    pub fn roulette(&self) -> bool {
+        self.world.resource::<RenderControl>().roulette
+    }
+
     /// Turns Russian roulette on or off (on by default; both are unbiased).
     pub fn set_roulette(&mut self, on: bool) {
         let mut control = self.world.resource_mut::<RenderControl>();
