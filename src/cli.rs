@@ -2,7 +2,6 @@
 //! written, made before any work is done for them, the text of an error, and the exit codes.
 
 use std::error::Error;
-use std::fs::OpenOptions;
 use std::path::{Path, PathBuf};
 
 /// Exit status of a run that failed on its input: a scene, an image, an output path.
@@ -59,14 +58,13 @@ pub fn check_output_dir(dir: &Path) -> Result<(), OutputError> {
     probe(dir).map_err(|e| fail(format!("cannot create files in it: {e}")))
 }
 
-/// Creates and removes an empty file in `dir`.
+/// Creates and removes an empty file in `dir`, of an unpredictable name (as the temporaries of
+/// [`crate::output_file`]), so that nothing planted in `dir` can make the check fail.
 fn probe(dir: &Path) -> std::io::Result<()> {
-    let probe = dir.join(format!(".rondo-write-test.{}", std::process::id()));
-    OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&probe)?;
-    std::fs::remove_file(&probe)
+    tempfile::Builder::new()
+        .prefix(".rondo-write-test.")
+        .tempfile_in(dir)?
+        .close()
 }
 
 /// One line for an error and its causes, `outer: inner: …`, leaving out a cause whose text the

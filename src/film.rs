@@ -6,7 +6,6 @@
 //! split by sample ranges (threads, passes, processes, machines) and merged in any order gives
 //! the very same sums, hence the very same image, as one process rendering every sample.
 
-use std::io::{BufWriter, Write};
 use std::path::Path;
 
 use glam::Vec3;
@@ -245,7 +244,7 @@ fn encode_image(
             format!("{}: output must end in .png or .exr", path.display()),
         )
     })?;
-    write_file(path, sync, |out| match kind {
+    crate::output_file::write_file(path, sync, |out| match kind {
         OutputKind::Png => srgb8(width, height, sum, count)
             .write_to(out, ImageFormat::Png)
             .map_err(std::io::Error::other),
@@ -264,43 +263,8 @@ fn encode_image(
     })
 }
 
-/// Writes a file atomically: `encode` writes to a temporary file in the same directory, which is
-/// then synced and renamed over `path`, so a reader never sees a half-written file and a failed
-/// write leaves the old one in place.
-pub fn write_atomically(
-    path: &Path,
-    encode: impl FnOnce(&mut BufWriter<std::fs::File>) -> std::io::Result<()>,
-) -> std::io::Result<()> {
-    write_file(path, true, encode)
-}
-
-/// [`write_atomically`], with the sync before the rename only if `sync`.
-fn write_file(
-    path: &Path,
-    sync: bool,
-    encode: impl FnOnce(&mut BufWriter<std::fs::File>) -> std::io::Result<()>,
-) -> std::io::Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = path.file_name().unwrap_or_default().to_string_lossy();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let mut out = BufWriter::new(std::fs::File::create(&tmp)?);
-        encode(&mut out)?;
-        out.flush()?;
-        if sync {
-            out.get_ref().sync_all()?;
-        }
-        drop(out);
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
-}
+/// Writes a file atomically (moved to [`crate::output_file`]; kept here for its callers).
+pub use crate::output_file::write_atomically;
 
 #[cfg(test)]
 mod tests {

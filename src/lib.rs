@@ -17,6 +17,7 @@ pub mod film;
 pub mod geometry;
 pub mod lights;
 pub mod metrics;
+pub mod output_file;
 pub mod partial;
 pub mod render;
 pub mod scene;

@@ -312,7 +312,11 @@ impl RenderArgs {
 /// Parses the command line (clap exits with status 2 on a usage error) and runs it; any other
 /// error exits with status 1.
 fn main() {
-    if let Err(e) = run(Cli::parse()) {
+    let cli = Cli::parse();
+    // SIGINT, SIGTERM or SIGHUP in the middle of a write removes the temporary before exiting.
+    let installed = rondo::output_file::remove_temporaries_on_termination()
+        .context("cannot install the signal handler");
+    if let Err(e) = installed.and_then(|()| run(cli)) {
         eprintln!("error: {}", rondo::cli::error_text(e.as_ref()));
         std::process::exit(EXIT_INPUT);
     }
@@ -778,7 +782,9 @@ fn watch(options: WatchOptions, serve: Option<Option<String>>) -> Result<()> {
         None => None,
     };
     let stop = watch.stop_handle();
-    ctrlc::set_handler(move || stop.stop()).context("cannot install the Ctrl-C handler")?;
+    // The first SIGINT/SIGTERM ends the session after its current step (an image being written
+    // is finished); a second one exits at once, removing the temporary.
+    rondo::output_file::stop_on_termination(move || stop.stop());
     watch.run(|report| {
         if let Some(line) = report.line() {
             eprintln!("{line}");
@@ -810,8 +816,13 @@ fn bench_watch(scene: &Path, runs: usize, first_spp: u32, options: &RenderArgs) 
             );
         }
     }
-    let dir = std::env::temp_dir().join(format!("rondo-bench-watch-{}", std::process::id()));
-    std::fs::create_dir_all(&dir)?;
+    // A private directory of a fresh, unpredictable name (no planted files or symlinks),
+    // removed with its contents when dropped.
+    let temp = tempfile::Builder::new()
+        .prefix("rondo-bench-watch-")
+        .tempdir()
+        .context("cannot create a temporary directory")?;
+    let dir = temp.path().to_path_buf();
     let rows = time_edits(
         &dir,
         &original,
@@ -819,7 +830,7 @@ fn bench_watch(scene: &Path, runs: usize, first_spp: u32, options: &RenderArgs) 
         runs,
         options.watch_options(&dir.join("scene.ron"), &dir.join("out.png"), first_spp)?,
     );
-    std::fs::remove_dir_all(&dir).ok();
+    drop(temp);
     let rows = rows?;
     let stats = |v: &mut Vec<Duration>| {
         v.sort();

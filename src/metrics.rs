@@ -253,10 +253,15 @@ pub fn write_error_image(a: &Image, r: &Image, path: &Path) -> Result<f32, Metri
     let errors = pixel_errors(a, r).unwrap_or_default();
     let scale = quantile(&errors, 0.99);
     let picture = error_image(a, r, scale).unwrap_or_default();
-    picture.save(path).map_err(|source| MetricsError::Write {
+    let fail = |source| MetricsError::Write {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    let format = image::ImageFormat::from_path(path).map_err(fail)?;
+    crate::output_file::write_atomically(path, |out| {
+        picture.write_to(out, format).map_err(std::io::Error::other)
+    })
+    .map_err(|e| fail(image::ImageError::IoError(e)))?;
     Ok(scale)
 }
 

@@ -1494,8 +1494,11 @@ mod tests {
         // pass is cancelled by the next file event, and a reload of the same file that
         // therefore changes nothing itself. Its image is still of another scene than the last
         // one written (what the viewer's A/B keys on).
-        let dir = std::env::temp_dir().join(format!("rondo-watch-unit-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
+        let temp = tempfile::Builder::new()
+            .prefix("rondo-watch-unit-")
+            .tempdir()
+            .expect("temp dir");
+        let dir = temp.path();
         let scene = dir.join("scene.ron");
         let save = |colour: &str| {
             let text = format!(
@@ -1529,7 +1532,6 @@ mod tests {
         w.step(&mut out);
         render(&mut w, &mut out);
         drop(out);
-        std::fs::remove_dir_all(&dir).ok();
         let firsts: Vec<(u64, bool, bool)> = reports
             .iter()
             .filter_map(|r| match r {
@@ -1587,7 +1589,11 @@ mod tests {
         // The race behind it (seen in `watch_differential`, seed 14): a reload reads a prefab the
         // last scene did not use, the prefab's directory is deleted before the watcher knows the
         // file, so the deletion's events are dropped and the image shows a prefab that is gone.
-        let dir = std::env::temp_dir().join(format!("rondo-set-files-{}", std::process::id()));
+        let temp = tempfile::Builder::new()
+            .prefix("rondo-set-files-")
+            .tempdir()
+            .expect("temp dir");
+        let dir = temp.path();
         std::fs::create_dir_all(dir.join("prefabs")).expect("mkdir");
         let (scene, wall, door) = (
             dir.join("scene.ron"),
@@ -1621,6 +1627,5 @@ mod tests {
             w.set_files(&[scene.clone(), wall.clone()]).0,
             "a new file whose directory is gone: the missing directory is new to watch for"
         );
-        std::fs::remove_dir_all(&dir).expect("clean up");
     }
 }

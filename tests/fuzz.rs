@@ -9,7 +9,7 @@ mod common;
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use common::temp_dir;
@@ -58,7 +58,7 @@ const ALLOCATION_CAP: usize = 64 << 20;
 
 /// A scratch copy of `scenes/` (textures, meshes, prefabs and the scenes), so that mutated
 /// scenes resolve their relative paths as the originals do. Returns it with the scene texts.
-fn scratch_scenes(name: &str) -> (PathBuf, Vec<(String, Vec<u8>)>) {
+fn scratch_scenes(name: &str) -> (common::TestDir, Vec<(String, Vec<u8>)>) {
     let dir = temp_dir(name);
     let src = common::scenes_dir();
     let mut scenes = Vec::new();

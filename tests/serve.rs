@@ -45,7 +45,7 @@ fn scene(wall: &str, size: u32, spp: u32) -> String {
 /// argument names it); killed on drop.
 struct Rondo {
     child: Child,
-    dir: PathBuf,
+    dir: common::TestDir,
     scene: PathBuf,
     addr: SocketAddr,
     stderr: Receiver<String>,
@@ -115,7 +115,6 @@ impl Drop for Rondo {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
-        let _ = std::fs::remove_dir_all(&self.dir);
     }
 }
 

@@ -43,7 +43,7 @@ fn simple(wall: &str) -> String {
 
 /// A temporary directory with a scene and a running session, removed on drop.
 struct Fixture {
-    dir: PathBuf,
+    dir: common::TestDir,
     scene: PathBuf,
     out: PathBuf,
     session: Option<WatchSession>,
@@ -59,12 +59,7 @@ impl Fixture {
 
     /// Writes `files` (solid-colour PNGs) and `scene.ron`, and starts watching.
     fn open(name: &str, text: &str, files: &[(&str, [u8; 3])]) -> Self {
-        let nanos = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.as_nanos());
-        let dir =
-            std::env::temp_dir().join(format!("rondo-watch-{name}-{}-{nanos}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("create temp dir");
+        let dir = common::temp_dir(&format!("watch-{name}"));
         for (file, rgb) in files {
             write_png(&dir.join(file), *rgb);
         }
@@ -117,7 +112,7 @@ impl Fixture {
 
 impl Drop for Fixture {
     fn drop(&mut self) {
-        common::end_watch(self.session.take(), &self.dir);
+        common::end_watch(self.session.take());
     }
 }
 

@@ -15,7 +15,7 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 use rondo::watch::{Report, WatchOptions, WatchSession};
@@ -385,7 +385,7 @@ enum Shown {
 
 /// A watch session on a directory of its own, with the initial files.
 struct Bench {
-    dir: PathBuf,
+    dir: common::TestDir,
     session: Option<WatchSession>,
     shown: Shown,
     reports: Vec<String>,
@@ -393,12 +393,7 @@ struct Bench {
 
 impl Bench {
     fn new(name: &str) -> Self {
-        let nanos = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.as_nanos());
-        let dir =
-            std::env::temp_dir().join(format!("rondo-diff-{name}-{}-{nanos}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("create temp dir");
+        let dir = common::temp_dir(&format!("diff-{name}"));
         for (d, sub) in DIRS.iter().enumerate() {
             std::fs::create_dir(dir.join(sub)).expect("mkdir");
             let (file, bytes) = dir_file(d, 0);
@@ -491,7 +486,7 @@ impl Bench {
 
 impl Drop for Bench {
     fn drop(&mut self) {
-        common::end_watch(self.session.take(), &self.dir);
+        common::end_watch(self.session.take());
     }
 }
 

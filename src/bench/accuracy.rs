@@ -18,7 +18,6 @@
 //! is the method's cost of accuracy, and the ratio of two methods' `c` is their error ratio at
 //! equal time (its square, the time ratio at equal error).
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use crate::metrics::{ErrorMetrics, Image, MetricsError, compare};
@@ -323,7 +322,7 @@ pub fn write_csv(path: &Path, rows: &[AccuracyRow]) -> Result<(), AccuracyError>
             r.sampler
         );
     }
-    std::fs::write(path, text).map_err(write_error(path))
+    crate::output_file::write_bytes(path, text.as_bytes()).map_err(write_error(path))
 }
 
 /// The equal-time comparison as Markdown, one table per metric: per method its slope and
@@ -390,14 +389,18 @@ pub fn write_chart(
     metric: Metric,
     report: &AccuracyReport,
 ) -> Result<(), AccuracyError> {
-    draw_chart(path, title, metric, report).map_err(|e| AccuracyError::Write {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })
+    let mut svg = String::new();
+    draw_chart(&mut svg, title, metric, report)
+        .and_then(|()| Ok(crate::output_file::write_bytes(path, svg.as_bytes())?))
+        .map_err(|e| AccuracyError::Write {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })
 }
 
+/// Draws the chart of [`write_chart`] as SVG text into `svg`.
 fn draw_chart(
-    path: &Path,
+    svg: &mut String,
     title: &str,
     metric: Metric,
     report: &AccuracyReport,
@@ -419,7 +422,7 @@ fn draw_chart(
         // Everything exact: an empty frame with the legend says so.
         (t0, t1, e0, e1) = (0.01, 1.0, 1e-4, 1.0);
     }
-    let root = SVGBackend::new(path, (760, 520)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (760, 520)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 18))
@@ -537,16 +540,14 @@ pub fn run(
         &report,
     )?;
     let summary = options.out.join("summary.md");
-    let mut file = std::fs::File::create(&summary).map_err(write_error(&summary))?;
-    writeln!(
-        file,
-        "{}\n\nscene `{}`, reference `{}`\n\n{}",
+    let text = format!(
+        "{}\n\nscene `{}`, reference `{}`\n\n{}\n",
         title(Metric::Rmse),
         options.scene.display(),
         options.reference.display(),
         summary_markdown(&report)
-    )
-    .map_err(write_error(&summary))?;
+    );
+    crate::output_file::write_bytes(&summary, text.as_bytes()).map_err(write_error(&summary))?;
     Ok(report)
 }
 

@@ -93,6 +93,13 @@ where
 
 /// Writes the chart of `rows` to `path` (SVG).
 pub fn layout_chart(path: &Path, rows: &[Row]) -> Result<(), Box<dyn Error>> {
+    let mut svg = String::new();
+    draw_layout_chart(&mut svg, rows)?;
+    Ok(crate::output_file::write_bytes(path, svg.as_bytes())?)
+}
+
+/// Draws the chart of [`layout_chart`] as SVG text into `svg`.
+fn draw_layout_chart(svg: &mut String, rows: &[Row]) -> Result<(), Box<dyn Error>> {
     let counts: Vec<f64> = rows.iter().map(|r| r.count as f64).collect();
     let (x_min, x_max) = counts
         .iter()
@@ -103,7 +110,7 @@ pub fn layout_chart(path: &Path, rows: &[Row]) -> Result<(), Box<dyn Error>> {
     let x_range = (x_min / 1.5)..(x_max * 1.5);
 
     let height = 360 * WORKLOADS.len() as u32 + 50;
-    let root = SVGBackend::new(path, (1300, height)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (1300, height)).into_drawing_area();
     root.fill(&WHITE)?;
     let (title, body) = root.split_vertically(50);
     title.titled(

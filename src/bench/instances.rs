@@ -62,8 +62,13 @@ pub fn scene_text(mesh: &str, count: usize) -> String {
 /// Loads and renders a scene of `count` placements of the mesh at `mesh_path` in this process,
 /// with meshes instanced (`true`) or copied into the scene BVH (`false`).
 pub fn measure(mesh_path: &Path, count: usize, instancing: bool) -> Result<InstanceRun, String> {
-    let dir = std::env::temp_dir().join(format!("rondo-bench-instances-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    // A private directory of a fresh, unpredictable name (no planted files or symlinks),
+    // removed with its contents when dropped.
+    let temp = tempfile::Builder::new()
+        .prefix("rondo-bench-instances-")
+        .tempdir()
+        .map_err(|e| format!("cannot create a temporary directory: {e}"))?;
+    let dir = temp.path();
     let mesh =
         std::fs::canonicalize(mesh_path).map_err(|e| format!("{}: {e}", mesh_path.display()))?;
     let scene = dir.join("instances.ron");
@@ -82,7 +87,6 @@ pub fn measure(mesh_path: &Path, count: usize, instancing: bool) -> Result<Insta
         .mesh(&mesh)
         .map(|m| m.triangles.len() as u64)
         .unwrap_or(0);
-    let _ = std::fs::remove_dir_all(&dir);
     Ok(InstanceRun {
         count,
         scene_triangles: triangles * count as u64,

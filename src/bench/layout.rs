@@ -264,9 +264,9 @@ pub fn run(options: &Options) -> std::io::Result<Vec<Row>> {
         }
     }
     write_csv(options, &rows)?;
-    std::fs::write(
-        options.out.join("layout.md"),
-        markdown(options, &rows, &notes, started.elapsed()),
+    crate::output_file::write_bytes(
+        &options.out.join("layout.md"),
+        markdown(options, &rows, &notes, started.elapsed()).as_bytes(),
     )?;
     chart::layout_chart(&options.out.join("layout.svg"), &rows)
         .map_err(|e| std::io::Error::other(format!("chart: {e}")))?;
@@ -709,7 +709,7 @@ fn write_csv(options: &Options, rows: &[Row]) -> std::io::Result<()> {
             r.runs.len(),
         );
     }
-    std::fs::write(options.out.join("layout.csv"), csv)
+    crate::output_file::write_bytes(&options.out.join("layout.csv"), csv.as_bytes())
 }
 
 /// The model name of the first CPU, from `/proc/cpuinfo` where there is one.

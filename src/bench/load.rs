@@ -421,8 +421,13 @@ pub fn main(kinds: &[String], sizes: &[usize], watch: Option<usize>) -> Result<(
             known.join(", ")
         ));
     }
-    let dir = std::env::temp_dir().join(format!("rondo-bench-load-{}", std::process::id()));
-    let rows = run(kinds, sizes, &dir, |r| {
+    // A private directory of a fresh, unpredictable name: another user cannot plant files or
+    // symlinks where the scenes are written. Removed with its contents when dropped.
+    let temp = tempfile::Builder::new()
+        .prefix("rondo-bench-load-")
+        .tempdir()
+        .map_err(|e| format!("cannot create a temporary directory: {e}"))?;
+    let rows = run(kinds, sizes, &temp.path().join("load"), |r| {
         eprintln!(
             "{} {}: first image {:.1} ms CPU ({:.1} ms wall), check {:.1} ms CPU",
             r.kind,
@@ -432,10 +437,9 @@ pub fn main(kinds: &[String], sizes: &[usize], watch: Option<usize>) -> Result<(
             r.check.as_secs_f64() * 1e3
         );
     });
-    std::fs::remove_dir_all(&dir).ok();
     println!("{}", markdown(&rows?));
     if let Some(n) = watch {
-        let (cold, edits) = watch_edit(n, 5, &dir)?;
+        let (cold, edits) = watch_edit(n, 5, &temp.path().join("watch"))?;
         let ms = |(wall, cpu): &WallCpu| {
             format!(
                 "{:.0} ms ({:.0} ms CPU)",

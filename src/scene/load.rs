@@ -951,8 +951,11 @@ mod tests {
 
     #[test]
     fn an_unchanged_file_is_read_once() {
-        let dir = std::env::temp_dir().join(format!("rondo-cache-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("dir");
+        let temp = tempfile::Builder::new()
+            .prefix("rondo-cache-")
+            .tempdir()
+            .expect("dir");
+        let dir = temp.path();
         let path = dir.join("t.obj");
         std::fs::write(&path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").expect("write");
         let mut cache = AssetCache::default();
@@ -960,6 +963,6 @@ mod tests {
         let b = cache.mesh(&path).expect("mesh");
         assert!(Arc::ptr_eq(&a, &b));
         assert_eq!(cache.mesh_loads(), 1);
-        assert!(cache.mesh(&dir).is_err(), "a directory is not a mesh");
+        assert!(cache.mesh(dir).is_err(), "a directory is not a mesh");
     }
 }

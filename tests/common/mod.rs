@@ -8,12 +8,57 @@ use std::path::{Path, PathBuf};
 
 use rondo::{Film, Overrides, PassPlan, Renderer};
 
-/// A fresh, empty directory for one test.
-pub fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rondo-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create temp dir");
-    dir
+/// A test's temporary directory: removed with its contents when dropped, unless the test is
+/// panicking (failing), when it is kept and its path printed so that the files can be examined.
+/// Derefs to its [`Path`].
+pub struct TestDir(Option<tempfile::TempDir>);
+
+impl TestDir {
+    /// The directory's path.
+    pub fn path(&self) -> &Path {
+        self.0
+            .as_ref()
+            .map_or(Path::new(""), tempfile::TempDir::path)
+    }
+}
+
+impl std::ops::Deref for TestDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        self.path()
+    }
+}
+
+impl AsRef<Path> for TestDir {
+    fn as_ref(&self) -> &Path {
+        self.path()
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for TestDir {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.path().as_os_str()
+    }
+}
+
+impl Drop for TestDir {
+    fn drop(&mut self) {
+        if std::thread::panicking()
+            && let Some(dir) = self.0.take()
+        {
+            eprintln!("test files kept in {}", dir.keep().display());
+        }
+    }
+}
+
+/// A fresh, empty directory for one test in the system's temporary directory, named
+/// `rondo-NAME-` and random characters; see [`TestDir`] for when it is removed.
+pub fn temp_dir(name: &str) -> TestDir {
+    let dir = tempfile::Builder::new()
+        .prefix(&format!("rondo-{name}-"))
+        .tempdir()
+        .expect("create temp dir");
+    TestDir(Some(dir))
 }
 
 /// Writes `source` to `dir/name` and returns the path.
@@ -97,14 +142,13 @@ pub fn wait_or_kill(
     (!hung).then_some(status)
 }
 
-/// Ends a test's watch session (its thread must end cleanly, unless the test already failed) and
-/// removes the test's directory.
-pub fn end_watch(session: Option<rondo::watch::WatchSession>, dir: &Path) {
+/// Ends a test's watch session: its thread must end cleanly, unless the test already failed.
+/// Call it before the session's [`TestDir`] is dropped, so that nothing writes there afterwards.
+pub fn end_watch(session: Option<rondo::watch::WatchSession>) {
     if let Some(session) = session {
         let stopped = session.stop();
         if !std::thread::panicking() {
             stopped.expect("watch thread ends cleanly");
         }
     }
-    let _ = std::fs::remove_dir_all(dir);
 }
