@@ -1,44 +1,117 @@
 //! The film: per-pixel sums of radiance samples in exact fixed point, and the image files made
 //! from them.
 //!
-//! Every sample is rounded once to a multiple of 2⁻³² ([`FRACTION_BITS`]) and added as an
-//! integer, so a pixel's sum does not depend on the order its samples were added in: a render
-//! split by sample ranges (threads, passes, processes, machines) and merged in any order gives
-//! the very same sums, hence the very same image, as one process rendering every sample.
+//! Every sample is scaled by a power of two chosen for the scene ([`shift_for`]), rounded once to
+//! an integer and added as one, so a pixel's sum does not depend on the order its samples were
+//! added in: a render split by sample ranges (threads, passes, processes, machines) and merged in
+//! any order gives the very same sums, hence the very same image, as one process rendering every
+//! sample. The power of two (the film's `shift`) follows the scene's brightest radiance, so a
+//! scene lit at 10⁻¹⁰ keeps its precision and one lit at 10⁹ its range; samples that still fall
+//! outside are clamped and counted, never lost silently.
 
 use std::path::Path;
 
 use glam::Vec3;
 use image::{ImageFormat, Rgb32FImage, RgbImage};
 
-/// Fractional bits of the fixed-point sums: samples are rounded to multiples of 2⁻³² (2.3e-10).
-pub const FRACTION_BITS: u32 = 32;
+/// Bits of headroom above the scene's brightest radiance: a sample may reach 2²⁴ (1.7·10⁷)
+/// times the brightest emitter or background before it is clamped.
+pub const HEADROOM_BITS: i32 = 24;
 
-/// Largest magnitude a sample's channel may have; larger values are clamped to it. With at most
-/// 2³² samples per pixel a sum then needs at most 95 bits and a sign ([`Pixel::WORDS`] words).
-pub const MAX_SAMPLE: f32 = 2_147_483_520.0;
+/// Magnitude bound of one sample in fixed point: 2⁶², so rounding never overflows an `i64`, and
+/// with at most 2³² samples per pixel a sum needs at most 94 bits and a sign
+/// ([`Pixel::WORDS`] words).
+const SAMPLE_LIMIT: f64 = (1u64 << 62) as f64;
 
-const SCALE: f64 = (1u64 << FRACTION_BITS) as f64;
-
-/// The exact sum of a pixel's samples, per channel, in units of 2⁻[`FRACTION_BITS`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub struct Pixel(pub [i128; 3]);
-
-/// One channel of a sample in fixed point, rounded to nearest (ties away from zero). Exact and
-/// cheap: the scaled value fits an `i64`, and the truncation remainder is computed exactly.
-#[inline]
-fn fixed(c: f32) -> i64 {
-    let x = f64::from(c.clamp(-MAX_SAMPLE, MAX_SAMPLE)) * SCALE;
-    let t = x as i64;
-    let r = x - t as f64;
-    if r >= 0.5 {
-        t + 1
-    } else if r <= -0.5 {
-        t - 1
+/// The shift of a scene whose brightest radiance (emission or background, any channel) is
+/// `max_radiance`: samples are rounded to multiples of 2⁻shift, and a sample may reach
+/// 2^[`HEADROOM_BITS`] times the brightest radiance (rounded up to a power of two) before it is
+/// clamped. A scene with nothing brighter than 1 uses the shift of 1 (38: a resolution of
+/// 3.6·10⁻¹², a range to 1.7·10⁷). Deterministic in `max_radiance` alone, so every process
+/// that renders part of a scene picks the same one.
+pub fn shift_for(max_radiance: f32) -> i32 {
+    let m = if max_radiance.is_finite() && max_radiance > 1.0 {
+        max_radiance
+    } else if max_radiance.is_finite() && max_radiance > 0.0 {
+        max_radiance.max(f32::MIN_POSITIVE)
     } else {
-        t
+        1.0
+    };
+    // ⌈log2 m⌉ from the bits: m is normal, so its exponent is exact.
+    let bits = m.to_bits();
+    let exponent = ((bits >> 23) & 0xff) as i32 - 127;
+    let ceil_log2 = exponent + i32::from(bits & 0x7f_ffff != 0);
+    62 - HEADROOM_BITS - ceil_log2
+}
+
+/// The shift a film starts with before a scene sets its own: that of radiance 1.
+pub const DEFAULT_SHIFT: i32 = 62 - HEADROOM_BITS;
+
+/// The fixed-point scale of a film: samples are multiplied by 2^shift and rounded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FixedPoint {
+    scale: f64,
+}
+
+impl FixedPoint {
+    /// The scale 2^`shift`.
+    pub fn new(shift: i32) -> Self {
+        Self {
+            scale: 2f64.powi(shift),
+        }
+    }
+
+    /// One channel of a sample in fixed point, rounded to nearest (ties away from zero), and
+    /// whether it had to be clamped to the representable range. Exact and cheap: the scaled
+    /// value fits an `i64`, and the truncation remainder is computed exactly.
+    #[inline]
+    fn fixed(self, c: f32) -> (i64, bool) {
+        let x = f64::from(c) * self.scale;
+        let (x, clamped) = if x.abs() < SAMPLE_LIMIT {
+            (x, false)
+        } else {
+            (SAMPLE_LIMIT.copysign(x), true)
+        };
+        let t = x as i64;
+        let r = x - t as f64;
+        let v = if r >= 0.5 {
+            t + 1
+        } else if r <= -0.5 {
+            t - 1
+        } else {
+            t
+        };
+        (v, clamped)
+    }
+
+    /// The fixed-point value of one sample (`l` must be finite), and whether any channel was
+    /// clamped to the range.
+    #[inline]
+    pub fn pixel(self, l: Vec3) -> (Pixel, bool) {
+        let (x, cx) = self.fixed(l.x);
+        let (y, cy) = self.fixed(l.y);
+        let (z, cz) = self.fixed(l.z);
+        (
+            Pixel([i128::from(x), i128::from(y), i128::from(z)]),
+            cx | cy | cz,
+        )
+    }
+
+    /// The mean of `count` samples whose sum is `sum` (zero for no samples).
+    #[inline]
+    pub fn mean(self, sum: &Pixel, count: u64) -> Vec3 {
+        let scale = 1.0 / (self.scale * count.max(1) as f64);
+        Vec3::new(
+            (sum.0[0] as f64 * scale) as f32,
+            (sum.0[1] as f64 * scale) as f32,
+            (sum.0[2] as f64 * scale) as f32,
+        )
     }
 }
+
+/// The exact sum of a pixel's samples, per channel, in units of 2⁻shift of its film.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Pixel(pub [i128; 3]);
 
 impl Pixel {
     /// A zero sum.
@@ -47,20 +120,12 @@ impl Pixel {
     /// 32-bit words a channel's sum is stored in (two's complement, least significant first).
     pub const WORDS: usize = 3;
 
-    /// The fixed-point value of one sample (`l` must be finite).
+    /// Adds one sample (`l` must be finite) in `fixed` point; true if a channel was clamped.
     #[inline]
-    pub fn from_radiance(l: Vec3) -> Self {
-        Self([
-            i128::from(fixed(l.x)),
-            i128::from(fixed(l.y)),
-            i128::from(fixed(l.z)),
-        ])
-    }
-
-    /// Adds one sample (`l` must be finite).
-    #[inline]
-    pub fn add(&mut self, l: Vec3) {
-        self.merge(&Self::from_radiance(l));
+    pub fn add(&mut self, l: Vec3, fixed: FixedPoint) -> bool {
+        let (p, clamped) = fixed.pixel(l);
+        self.merge(&p);
+        clamped
     }
 
     /// Adds another sum (exact, so in any order).
@@ -69,17 +134,6 @@ impl Pixel {
         for (a, b) in self.0.iter_mut().zip(other.0) {
             *a += b;
         }
-    }
-
-    /// The mean of `count` samples whose sum this is (zero for no samples).
-    #[inline]
-    pub fn mean(&self, count: u64) -> Vec3 {
-        let scale = 1.0 / (SCALE * count.max(1) as f64);
-        Vec3::new(
-            (self.0[0] as f64 * scale) as f32,
-            (self.0[1] as f64 * scale) as f32,
-            (self.0[2] as f64 * scale) as f32,
-        )
     }
 
     /// Channel `c`'s sum as [`Pixel::WORDS`] 32-bit words, least significant first.
@@ -143,6 +197,8 @@ pub struct Film {
     pub samples: u32,
     /// First sample index accumulated (0 but for a render of a sample range).
     pub start: u32,
+    /// Samples are rounded to multiples of 2⁻shift ([`shift_for`] of the scene).
+    pub shift: i32,
 }
 
 impl Film {
@@ -154,14 +210,20 @@ impl Film {
             sum: vec![Pixel::ZERO; width as usize * height as usize],
             samples: 0,
             start: 0,
+            shift: DEFAULT_SHIFT,
         }
     }
 
-    /// Clears the sums, keeping the size; the film then starts at sample `start`.
+    /// Clears the sums, keeping the size and the shift; the film then starts at sample `start`.
     pub fn clear(&mut self, start: u32) {
         self.sum.fill(Pixel::ZERO);
         self.start = start;
         self.samples = start;
+    }
+
+    /// The fixed-point scale samples are added in.
+    pub fn fixed(&self) -> FixedPoint {
+        FixedPoint::new(self.shift)
     }
 
     /// Samples per pixel held.
@@ -171,71 +233,76 @@ impl Film {
 
     /// The mean radiance of every pixel.
     pub fn mean(&self) -> Vec<Vec3> {
-        let n = self.count();
-        self.sum.iter().map(|s| s.mean(n)).collect()
+        let (n, fixed) = (self.count(), self.fixed());
+        self.sum.iter().map(|s| fixed.mean(s, n)).collect()
     }
 
     /// 8-bit sRGB image of the clamped mean.
     pub fn to_srgb8(&self) -> RgbImage {
-        srgb8(self.width, self.height, &self.sum, self.count())
+        srgb8(
+            self.width,
+            self.height,
+            &self.sum,
+            self.count(),
+            self.fixed(),
+        )
     }
 
     /// Linear float image of the mean, unclamped.
     pub fn to_linear(&self) -> Rgb32FImage {
-        let n = self.count();
-        let data = self.sum.iter().flat_map(|s| s.mean(n).to_array()).collect();
+        let (n, fixed) = (self.count(), self.fixed());
+        let data = self
+            .sum
+            .iter()
+            .flat_map(|s| fixed.mean(s, n).to_array())
+            .collect();
         Rgb32FImage::from_raw(self.width, self.height, data).expect("film size matches its pixels")
     }
 
     /// Writes the image atomically (see [`write_atomically`]); the mean of each pixel is made
     /// as it is encoded, never kept as a second full-size image.
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
-        encode_image(path, self.width, self.height, &self.sum, self.count(), true)
+        let sums = (&self.sum[..], self.count(), self.fixed());
+        encode_image(path, self.width, self.height, sums, true)
     }
 
     /// As [`Film::write`], but without waiting for the data to reach the disk (no fsync): for
     /// live images replaced within moments, where the fsync (5–20 ms on ext4 here) would delay
     /// the first image of an edit. Readers still never see a half-written file.
     pub fn write_live(&self, path: &Path) -> std::io::Result<()> {
-        encode_image(
-            path,
-            self.width,
-            self.height,
-            &self.sum,
-            self.count(),
-            false,
-        )
+        let sums = (&self.sum[..], self.count(), self.fixed());
+        encode_image(path, self.width, self.height, sums, false)
     }
 }
 
-/// 8-bit sRGB image of the clamped means of `sum` (`count` samples per pixel).
-pub fn srgb8(width: u32, height: u32, sum: &[Pixel], count: u64) -> RgbImage {
+/// 8-bit sRGB image of the clamped means of `sum` (`count` samples per pixel, in `fixed` point).
+pub fn srgb8(width: u32, height: u32, sum: &[Pixel], count: u64, fixed: FixedPoint) -> RgbImage {
     let data = sum
         .iter()
-        .flat_map(|s| s.mean(count).to_array())
+        .flat_map(|s| fixed.mean(s, count).to_array())
         .map(|c| (linear_to_srgb(c.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8)
         .collect();
     RgbImage::from_raw(width, height, data).expect("film size matches its pixels")
 }
 
-/// Writes the means of `sum` (`count` samples per pixel) as a `.png` (8-bit sRGB, clamped) or
-/// `.exr` (linear f32 R, G, B) image, chosen by `path`'s extension, atomically.
+/// Writes the means of `sum` (`count` samples per pixel, in `fixed` point) as a `.png` (8-bit
+/// sRGB, clamped) or `.exr` (linear f32 R, G, B) image, chosen by `path`'s extension, atomically.
 pub fn write_image(
     path: &Path,
     width: u32,
     height: u32,
     sum: &[Pixel],
     count: u64,
+    fixed: FixedPoint,
 ) -> std::io::Result<()> {
-    encode_image(path, width, height, sum, count, true)
+    encode_image(path, width, height, (sum, count, fixed), true)
 }
 
 fn encode_image(
     path: &Path,
     width: u32,
     height: u32,
-    sum: &[Pixel],
-    count: u64,
+    (sum, count, fixed): (&[Pixel], u64, FixedPoint),
     sync: bool,
 ) -> std::io::Result<()> {
     let kind = OutputKind::from_path(path).ok_or_else(|| {
@@ -245,14 +312,14 @@ fn encode_image(
         )
     })?;
     crate::output_file::write_file(path, sync, |out| match kind {
-        OutputKind::Png => srgb8(width, height, sum, count)
+        OutputKind::Png => srgb8(width, height, sum, count, fixed)
             .write_to(out, ImageFormat::Png)
             .map_err(std::io::Error::other),
         OutputKind::Exr => {
             use exr::prelude::*;
             let w = width as usize;
             let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
-                let m = sum[p.y() * w + p.x()].mean(count);
+                let m = fixed.mean(&sum[p.y() * w + p.x()], count);
                 (m.x, m.y, m.z)
             });
             Image::from_channels((w, height as usize), channels)
@@ -280,8 +347,9 @@ mod tests {
     #[test]
     fn png_clamps_and_exr_keeps_linear_values() {
         let mut film = Film::new(2, 1);
-        film.sum[0].add(Vec3::new(4.0, 0.5, -1.0));
-        film.sum[1].add(Vec3::new(0.0, 2.0, 0.0));
+        let fixed = film.fixed();
+        film.sum[0].add(Vec3::new(4.0, 0.5, -1.0), fixed);
+        film.sum[1].add(Vec3::new(0.0, 2.0, 0.0), fixed);
         film.samples = 2;
         let png = film.to_srgb8();
         // Mean (2, 0.25, −0.5) clamps to (1, 0.25, 0); 0.25 linear is 0.5371 in sRGB → 137.
@@ -292,27 +360,81 @@ mod tests {
 
     #[test]
     fn fixed_point_rounds_to_nearest_and_sums_in_any_order() {
-        let unit = (1.0 / SCALE) as f32;
-        assert_eq!(fixed(1.0), 1 << 32);
-        assert_eq!(fixed(-0.25), -(1 << 30));
-        assert_eq!(fixed(unit * 0.49), 0);
-        assert_eq!(fixed(unit * 0.5), 1);
-        assert_eq!(fixed(-unit * 0.5), -1);
-        assert_eq!(fixed(f32::MAX), fixed(MAX_SAMPLE));
-        assert!(fixed(MAX_SAMPLE) < i64::MAX);
+        let fixed = FixedPoint::new(32);
+        let unit = 2f32.powi(-32);
+        let one = |c: f32| fixed.fixed(c);
+        assert_eq!(one(1.0), (1 << 32, false));
+        assert_eq!(one(-0.25), (-(1 << 30), false));
+        assert_eq!(one(unit * 0.49), (0, false));
+        assert_eq!(one(unit * 0.5), (1, false));
+        assert_eq!(one(-unit * 0.5), (-1, false));
+        // Beyond 2^62 units (2^30 at shift 32) a channel is clamped, and says so.
+        assert_eq!(one(f32::MAX), (1 << 62, true));
+        assert_eq!(one(-f32::MAX), (-(1 << 62), true));
+        assert_eq!(
+            one(2f32.powi(30) * 0.999),
+            ((0.999 * 2f64.powi(62)) as i64, false)
+        );
         // Values that do not add associatively in floating point.
         let samples = [1e8f32, 1e-3, -1e8, 3.7e-5, 0.1, 12345.678];
         let mut forward = Pixel::ZERO;
-        samples.iter().for_each(|&s| forward.add(Vec3::splat(s)));
+        samples.iter().for_each(|&s| {
+            forward.add(Vec3::splat(s), fixed);
+        });
         let mut backward = Pixel::ZERO;
-        samples
-            .iter()
-            .rev()
-            .for_each(|&s| backward.add(Vec3::splat(s)));
+        samples.iter().rev().for_each(|&s| {
+            backward.add(Vec3::splat(s), fixed);
+        });
         assert_eq!(forward, backward);
         let f: f32 = samples.iter().sum();
         let b: f32 = samples.iter().rev().sum();
         assert_ne!(f, b, "the samples must not be associative in f32");
+    }
+
+    #[test]
+    fn the_shift_gives_every_brightness_its_headroom_and_precision() {
+        assert_eq!(shift_for(1.0), DEFAULT_SHIFT);
+        assert_eq!(
+            shift_for(0.0),
+            DEFAULT_SHIFT,
+            "a black scene keeps the default"
+        );
+        assert_eq!(shift_for(f32::NAN), DEFAULT_SHIFT);
+        assert_eq!(shift_for(2.0), DEFAULT_SHIFT - 1);
+        assert_eq!(
+            shift_for(2.5),
+            DEFAULT_SHIFT - 2,
+            "rounded up to a power of two"
+        );
+        assert_eq!(shift_for(0.5), DEFAULT_SHIFT + 1);
+        for m in [
+            1e-30f32,
+            1e-10,
+            3e-10,
+            0.7,
+            17.0,
+            1.6e9,
+            5e9,
+            1e30,
+            f32::MAX,
+        ] {
+            let fixed = FixedPoint::new(shift_for(m));
+            // The brightest radiance, and 2^HEADROOM_BITS times it less an ulp, are not clamped;
+            // four times beyond the headroom is.
+            let headroom = 2f32.powi(HEADROOM_BITS);
+            assert!(!fixed.pixel(Vec3::splat(m)).1, "{m}");
+            if (m * headroom).is_finite() {
+                assert!(!fixed.pixel(Vec3::splat(m * headroom * 0.999)).1, "{m}");
+            }
+            if (m * headroom * 4.0).is_finite() {
+                assert!(fixed.pixel(Vec3::splat(m * headroom * 4.0)).1, "{m}");
+            }
+            // Relative error of one sample at 10⁻⁶ of the brightest value: below 10⁻⁶.
+            let small = m * 1e-6;
+            let mean = fixed.mean(&fixed.pixel(Vec3::splat(small)).0, 1);
+            let rel = ((mean.x - small) / small).abs();
+            assert!(rel < 1e-6, "{m}: {rel}");
+        }
     }
 
     #[test]

@@ -35,8 +35,6 @@ use crate::shading::texture::Texture;
 
 /// Marks a primitive slot that is not an emitter.
 const NONE: u32 = u32::MAX;
-/// The largest `f32` below 1.
-const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// Resolution of the selection table: cumulative counts out of 2²⁴.
 const SELECT_SCALE: u32 = 1 << 24;
@@ -324,9 +322,11 @@ impl LightSet {
         }
     }
 
-    /// Samples a point seen from shading point `p_ref`: `u_select` picks the emitter; its
-    /// remainder within the emitter's share, rescaled to [0, 1), and `u.y` pick the point on it
-    /// (`u.x` is not used).
+    /// Samples a point seen from shading point `p_ref`: `u_select` picks the emitter, `u` the
+    /// point on it. The two come from separate sampler dimensions: rescaling the remainder of
+    /// `u_select` within the emitter's share into a point coordinate leaves an emitter with a
+    /// count of c out of 2²⁴ only c distinct values (a lone triangle lamp would always give
+    /// one edge).
     #[inline(always)]
     pub fn sample<L: Layout>(
         &self,
@@ -338,12 +338,6 @@ impl LightSet {
         let (k, pmf) = self.select(u_select)?;
         let e = self.emitters[k];
         let i = e.index as usize;
-        // Where `u_select` fell within the chosen emitter's share, rescaled to [0, 1), is the
-        // first coordinate of the point (pbrt-v4's remapped discrete sample): the integrator
-        // passes `u_select = u.x`, so one stratified 2D sample picks both emitter and point.
-        let lo = if k == 0 { 0 } else { self.cdf[k - 1] };
-        let share = (u_select * SELECT_SCALE as f32 - lo as f32) / (self.cdf[k] - lo) as f32;
-        let u = Vec2::new(share.clamp(0.0, ONE_BELOW), u.y);
         let strategy = Self::strategy(geometry, &e, p_ref);
         let (p, n, uv, err) = match e.kind {
             HitKind::Sphere => {
@@ -506,13 +500,15 @@ mod tests {
             "glass is not an emitter"
         );
 
-        // Sampled points lie on their emitter and report the same pdf.
+        // Sampled points lie on their emitter and report the density `pdf` gives the same point
+        // when a ray from the shading point finds it.
         let mut rng = crate::shading::rng::Rng::new(1, 2);
+        let p_ref = Vec3::new(0.5, 0.5, 3.0);
         for _ in 0..1000 {
             let s = set
                 .sample(
                     &g,
-                    Vec3::new(0.5, 0.5, 3.0),
+                    p_ref,
                     rng.next_f32(),
                     Vec2::new(rng.next_f32(), rng.next_f32()),
                 )
@@ -528,7 +524,72 @@ mod tests {
                         && s.p.y <= 1.0
                 );
             }
+            let ray = crate::geometry::ray::Ray::new(p_ref, (s.p - p_ref).normalize());
+            let hit = g
+                .intersect(&ray, f32::INFINITY)
+                .expect("the sampled point is seen");
+            let found = g.surface(&ray, &hit);
+            assert!((found.p - s.p).length() < 1e-4, "{} vs {}", found.p, s.p);
+            let pdf = set.pdf(&g, hit.kind, hit.index, p_ref, found.p, found.n);
+            assert!(
+                (pdf - s.pdf).abs() <= 1e-3 * s.pdf,
+                "sample pdf {} vs pdf {pdf} at {}",
+                s.pdf,
+                s.p
+            );
         }
+    }
+
+    #[test]
+    fn the_point_on_a_rarely_chosen_emitter_takes_its_whole_2d_sample() {
+        // A big lamp and a small triangle 1000 times dimmer, whose count in the selection table is
+        // a few units of 2²⁴. With the point's first coordinate taken from the selection
+        // number's remainder, that coordinate had only those few values (one value: a single
+        // vertex line). From its own dimension, the points cover the triangle uniformly: their
+        // mean is the centroid, and the first coordinate of `u` moves them.
+        let prims = vec![
+            (
+                0,
+                Primitive::Sphere {
+                    center: Vec3::new(0.0, 0.0, -50.0),
+                    radius: 10.0,
+                    frame: glam::Mat3::IDENTITY,
+                },
+            ),
+            (
+                1,
+                Primitive::Triangle {
+                    p: [
+                        Vec3::ZERO,
+                        Vec3::new(1.0, 0.0, 0.0),
+                        Vec3::new(0.0, 1.0, 0.0),
+                    ],
+                    uv: [Vec2::ZERO; 3],
+                },
+            ),
+        ];
+        let g = Geometry::build(&prims);
+        let set = LightSet::build(&g, &[light(1.0), light(1e-3)], &[0, 1]);
+        // The triangle's share of the selection numbers: at the top of [0, 1).
+        let dim = 1.0 - set.selection_pmf(1) * 0.5;
+        assert!(set.selection_pmf(1) > 0.0 && set.selection_pmf(1) < 1e-5);
+        // Far away, so the triangle is sampled by area: uniform barycentrics.
+        let p_ref = Vec3::new(0.3, 0.3, 1000.0);
+        let n = 64;
+        let mut mean = Vec3::ZERO;
+        for i in 0..n {
+            for j in 0..n {
+                let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                let s = set.sample(&g, p_ref, dim, u).expect("sample");
+                assert!(s.p.z.abs() < 1e-6, "picked the lamp, not the triangle");
+                mean += s.p / (n * n) as f32;
+            }
+        }
+        let centroid = Vec3::new(1.0 / 3.0, 1.0 / 3.0, 0.0);
+        assert!((mean - centroid).length() < 0.01, "mean {mean}");
+        let a = set.sample(&g, p_ref, dim, Vec2::new(0.1, 0.5)).expect("a");
+        let b = set.sample(&g, p_ref, dim, Vec2::new(0.9, 0.5)).expect("b");
+        assert!((a.p - b.p).length() > 0.1, "{} and {}", a.p, b.p);
     }
 
     #[test]

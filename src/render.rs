@@ -9,13 +9,13 @@ use rayon::prelude::*;
 
 use crate::camera::Camera;
 use crate::cpu::{Isa, Kernel, Lanes, Sse};
-use crate::film::{Film, Pixel};
+use crate::film::{Film, FixedPoint, Pixel};
 use crate::geometry::layout::{DefaultLayout, Layout, SphereStore, TriangleStore};
 use crate::geometry::packed::{Geometry, Hit, HitKind, LayoutKind, Surface};
 use crate::geometry::ray::{Ray, gamma, spawn_origin};
 use crate::lights::LightSet;
 use crate::scene::format::Method;
-use crate::shading::material::Material;
+use crate::shading::material::{Material, Scatter};
 use crate::shading::rng::Rng;
 use crate::shading::sampler::{IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};
 
@@ -55,6 +55,9 @@ pub struct TraceStats {
     pub rays: u64,
     /// Samples whose radiance was NaN or infinite; they are dropped, never written.
     pub nonfinite: u64,
+    /// Samples with a channel beyond the film's range (2^[`crate::film::HEADROOM_BITS`] times
+    /// the scene's brightest radiance); they are clamped to it.
+    pub clamped: u64,
     /// Passes traced in each layout, in the order of [`LayoutKind::ALL`]: which monomorphised
     /// code really ran.
     pub layout_passes: [u64; 4],
@@ -66,6 +69,7 @@ impl std::ops::Add for TraceStats {
         Self {
             rays: self.rays + o.rays,
             nonfinite: self.nonfinite + o.nonfinite,
+            clamped: self.clamped + o.clamped,
             layout_passes: std::array::from_fn(|k| self.layout_passes[k] + o.layout_passes[k]),
         }
     }
@@ -80,13 +84,15 @@ const ROULETTE_DEPTH: u32 = 3;
 
 /// The sampler's dimension layout: dimension 0 is the pixel position; bounce `b` then owns
 /// dimensions `1 + b·BOUNCE_DIMENSIONS + k` with `k` one of the offsets below.
-const BOUNCE_DIMENSIONS: u32 = 4;
-/// The light sample (2D): its x picks the emitter and, rescaled, the point with its y.
-const LIGHT_DIMENSION: u32 = 0;
+pub const BOUNCE_DIMENSIONS: u32 = 5;
+/// The choice of an emitter for next-event estimation (1D).
+pub const LIGHT_CHOICE_DIMENSION: u32 = 0;
+/// The point on the chosen emitter (2D).
+pub const LIGHT_POINT_DIMENSION: u32 = 1;
 /// The BSDF's 2D sample, then one more 1D value (glass's choice, metal's fuzz depth).
-const BSDF_DIMENSION: u32 = 1;
+pub const BSDF_DIMENSION: u32 = 2;
 /// Russian roulette (1D).
-const ROULETTE_DIMENSION: u32 = 3;
+pub const ROULETTE_DIMENSION: u32 = 4;
 
 /// Veach's power heuristic (β = 2) weight of a strategy with density `a` against one with `b`.
 #[inline]
@@ -140,8 +146,9 @@ pub fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
 /// - `Mis`: both, weighted by the power heuristic (Veach 1997, ch. 9).
 ///
 /// Emission seen by the camera or after a glass/mirror bounce always counts in full. Russian
-/// roulette (after a few bounces, survival probability = the path's throughput) ends paths
-/// early without bias.
+/// roulette (after a few bounces, survival probability = the path's throughput without the
+/// (n1/n2)² radiance scale of refractions, as pbrt-v4's `etaScale`) ends paths early without
+/// bias: a path inside glass is not killed for the compression it undoes on the way out.
 #[inline(always)]
 pub fn trace_path<L: Layout, S: Sampler>(
     view: &SceneView<L>,
@@ -163,6 +170,8 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
 ) -> Vec3 {
     let mut radiance = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
+    // The product of the refractions' radiance scales in `throughput`.
+    let mut eta_scale = 1.0f32;
     // Point and BSDF density of the previous vertex, if it was one that sampled lights.
     let mut previous: Option<(Vec3, f32)> = None;
     let sample_lights = view.method != Method::Naive && !view.lights.is_empty();
@@ -200,12 +209,13 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         let err = point_error(view.geometry, &hit, s.p);
         let dimension = 1 + depth * BOUNCE_DIMENSIONS;
         if sample_lights && material.samples_lights() {
-            sampler.seek(dimension + LIGHT_DIMENSION);
+            sampler.seek(dimension + LIGHT_CHOICE_DIMENSION);
             let vertex = Vertex {
                 surface: &s,
                 err,
                 d: ray.direction,
                 material,
+                dimension,
             };
             radiance += throughput * direct_light(lanes, view, vertex, sampler, stats);
         }
@@ -215,16 +225,22 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         else {
             break;
         };
-        if leaks(&s, material, ray.direction, scatter.direction) {
-            break;
-        }
+        let scatter = if is_smooth(&s, material) {
+            let Some(folded) = fold(&s, material, ray.direction, scatter) else {
+                break;
+            };
+            folded
+        } else {
+            scatter
+        };
         previous = scatter.pdf.map(|pdf| (s.p, pdf));
         throughput *= scatter.attenuation;
+        eta_scale *= scatter.radiance_scale;
         if throughput == Vec3::ZERO {
             break;
         }
         if view.roulette && depth >= ROULETTE_DEPTH {
-            let survive = throughput.max_element().min(1.0);
+            let survive = (throughput.max_element() / eta_scale).min(1.0);
             sampler.seek(dimension + ROULETTE_DIMENSION);
             if sampler.next_1d() >= survive {
                 break;
@@ -247,14 +263,73 @@ fn shading_normal(s: &Surface, material: &Material) -> Vec3 {
     }
 }
 
-/// Whether a reflection `wi` chosen with the shading normal would pass through the geometric
-/// surface a ray arriving along `d` hit: with smooth normals that happens near silhouettes, and
-/// following it would leak light through the mesh, so such directions carry nothing.
+/// Whether the material shades `s` with a normal other than the geometric one (a smooth mesh,
+/// glass excepted), so that its lobe can reach through the surface.
 #[inline]
-fn leaks(s: &Surface, material: &Material, d: Vec3, wi: Vec3) -> bool {
-    s.ns != s.n
-        && !matches!(material, Material::Dielectric { .. })
-        && wi.dot(s.n) * d.dot(s.n) >= 0.0
+fn is_smooth(s: &Surface, material: &Material) -> bool {
+    s.ns != s.n && !matches!(material, Material::Dielectric { .. })
+}
+
+/// `w` mirrored at the plane of unit normal `n`.
+#[inline]
+fn mirror(w: Vec3, n: Vec3) -> Vec3 {
+    w - 2.0 * w.dot(n) * n
+}
+
+/// The geometric normal of `s` on the side a ray travelling along `d` arrives from.
+#[inline]
+fn front(s: &Surface, d: Vec3) -> Vec3 {
+    if d.dot(s.n) < 0.0 { s.n } else { -s.n }
+}
+
+/// A smooth surface's lobe, sampled around the shading normal, folded onto the side of the
+/// geometric surface the ray came from: a direction that would pass through the surface (near
+/// silhouettes) is mirrored at it. Following such a direction would leak light through the
+/// mesh, and dropping it would darken the silhouettes (a white closed mesh lost 1.3 % of its
+/// light, 33 % at silhouette pixels); folded, the lobe keeps its energy on the right side. Its
+/// value and density at a direction are the sums over the direction and its mirror image
+/// ([`folded_eval`]), so the sampled weight is their ratio (exactly the albedo for a diffuse
+/// surface) and next-event estimation and MIS use the very density sampled from. `None` for a
+/// direction in the surface's plane or of zero density.
+#[inline]
+fn fold(s: &Surface, material: &Material, d: Vec3, scatter: Scatter) -> Option<Scatter> {
+    let n = front(s, d);
+    let direction = if scatter.direction.dot(n) > 0.0 {
+        scatter.direction
+    } else {
+        mirror(scatter.direction, n).normalize()
+    };
+    if direction.dot(n) <= 0.0 {
+        return None;
+    }
+    let Some(_) = scatter.pdf else {
+        // A lobe without a density (the fuzzed metal): only its direction is folded.
+        return Some(Scatter {
+            direction,
+            ..scatter
+        });
+    };
+    let (f_cos, pdf) = folded_eval(s, material, d, direction)?;
+    (pdf > 0.0).then(|| Scatter {
+        direction,
+        attenuation: f_cos / pdf,
+        pdf: Some(pdf),
+        radiance_scale: 1.0,
+    })
+}
+
+/// [`Material::eval`] of a smooth surface's folded lobe (see [`fold`]) at `wi`, on the side the
+/// ray arriving along `d` came from: the lobe's value and density at `wi` plus those at its mirror
+/// image below the surface; zero for a `wi` that passes through the surface.
+#[inline]
+fn folded_eval(s: &Surface, material: &Material, d: Vec3, wi: Vec3) -> Option<(Vec3, f32)> {
+    let n = front(s, d);
+    if wi.dot(n) <= 0.0 {
+        return Some((Vec3::ZERO, 0.0));
+    }
+    let (f_above, pdf_above) = material.eval(d, wi, s.ns, s.uv)?;
+    let (f_below, pdf_below) = material.eval(d, mirror(wi, n), s.ns, s.uv)?;
+    Some((f_above + f_below, pdf_above + pdf_below))
 }
 
 /// A vertex a path continues from: the surface it hit, that point's error bound, the direction
@@ -265,6 +340,8 @@ struct Vertex<'a> {
     err: Vec3,
     d: Vec3,
     material: &'a Material,
+    /// The bounce's first sampler dimension.
+    dimension: u32,
 }
 
 /// One light sample at a vertex's surface `s` for a ray arriving along `d`: emitted radiance
@@ -283,10 +360,13 @@ fn direct_light<L: Layout, W: Lanes>(
         err,
         d,
         material,
+        ..
     } = vertex;
-    // One 2D sample picks the emitter and the point on it, so both are stratified together.
+    // The emitter from its own dimension, the point from the next.
+    let u_select = sampler.next_1d();
+    sampler.seek(vertex.dimension + LIGHT_POINT_DIMENSION);
     let u = sampler.next_2d();
-    let Some(light) = view.lights.sample(view.geometry, s.p, u.x, u) else {
+    let Some(light) = view.lights.sample(view.geometry, s.p, u_select, u) else {
         return Vec3::ZERO;
     };
     let to_light = light.p - s.p;
@@ -299,10 +379,12 @@ fn direct_light<L: Layout, W: Lanes>(
     if emitted == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    if leaks(s, material, d, wi) {
-        return Vec3::ZERO;
-    }
-    let Some((f_cos, pdf_bsdf)) = material.eval(d, wi, shading_normal(s, material), s.uv) else {
+    let evaluated = if is_smooth(s, material) {
+        folded_eval(s, material, d, wi)
+    } else {
+        material.eval(d, wi, shading_normal(s, material), s.uv)
+    };
+    let Some((f_cos, pdf_bsdf)) = evaluated else {
         return Vec3::ZERO;
     };
     if f_cos == Vec3::ZERO {
@@ -375,6 +457,7 @@ fn render_pass_with<L: Layout, S: PixelSampler>(
 ) -> Result<TraceStats, Cancelled> {
     let (width, height) = (film.width, film.height);
     let isa = Isa::selected();
+    let fixed = film.fixed();
     let stats = film
         .sum
         .par_chunks_mut(width as usize * BAND_ROWS)
@@ -391,6 +474,7 @@ fn render_pass_with<L: Layout, S: PixelSampler>(
                 size: (width, height),
                 seed,
                 samples: samples.clone(),
+                fixed,
                 sampler: PhantomData,
             });
             progress((pixels.len() / width as usize) as u64);
@@ -417,6 +501,7 @@ struct Band<'a, L: Layout, S> {
     size: (u32, u32),
     seed: u64,
     samples: Range<u32>,
+    fixed: FixedPoint,
     sampler: PhantomData<S>,
 }
 
@@ -439,10 +524,10 @@ impl<L: Layout, S: PixelSampler> Kernel for Band<'_, L, S> {
                 let j = sampler.next_2d();
                 let ray = self.view.camera.ray(x + j.x, y + j.y, width, height);
                 let l = trace_path_with(lanes, self.view, ray, &mut sampler, &mut stats);
-                if l.is_finite() {
-                    sum.add(l);
-                } else {
+                if !l.is_finite() {
                     stats.nonfinite += 1;
+                } else if sum.add(l, self.fixed) {
+                    stats.clamped += 1;
                 }
             }
         }
@@ -463,6 +548,7 @@ pub fn render_preview<L: Layout>(
 ) -> Result<TraceStats, Cancelled> {
     let (width, height) = (film.width as usize, film.height as usize);
     let block = block.max(1);
+    let fixed = film.fixed();
     let stats = film
         .sum
         .par_chunks_mut(width * block)
@@ -484,7 +570,9 @@ pub fn render_preview<L: Layout>(
                         .ray(cx as f32 + jx, cy as f32 + jy, width as u32, height as u32);
                 let l = trace_path(view, ray, &mut rng, &mut stats);
                 let value = if l.is_finite() {
-                    Pixel::from_radiance(l)
+                    let (value, clamped) = fixed.pixel(l);
+                    stats.clamped += u64::from(clamped);
+                    value
                 } else {
                     stats.nonfinite += 1;
                     Pixel::ZERO

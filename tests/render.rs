@@ -230,3 +230,82 @@ fn live_preview_and_progressive_passes_end_in_the_batch_image() {
         "the preview, then passes of 1, 2, 4 and 8 samples in total"
     );
 }
+
+/// The linear RGB of an EXR file (the `R`, `G`, `B` layer a partial also carries).
+fn read_exr(path: &std::path::Path) -> Vec<f32> {
+    image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .into_rgb32f()
+        .into_raw()
+}
+
+fn rondo(args: &[&std::ffi::OsStr]) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .args(args)
+        .output()
+        .expect("run rondo");
+    assert!(
+        out.status.success(),
+        "rondo {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn the_film_keeps_very_dim_and_very_bright_scenes() {
+    // A uniform background seen by every pixel is the exact value of every pixel. With a fixed
+    // film range, 1e-10 rounded to 0 and 3e-10 to -22 %, and 5e9 was clamped to 2.1e9.
+    let dir = temp_dir("film-range");
+    for background in [1e-10f32, 3e-10, 1.6e9, 5e9, 3e30] {
+        let scene = write_scene(
+            &dir,
+            "sky.ron",
+            &format!(
+                r#"Scene(
+    camera: Camera(position: (0, 0, 0), look_at: (0, 0, 1), fov: 40),
+    settings: Settings(width: 8, height: 8, spp: 4, background: ({background:e}, {background:e}, {background:e})),
+    materials: {{}},
+    entities: [],
+)"#
+            ),
+        );
+        let whole = dir.join("whole.exr");
+        rondo(&[
+            "render".as_ref(),
+            scene.as_os_str(),
+            "-o".as_ref(),
+            whole.as_os_str(),
+        ]);
+        for v in read_exr(&whole) {
+            assert!(
+                ((v - background) / background).abs() < 1e-3,
+                "background {background:e}: pixel {v:e}"
+            );
+        }
+        // Partials of such a scene merge to the very same image.
+        let parts = [dir.join("a.exr"), dir.join("b.exr")];
+        for (part, range) in parts.iter().zip(["0..1", "1..4"]) {
+            rondo(&[
+                "render".as_ref(),
+                scene.as_os_str(),
+                "--samples".as_ref(),
+                range.as_ref(),
+                "-o".as_ref(),
+                part.as_os_str(),
+            ]);
+        }
+        let merged = dir.join("merged.exr");
+        rondo(&[
+            "merge".as_ref(),
+            parts[1].as_os_str(),
+            parts[0].as_os_str(),
+            "-o".as_ref(),
+            merged.as_os_str(),
+        ]);
+        assert_eq!(
+            read_exr(&merged),
+            read_exr(&whole),
+            "background {background:e}"
+        );
+    }
+}

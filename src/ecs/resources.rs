@@ -187,12 +187,14 @@ pub struct Accumulation {
 }
 
 impl Accumulation {
-    /// Clears the film for a `width` × `height` image, reusing its memory when the size holds.
-    pub fn reset(&mut self, width: u32, height: u32) {
+    /// Clears the film for a `width` × `height` image whose samples are rounded to multiples of
+    /// 2⁻`shift` ([`crate::film::shift_for`]), reusing its memory when the size holds.
+    pub fn reset(&mut self, width: u32, height: u32, shift: i32) {
         if self.film.width != width || self.film.height != height {
             self.film = Film::new(width, height);
         }
         self.film.clear(self.first_sample);
+        self.film.shift = shift;
         self.stats = TraceStats::default();
         self.complete = false;
     }

@@ -67,6 +67,9 @@ pub struct Scatter {
     /// Solid-angle density of `direction`, if the BSDF can evaluate it (`None` for mirror,
     /// glass and the fuzzed metal, which next-event estimation cannot use).
     pub pdf: Option<f32>,
+    /// The factor of `attenuation` that is the (n1/n2)² compression of radiance at a
+    /// refraction, 1 otherwise: Russian roulette decides on the throughput without it.
+    pub radiance_scale: f32,
 }
 
 /// Mirror reflection of `d` about `n`.
@@ -186,6 +189,16 @@ impl Material {
         }
     }
 
+    /// The largest radiance the material emits in any channel, anywhere (0 for a non-emitter).
+    pub fn max_emission(&self) -> f32 {
+        match self {
+            Self::Light {
+                emit, intensity, ..
+            } => emit.max_channel() * intensity.abs(),
+            _ => 0.0,
+        }
+    }
+
     /// Radiance emitted towards a ray travelling along `d` that hit a surface with geometric
     /// normal `n`.
     #[inline]
@@ -220,6 +233,7 @@ impl Material {
                     direction,
                     attenuation: albedo.eval(uv),
                     pdf: Some(local.z * std::f32::consts::FRAC_1_PI),
+                    radiance_scale: 1.0,
                 })
             }
             Self::Metal { albedo, roughness } => {
@@ -233,6 +247,7 @@ impl Material {
                     direction: r.normalize(),
                     attenuation: albedo.eval(uv),
                     pdf: None,
+                    radiance_scale: 1.0,
                 })
             }
             Self::Glossy { albedo, roughness } => {
@@ -257,6 +272,7 @@ impl Material {
                     direction,
                     attenuation: f * ((1.0 + g.lo) / (1.0 + g.lo + g.li)),
                     pdf: Some(g.pdf(cos_o)),
+                    radiance_scale: 1.0,
                 })
             }
             Self::Dielectric { ior } => {
@@ -275,6 +291,7 @@ impl Material {
                     direction,
                     attenuation: Vec3::splat(scale),
                     pdf: None,
+                    radiance_scale: scale,
                 })
             }
             Self::Light { .. } => None,

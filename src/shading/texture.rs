@@ -10,6 +10,8 @@ pub struct ImageTexture {
     width: u32,
     height: u32,
     texels: Vec<Vec3>,
+    /// The largest channel magnitude of any texel.
+    max: f32,
 }
 
 /// The sRGB electro-optical transfer function: encoded value in `[0, 1]` → linear.
@@ -34,11 +36,7 @@ impl ImageTexture {
             .chunks_exact(3)
             .map(|p| Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
             .collect();
-        Self {
-            width,
-            height,
-            texels,
-        }
+        Self::new(width, height, texels)
     }
 
     /// Wraps linear RGB floats (row-major, top row first); `pixels.len()` must be
@@ -46,10 +44,19 @@ impl ImageTexture {
     pub fn from_linear(width: u32, height: u32, pixels: &[f32]) -> Self {
         debug_assert_eq!(pixels.len(), 3 * width as usize * height as usize);
         let texels = pixels.chunks_exact(3).map(Vec3::from_slice).collect();
+        Self::new(width, height, texels)
+    }
+
+    fn new(width: u32, height: u32, texels: Vec<Vec3>) -> Self {
+        let max = texels
+            .iter()
+            .map(|t| t.abs().max_element())
+            .fold(0.0, f32::max);
         Self {
             width,
             height,
             texels,
+            max,
         }
     }
 
@@ -121,6 +128,15 @@ impl Texture {
                 }
             }
             Self::Image(image) => image.lookup(uv),
+        }
+    }
+
+    /// The largest channel magnitude the texture takes anywhere.
+    pub fn max_channel(&self) -> f32 {
+        match self {
+            Self::Constant(c) => c.abs().max_element(),
+            Self::Checker { even, odd, .. } => even.max_channel().max(odd.max_channel()),
+            Self::Image(image) => image.max,
         }
     }
 }

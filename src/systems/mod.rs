@@ -9,5 +9,5 @@ mod write_image;
 pub use apply_scene::apply_scene;
 pub use assign_materials::{assign_materials, material_refs_changed};
 pub use rebuild_geometry::{geometry_changed, rebuild_geometry, world_primitives};
-pub use render_frame::{PREVIEW_PATHS, preview_block, render_frame};
+pub use render_frame::{PREVIEW_PATHS, film_shift, preview_block, render_frame};
 pub use write_image::write_image;

@@ -5,13 +5,17 @@ use std::time::Instant;
 
 use bevy_ecs::prelude::*;
 
+use glam::Vec3;
+
 use crate::camera::Camera;
 use crate::ecs::resources::{
     Accumulation, ActiveCamera, Counters, OwnerMaterials, PackedGeometry, PassPlan, Preview,
     RenderControl, RenderSettings, SceneVersion, Timings,
 };
+use crate::film::shift_for;
 use crate::geometry::packed::{Aos, Hybrid, LayoutCache, LayoutKind, Soa, SoaSimd};
 use crate::render::{SceneView, render_pass, render_preview};
+use crate::shading::material::Material;
 
 /// Paths a live preview traces at most, unless the smallest block gives more: about 9 ms on the
 /// Cornell box with 2 threads (1.87 M samples/s), so the first image of a 512² edit comes within
@@ -28,6 +32,16 @@ pub fn preview_block(smallest: u32, width: u32, height: u32) -> u32 {
         block *= 2;
     }
     block
+}
+
+/// The fixed-point shift of a scene's film: from its brightest radiance, emitted by any material
+/// of the table or arriving from the background (used or not, so it depends on the files alone).
+pub fn film_shift(materials: &[Material], background: Vec3) -> i32 {
+    let emitted = materials
+        .iter()
+        .map(Material::max_emission)
+        .fold(0.0, f32::max);
+    shift_for(emitted.max(background.abs().max_element()))
 }
 
 /// Renders one pass. A new scene version resets the film first. The samples of the pass follow
@@ -50,7 +64,11 @@ pub fn render_frame(
 ) {
     let s = settings.0;
     if version.is_changed() || acc.film.width != s.width || acc.film.height != s.height {
-        acc.reset(s.width, s.height);
+        acc.reset(
+            s.width,
+            s.height,
+            film_shift(&materials.materials, s.background),
+        );
         acc.preview = Preview::Due;
         timings.render = Default::default();
     }
@@ -66,7 +84,8 @@ pub fn render_frame(
     }
     if acc.preview == Preview::InFilm {
         // The preview was shown; the converging image starts from zero.
-        acc.reset(s.width, s.height);
+        let shift = acc.film.shift;
+        acc.reset(s.width, s.height, shift);
         acc.preview = Preview::Done;
     }
     let preview = acc.preview == Preview::Due;
@@ -146,7 +165,8 @@ pub fn render_frame(
         Err(_) => {
             // Restart cleanly: the partial pass added samples to some rows only.
             control.cancel.store(false, Ordering::Relaxed);
-            acc.reset(s.width, s.height);
+            let shift = acc.film.shift;
+            acc.reset(s.width, s.height, shift);
             if acc.preview == Preview::InFilm {
                 acc.preview = Preview::Done;
             }
