@@ -10,10 +10,11 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crate::app::{Overrides, Renderer};
-use crate::film::OutputKind;
+use crate::film::{DEFAULT_SHIFT, OutputKind, Pixel};
 use crate::geometry::packed::LayoutKind;
 use crate::partial::{
-    PartialError, PartialMeta, add_partial, image_hash, normalize, read_meta, write_output,
+    PartialError, PartialMeta, Tracing, image_hash, image_settings, normalize, read_partial,
+    setting_difference, write_output,
 };
 use crate::scene::error::SceneError;
 use crate::scene::format::SettingsDesc;
@@ -48,15 +49,19 @@ pub enum Samples {
 pub struct PartRender {
     output: PathBuf,
     meta: PartialMeta,
-    resume: Option<PathBuf>,
+    /// The resumed partial and its sums, read before anything was rendered.
+    resume: Option<(PathBuf, Vec<Pixel>)>,
     /// The settings, overrides applied (spp = one past the last sample rendered).
     pub settings: SettingsDesc,
 }
 
 /// Loads `scene` into `r` with `overrides` for a render of `samples` into `output`, checking
 /// the request: a range needs a `.exr` output and no spp override (the range's end is the spp);
-/// a resume needs a partial of the same scene, settings, seed and resolution, and an spp beyond
-/// its last sample.
+/// a resume needs a partial of the same scene, settings (sampler, method, … and `r`'s
+/// [`Tracing`]), seed and resolution, and an spp beyond its last sample. The resumed partial is
+/// read whole and checked first, before the scene is loaded: a corrupt one is refused before
+/// any work, and its sums are held (one more image in memory, 48 bytes a pixel) until
+/// [`PartRender::finish`].
 pub fn prepare(
     r: &mut Renderer,
     mut overrides: Overrides,
@@ -69,6 +74,10 @@ pub fn prepare(
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
+    let tracing = Tracing {
+        roulette: r.roulette(),
+        instancing: r.instancing(),
+    };
     match samples {
         Samples::Range(range) => {
             if overrides.spp.is_some() {
@@ -87,22 +96,25 @@ pub fn prepare(
             let info = r.load(scene)?;
             r.set_first_sample(range.start);
             let s = info.settings;
+            let settings = image_settings(&s, tracing);
             Ok(PartRender {
                 output: output.to_path_buf(),
                 meta: PartialMeta {
                     width: s.width,
                     height: s.height,
                     seed: s.seed,
-                    hash: image_hash(&info.dependencies, &s)?,
+                    hash: image_hash(&info.dependencies, (s.width, s.height), s.seed, &settings)?,
                     ranges: vec![range.clone()],
                     scene: scene_name,
+                    shift: DEFAULT_SHIFT,
+                    settings,
                 },
                 resume: None,
                 settings: s,
             })
         }
         Samples::Resume(base) => {
-            let held = read_meta(base)?;
+            let (held, base_sum) = read_partial(base)?;
             r.set_overrides(overrides);
             let info = r.load(scene)?;
             let s = info.settings;
@@ -119,7 +131,19 @@ pub fn prepare(
                     held.seed, s.seed
                 )));
             }
-            let hash = image_hash(&info.dependencies, &s)?;
+            let settings = image_settings(&s, tracing);
+            if let Some((key, theirs, mine)) = setting_difference(&held.settings, &settings) {
+                let flag = match key {
+                    "max_depth" => " (give the same --max-depth)",
+                    "method" => " (give the same --method)",
+                    "sampler" => " (give the same --sampler)",
+                    _ => "",
+                };
+                return Err(fail(format!(
+                    "{name}: rendered with {key} {theirs}, this render has {key} {mine}{flag}"
+                )));
+            }
+            let hash = image_hash(&info.dependencies, (s.width, s.height), s.seed, &settings)?;
             if held.hash != hash {
                 return Err(fail(format!(
                     "{name}: made from another scene, scene file or settings (hash {:016x}, this render {hash:016x})",
@@ -143,7 +167,7 @@ pub fn prepare(
                     scene: scene_name,
                     ..held
                 },
-                resume: Some(base.clone()),
+                resume: Some((base.clone(), base_sum)),
                 settings: s,
             })
         }
@@ -158,10 +182,23 @@ impl PartRender {
 
     /// After `r` rendered to completion: adds the resumed partial's sums, if any, and writes the
     /// output (a partial for `.exr`, an 8-bit image for `.png`), atomically.
-    pub fn finish(self, r: &mut Renderer) -> Result<(), FarmError> {
+    pub fn finish(mut self, r: &mut Renderer) -> Result<(), FarmError> {
         let film = r.film_mut();
-        if let Some(base) = &self.resume {
-            add_partial(base, &mut film.sum)?;
+        if let Some((base, _)) = &self.resume
+            && self.meta.shift != film.shift
+        {
+            return Err(fail(format!(
+                "{}: its sums are in units of 2^-{}, this render's in 2^-{}",
+                base.display(),
+                self.meta.shift,
+                film.shift
+            )));
+        }
+        self.meta.shift = film.shift;
+        if let Some((_, base_sum)) = &self.resume {
+            for (pixel, held) in film.sum.iter_mut().zip(base_sum) {
+                pixel.merge(held);
+            }
         }
         write_output(&self.output, &self.meta, &film.sum)
             .map_err(|e| fail(format!("{}: cannot write: {e}", self.output.display())))
@@ -175,8 +212,20 @@ pub fn task_range(index: u32, tasks: u32, spp: u32) -> Range<u32> {
     at(index)..at(index + 1)
 }
 
-/// The `rondo render` flags that reproduce `overrides` (but spp) and `layout` in a task.
+/// The `rondo render` flags that reproduce `overrides` (but spp, which each task's range
+/// replaces) and `layout` in a task.
 pub fn render_flags(overrides: &Overrides, layout: LayoutKind) -> Vec<String> {
+    // Every field by name: an override added to `Overrides` fails to compile here until it is
+    // passed on too, so no task can render with a setting the others lack.
+    let Overrides {
+        width,
+        height,
+        spp: _,
+        max_depth,
+        seed,
+        method,
+        sampler,
+    } = *overrides;
     let mut flags = Vec::new();
     let mut push = |name: &str, value: Option<String>| {
         if let Some(v) = value {
@@ -184,11 +233,12 @@ pub fn render_flags(overrides: &Overrides, layout: LayoutKind) -> Vec<String> {
             flags.push(v);
         }
     };
-    push("width", overrides.width.map(|v| v.to_string()));
-    push("height", overrides.height.map(|v| v.to_string()));
-    push("max-depth", overrides.max_depth.map(|v| v.to_string()));
-    push("seed", overrides.seed.map(|v| v.to_string()));
-    push("method", overrides.method.map(|v| v.to_string()));
+    push("width", width.map(|v| v.to_string()));
+    push("height", height.map(|v| v.to_string()));
+    push("max-depth", max_depth.map(|v| v.to_string()));
+    push("seed", seed.map(|v| v.to_string()));
+    push("method", method.map(|v| v.to_string()));
+    push("sampler", sampler.map(|v| v.to_string()));
     if layout != LayoutKind::default() {
         push("layout", Some(layout.to_string()));
     }
@@ -251,6 +301,20 @@ fn slurm_value(what: &str, v: &str) -> Result<String, PartialError> {
 pub fn parts_dir(output: &Path) -> PathBuf {
     output.with_extension("parts")
 }
+
+/// A bash function `q` that prints its argument quoted for any POSIX shell as [`shell_quote`]
+/// quotes the script's paths (bare if it holds only safe characters, else in single quotes), so
+/// the commands the report prints can be pasted whatever the paths hold.
+const QUOTE_FUNCTION: &str = r#"q() {
+  case $1 in
+    '' | *[!-[:alnum:]_./=:,+@%]*)
+      local s=${1//\'/\'\\\'\'}
+      printf "'%s'" "$s"
+      ;;
+    *) printf '%s' "$1" ;;
+  esac
+}
+"#;
 
 /// The sbatch script of `job`: a job array of `tasks` tasks, task `i` rendering
 /// [`task_range`]`(i)` into `part-<i>.exr`; the first task to start queues the merge (after the
@@ -322,7 +386,7 @@ NAME={name}
 
 range() {{ echo \"$(( $1 * SPP / TASKS ))..$(( ($1 + 1) * SPP / TASKS ))\"; }}
 part() {{ printf '%s/part-%04d.exr' \"$PARTS\" \"$1\"; }}
-
+{QUOTE_FUNCTION}
 case \"${{RONDO_FARM_STEP:-render}}\" in
 merge)
   exec \"$RONDO\" merge --spp \"$SPP\" -o \"$OUTPUT\" \"$PARTS\"/part-*.exr
@@ -335,12 +399,14 @@ report)
     if [[ ! -f $p || ! -s $p || -e $p.failed ]]; then
       failed+=(\"$i\")
       echo \"task $i (samples $(range \"$i\")) failed$(cat \"$p.failed\" 2>/dev/null || true); rerun it alone with:\"
-      echo \"  $RONDO render $SCENE --samples $(range \"$i\") -o $p ${{FLAGS[*]}}\"
+      cmd=\"$(q \"$RONDO\") render $(q \"$SCENE\") --samples $(range \"$i\") -o $(q \"$p\")\"
+      for f in \"${{FLAGS[@]}}\"; do cmd+=\" $(q \"$f\")\"; done
+      echo \"  $cmd\"
     fi
   done
   list=$(IFS=,; echo \"${{failed[*]}}\")
   echo \"or rerun them all, then the merge, with:\"
-  echo \"  sbatch --array=$list $RONDO_FARM_SCRIPT\"
+  echo \"  sbatch --array=$list $(q \"$RONDO_FARM_SCRIPT\")\"
   exit 1
   ;;
 esac

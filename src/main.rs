@@ -55,10 +55,10 @@ enum Command {
         #[arg(required = true)]
         inputs: Vec<PathBuf>,
         /// Merged image (.exr or .png).
-        #[arg(short, long)]
+        #[arg(short, long, value_parser = image_path)]
         output: PathBuf,
         /// The merge must hold samples 0..N (missing ones at the end are reported too).
-        #[arg(long)]
+        #[arg(long, value_parser = at_most_u32(MAX_SPP))]
         spp: Option<u32>,
         /// Merge even with samples missing: the image averages the samples present.
         #[arg(long)]
@@ -121,7 +121,7 @@ enum FarmCommand {
         /// Scene file (.ron).
         scene: PathBuf,
         /// Merged image (.exr or .png); partials go to <output without extension>.parts/.
-        #[arg(short, long)]
+        #[arg(short, long, value_parser = image_path)]
         output: PathBuf,
         /// Array tasks (sample ranges).
         #[arg(long)]
@@ -572,9 +572,6 @@ fn render(
 
 /// `rondo merge`: checks the partials, reports missing samples, merges and writes.
 fn merge(inputs: &[PathBuf], output: &Path, spp: Option<u32>, allow_gaps: bool) -> Result<()> {
-    if OutputKind::from_path(output).is_none() {
-        bail!("{}: output must end in .png or .exr", output.display());
-    }
     check_output_file(output)?;
     let plan = rondo::partial::plan_merge(inputs, spp)?;
     if !plan.missing.is_empty() {
@@ -609,9 +606,6 @@ fn farm_slurm(
     mut job: rondo::farm::SlurmJob,
     options: &RenderArgs,
 ) -> Result<()> {
-    if OutputKind::from_path(output).is_none() {
-        bail!("{}: output must end in .png or .exr", output.display());
-    }
     check_output_file(output)?;
     if options.threads.is_some() {
         bail!("--threads: each task renders with --cpus-per-task threads");
@@ -656,23 +650,32 @@ fn check(scene: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The one-line summary printed after a render.
+/// The one-line summary printed after a render: the samples per pixel and the rate are those
+/// this process rendered (`--samples 1023..1024` renders 1 spp, a resume the samples after its
+/// partial's), with their range when it does not start at 0.
 fn summary(r: &Renderer, wall: Duration) -> String {
     let s = r.settings();
+    let film = r.film();
     let stats = r.stats();
     let secs = wall.as_secs_f64().max(1e-9);
-    let samples = f64::from(s.width) * f64::from(s.height) * f64::from(s.spp);
+    let spp = film.count();
+    let samples = f64::from(s.width) * f64::from(s.height) * spp as f64;
+    let range = if film.start > 0 {
+        format!(" (samples {}..{})", film.start, film.samples)
+    } else {
+        String::new()
+    };
     format!(
-        "{}x{}, {} spp, {:.2} s, {:.2} M samples/s, {:.2} M rays/s, BVH {:.2} ms ({} primitives), {} non-finite samples",
+        "{}x{}, {spp} spp{range}, {:.2} s, {:.2} M samples/s, {:.2} M rays/s, BVH {:.2} ms ({} primitives), {} non-finite samples (dropped), {} beyond the film's range (clamped)",
         s.width,
         s.height,
-        s.spp,
         secs,
         samples / secs / 1e6,
         stats.rays as f64 / secs / 1e6,
         r.timings().bvh.as_secs_f64() * 1e3,
         r.primitive_count(),
         stats.nonfinite,
+        stats.clamped,
     )
 }
 

@@ -14,14 +14,23 @@ use std::path::{Path, PathBuf};
 use exr::block::UncompressedBlock;
 use exr::block::chunk::Chunk;
 use exr::block::reader::ChunksReader;
-use exr::meta::attribute::{AttributeValue, Text};
+use exr::meta::BlockDescription;
+use exr::meta::attribute::{AttributeValue, LevelMode, Text};
 use rayon::prelude::*;
 
-use crate::film::{FRACTION_BITS, OutputKind, Pixel, write_atomically, write_image};
-use crate::scene::format::SettingsDesc;
+use crate::film::{FixedPoint, OutputKind, Pixel, write_atomically, write_image};
+use crate::scene::format::{Method, SettingsDesc};
+use crate::shading::sampler::SamplerKind;
 
 /// Value of the `rondo.format` attribute of a partial of this version of the format.
-pub const FORMAT: &str = "rondo-partial-1";
+pub const FORMAT: &str = "rondo-partial-2";
+
+/// The format before the sampler and the renderer's options were recorded (`rondo.settings`):
+/// its partials cannot say whether they belong together, so they are refused with this reason.
+const FORMAT_1: &str = "rondo-partial-1";
+
+/// Longest `rondo.scene` attribute read (a file name).
+const MAX_SCENE_NAME: usize = 255;
 
 /// The channels of a partial besides `R`, `G`, `B` (the mean): per colour, the sum's words,
 /// least significant first.
@@ -62,6 +71,11 @@ pub struct PartialMeta {
     pub ranges: Vec<Range<u32>>,
     /// The scene's file name (for people; not checked).
     pub scene: String,
+    /// The film's fixed-point shift: sums are in units of 2⁻shift ([`crate::film::shift_for`]).
+    pub shift: i32,
+    /// Every other setting the pixels depend on, as [`image_settings`] writes them
+    /// (`max_depth=8 method=mis sampler=sobol …`).
+    pub settings: String,
 }
 
 impl PartialMeta {
@@ -94,10 +108,138 @@ impl Fnv {
     }
 }
 
-/// Hash of everything an image depends on but the sample range: rondo's version, the contents of
-/// every file the scene loads (the scene file first, in load order; paths are left out, so the
-/// same scene in another directory hashes the same) and the settings after overrides (but spp).
-pub fn image_hash(dependencies: &[PathBuf], settings: &SettingsDesc) -> Result<u64, PartialError> {
+/// How a renderer traces, beyond the scene's settings, where it changes an image's bits
+/// (thread count and geometry layout never do, so they are not here).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Tracing {
+    /// Russian roulette on ([`crate::Renderer::set_roulette`]).
+    pub roulette: bool,
+    /// Meshes placed as instances ([`crate::Renderer::set_instancing`]).
+    pub instancing: bool,
+}
+
+impl Default for Tracing {
+    /// What `rondo render` does: roulette and instancing on.
+    fn default() -> Self {
+        Self {
+            roulette: true,
+            instancing: true,
+        }
+    }
+}
+
+/// The keys of [`image_settings`], in order.
+const SETTING_KEYS: [&str; 6] = [
+    "max_depth",
+    "method",
+    "sampler",
+    "background",
+    "roulette",
+    "instancing",
+];
+
+/// Every setting besides the size, seed and samples that changes an image's pixels, as words
+/// `key=value` in a fixed order: `max_depth=8 method=mis sampler=sobol background=0,0,0
+/// roulette=on instancing=on`. Stored as a partial's `rondo.settings` and hashed, so partials
+/// of renders that differ in any of them neither merge nor resume, and the refusal names it.
+pub fn image_settings(settings: &SettingsDesc, tracing: Tracing) -> String {
+    // Every field by name: a setting added to `SettingsDesc` fails to compile here until it is
+    // either part of a partial's identity or known to leave the pixels alone.
+    let SettingsDesc {
+        width: _,
+        height: _,
+        spp: _,
+        max_depth,
+        background,
+        seed: _,
+        method,
+        sampler,
+    } = *settings;
+    let Tracing {
+        roulette,
+        instancing,
+    } = tracing;
+    let on = |b: bool| if b { "on" } else { "off" };
+    // `{}` of an f32 is the shortest text that reads back to the same bits.
+    format!(
+        "max_depth={max_depth} method={method} sampler={sampler} background={},{},{} roulette={} instancing={}",
+        background.x,
+        background.y,
+        background.z,
+        on(roulette),
+        on(instancing)
+    )
+}
+
+/// The first setting two [`image_settings`] texts differ in: its key and both values.
+pub fn setting_difference<'a>(a: &'a str, b: &'a str) -> Option<(&'a str, &'a str, &'a str)> {
+    a.split(' ').zip(b.split(' ')).find_map(|(x, y)| {
+        let (key, mine) = x.split_once('=')?;
+        let theirs = y.strip_prefix(key)?.strip_prefix('=')?;
+        (mine != theirs).then_some((key, mine, theirs))
+    })
+}
+
+/// Checks a `rondo.settings` text: the keys of [`image_settings`] in its order, each value
+/// well-formed and within the limits a render accepts; gives the `max_depth`.
+fn check_settings(text: &str) -> Result<u32, String> {
+    let words: Vec<&str> = text.split(' ').collect();
+    if words.len() != SETTING_KEYS.len() {
+        return Err(format!("expected the keys {}", SETTING_KEYS.join(", ")));
+    }
+    let mut values = [""; SETTING_KEYS.len()];
+    for ((word, key), value) in words.iter().zip(SETTING_KEYS).zip(&mut values) {
+        *value = word
+            .strip_prefix(key)
+            .and_then(|v| v.strip_prefix('='))
+            .ok_or_else(|| format!("expected {key}=… where {word:?} is"))?;
+    }
+    let [max_depth, method, sampler, background, roulette, instancing] = values;
+    let max_depth: u32 = max_depth
+        .parse()
+        .map_err(|_| format!("max_depth {max_depth:?} is not a whole number"))?;
+    let method: Method = method.parse()?;
+    let sampler: SamplerKind = sampler.parse()?;
+    let background: Vec<f32> = background
+        .split(',')
+        .map(|c| c.parse::<f32>().ok().filter(|c| c.is_finite()))
+        .collect::<Option<_>>()
+        .filter(|b: &Vec<f32>| b.len() == 3)
+        .ok_or_else(|| format!("background {background:?} is not three finite numbers"))?;
+    let flag = |key: &str, v: &str| match v {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("{key} {v:?} is neither on nor off")),
+    };
+    let settings = SettingsDesc {
+        max_depth,
+        background: glam::Vec3::new(background[0], background[1], background[2]),
+        method,
+        sampler,
+        ..SettingsDesc::default()
+    };
+    settings.validate()?;
+    let tracing = Tracing {
+        roulette: flag("roulette", roulette)?,
+        instancing: flag("instancing", instancing)?,
+    };
+    // One text per identity, so that comparing texts compares settings.
+    if image_settings(&settings, tracing) != text {
+        return Err("not in the canonical form rondo writes".into());
+    }
+    Ok(max_depth)
+}
+
+/// Hash of everything an image depends on but the sample range: the format, rondo's version,
+/// the contents of every file the scene loads (the scene file first, in load order; paths are
+/// left out, so the same scene in another directory hashes the same), the size, the seed and
+/// the [`image_settings`] text `settings`.
+pub fn image_hash(
+    dependencies: &[PathBuf],
+    size: (u32, u32),
+    seed: u64,
+    settings: &str,
+) -> Result<u64, PartialError> {
     let mut h = Fnv::new();
     h.field(FORMAT.as_bytes());
     h.field(env!("CARGO_PKG_VERSION").as_bytes());
@@ -105,15 +247,10 @@ pub fn image_hash(dependencies: &[PathBuf], settings: &SettingsDesc) -> Result<u
         let data = std::fs::read(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
         h.field(&data);
     }
-    let s = settings;
-    h.field(&s.width.to_le_bytes());
-    h.field(&s.height.to_le_bytes());
-    h.field(&s.max_depth.to_le_bytes());
-    for c in s.background.to_array() {
-        h.field(&c.to_bits().to_le_bytes());
-    }
-    h.field(&s.seed.to_le_bytes());
-    h.field(s.method.to_string().as_bytes());
+    h.field(&size.0.to_le_bytes());
+    h.field(&size.1.to_le_bytes());
+    h.field(&seed.to_le_bytes());
+    h.field(settings.as_bytes());
     Ok(h.0)
 }
 
@@ -181,7 +318,7 @@ pub fn write_partial(path: &Path, meta: &PartialMeta, sum: &[Pixel]) -> std::io:
             sum.len()
         )));
     }
-    let count = meta.count();
+    let (count, fixed) = (meta.count(), FixedPoint::new(meta.shift));
     let [r, g, b] = SUM_CHANNELS;
     let channels = SpecificChannels::build()
         .with_channel("R")
@@ -198,7 +335,7 @@ pub fn write_partial(path: &Path, meta: &PartialMeta, sum: &[Pixel]) -> std::io:
         .with_channel(b[2])
         .with_pixel_fn(|p: Vec2<usize>| {
             let s = &sum[p.y() * w + p.x()];
-            let m = s.mean(count);
+            let m = fixed.mean(s, count);
             let [r0, r1, r2] = s.words(0);
             let [g0, g1, g2] = s.words(1);
             let [b0, b1, b2] = s.words(2);
@@ -219,9 +356,15 @@ pub fn write_partial(path: &Path, meta: &PartialMeta, sum: &[Pixel]) -> std::io:
     );
     other.insert(
         Text::from("rondo.fraction_bits"),
-        text(&FRACTION_BITS.to_string()),
+        text(&meta.shift.to_string()),
     );
-    let scene: String = meta.scene.chars().filter(char::is_ascii).collect();
+    other.insert(Text::from("rondo.settings"), text(&meta.settings));
+    let scene: String = meta
+        .scene
+        .chars()
+        .filter(|c| c.is_ascii_graphic() || *c == ' ')
+        .take(MAX_SCENE_NAME)
+        .collect();
     other.insert(Text::from("rondo.scene"), text(&scene));
     let layer = Layer::new((w, h), attributes, Encoding::FAST_LOSSLESS, channels);
     write_atomically(path, |out| {
@@ -236,7 +379,10 @@ pub fn write_partial(path: &Path, meta: &PartialMeta, sum: &[Pixel]) -> std::io:
 pub fn write_output(path: &Path, meta: &PartialMeta, sum: &[Pixel]) -> std::io::Result<()> {
     match OutputKind::from_path(path) {
         Some(OutputKind::Exr) => write_partial(path, meta, sum),
-        _ => write_image(path, meta.width, meta.height, sum, meta.count()),
+        _ => {
+            let fixed = FixedPoint::new(meta.shift);
+            write_image(path, meta.width, meta.height, sum, meta.count(), fixed)
+        }
     }
 }
 
@@ -271,18 +417,46 @@ fn meta_of(
         }
     };
     let format = attr("rondo.format")?;
+    if format == FORMAT_1 {
+        return Err(error(
+            path,
+            format!(
+                "partial format {FORMAT_1:?} is an older rondo's, which did not record the sampler and the renderer's options, so it cannot be checked: render it again"
+            ),
+        ));
+    }
     if format != FORMAT {
         return Err(error(
             path,
-            format!("partial format {format:?}, this rondo reads {FORMAT:?}"),
+            format!(
+                "partial format {}, this rondo reads {FORMAT:?}",
+                shown(&format)
+            ),
         ));
     }
-    let bits = attr("rondo.fraction_bits")?;
-    if bits != FRACTION_BITS.to_string() {
+    // One flat layer, one resolution level, of the known channels: anything else would be
+    // decoded for nothing (a block's memory grows with the channel count) or means another kind
+    // of file.
+    let one_level = match header.blocks {
+        BlockDescription::ScanLines => true,
+        BlockDescription::Tiles(t) => t.level_mode == LevelMode::Singular,
+    };
+    if header.deep || !one_level {
         return Err(error(
             path,
-            format!("rondo.fraction_bits {bits}, expected {FRACTION_BITS}"),
+            "a partial is a flat image of one resolution level, not deep data or mipmaps",
         ));
+    }
+    for c in &header.channels.list {
+        let name = c.name.to_string();
+        if !["R", "G", "B"].contains(&name.as_str())
+            && !SUM_CHANNELS.iter().flatten().any(|n| **n == name)
+        {
+            return Err(error(
+                path,
+                format!("a partial has no channel {}", shown(&name)),
+            ));
+        }
     }
     for name in SUM_CHANNELS.iter().flatten() {
         let found =
@@ -293,32 +467,119 @@ fn meta_of(
             return Err(error(path, format!("partial has no u32 channel {name}")));
         }
     }
-    let bad = |what: &str, v: &str| error(path, format!("bad {what} attribute {v:?}"));
+    let bad = |what: &str, v: &str, why: &str| {
+        error(path, format!("bad {what} attribute {}: {why}", shown(v)))
+    };
+    let bits = attr("rondo.fraction_bits")?;
+    let shift = bits
+        .parse::<i32>()
+        .ok()
+        .filter(|s| SHIFTS.contains(s))
+        .ok_or_else(|| {
+            bad(
+                "rondo.fraction_bits",
+                &bits,
+                &format!("expected a whole number in {SHIFTS:?}"),
+            )
+        })?;
+    let settings = attr("rondo.settings")?;
+    let max_depth =
+        check_settings(&settings).map_err(|why| bad("rondo.settings", &settings, &why))?;
     let samples = attr("rondo.samples")?;
-    let mut ranges = Vec::new();
-    for part in samples.split(',').filter(|p| !p.is_empty()) {
-        ranges.push(parse_range(part).map_err(|_| bad("rondo.samples", &samples))?);
+    if samples.is_empty() {
+        return Err(bad(
+            "rondo.samples",
+            &samples,
+            "a partial holds at least one sample range",
+        ));
     }
-    let ranges_sorted = normalize(ranges.clone());
-    if ranges_sorted.windows(2).any(|w| w[0].end > w[1].start) {
-        return Err(bad("rondo.samples", &samples));
+    let ranges = samples
+        .split(',')
+        .map(parse_range)
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|why| bad("rondo.samples", &samples, &why))?;
+    let ranges = normalize(ranges);
+    if ranges.windows(2).any(|w| w[0].end > w[1].start) {
+        return Err(bad("rondo.samples", &samples, "the ranges overlap"));
     }
-    let seed = attr("rondo.seed")?;
-    let hash = attr("rondo.hash")?;
+    let end = ranges.last().map_or(0, |r| r.end);
+    // The limits a render is held to, checked before anything is allocated for the pixels: a
+    // partial is a file anyone may have written.
     let size = header.layer_size;
+    let side = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
+    let (width, height) = (side(size.width()), side(size.height()));
+    let limits = SettingsDesc {
+        width,
+        height,
+        spp: end,
+        max_depth,
+        ..SettingsDesc::default()
+    };
+    limits.validate().map_err(|why| {
+        error(
+            path,
+            format!(
+                "{}x{} pixels, samples up to {end}: beyond what rondo renders ({why})",
+                size.width(),
+                size.height()
+            ),
+        )
+    })?;
+    let seed = attr("rondo.seed")?;
+    let seed = seed
+        .parse()
+        .map_err(|_| bad("rondo.seed", &seed, "not a whole number below 2^64"))?;
+    let hash = attr("rondo.hash")?;
+    let hash = Some(&hash)
+        .filter(|h| h.len() == 16 && h.bytes().all(|b| b.is_ascii_hexdigit()))
+        .and_then(|h| u64::from_str_radix(h, 16).ok())
+        .ok_or_else(|| bad("rondo.hash", &hash, "not 16 hexadecimal digits"))?;
+    let scene = match header.own_attributes.other.get(&Text::from("rondo.scene")) {
+        None => String::new(),
+        Some(AttributeValue::Text(t))
+            if t.as_slice().len() <= MAX_SCENE_NAME
+                && t.as_slice()
+                    .iter()
+                    .all(|b| *b == b' ' || b.is_ascii_graphic()) =>
+        {
+            t.to_string()
+        }
+        Some(_) => {
+            return Err(error(
+                path,
+                format!("bad rondo.scene attribute: at most {MAX_SCENE_NAME} printable characters"),
+            ));
+        }
+    };
     Ok(PartialMeta {
-        width: size.width() as u32,
-        height: size.height() as u32,
-        seed: seed.parse().map_err(|_| bad("rondo.seed", &seed))?,
-        hash: u64::from_str_radix(&hash, 16).map_err(|_| bad("rondo.hash", &hash))?,
-        ranges: ranges_sorted,
-        scene: attr("rondo.scene").unwrap_or_default(),
+        width,
+        height,
+        seed,
+        hash,
+        ranges,
+        scene,
+        shift,
+        settings,
     })
 }
 
+/// `text` for an error message: quoted, and cut after 64 characters (an attribute may be long).
+fn shown(text: &str) -> String {
+    const MAX: usize = 64;
+    match text.char_indices().nth(MAX) {
+        Some((at, _)) => format!("{:?}…", &text[..at]),
+        None => format!("{text:?}"),
+    }
+}
+
+/// The fixed-point shifts [`crate::film::shift_for`] can give, for any finite radiance.
+const SHIFTS: std::ops::RangeInclusive<i32> = -128..=200;
+
 /// Adds the sums of the partial at `path` into `sum` (a `width` × `height` image, row-major).
 /// Returns the partial's metadata. The file is decoded block by block (blocks in parallel), never
-/// held whole.
+/// held whole. Every block of the image (tile or scanlines) must be in the file exactly once (a
+/// crafted file could repeat one, or leave one out, and silently brighten or darken the image);
+/// on an error, `sum` holds part of the file.
 pub fn add_partial(path: &Path, sum: &mut [Pixel]) -> Result<PartialMeta, PartialError> {
     let reader = open(path)?;
     let meta = meta_of(path, reader.headers())?;
@@ -347,7 +608,18 @@ pub fn add_partial(path: &Path, sum: &mut [Pixel]) -> Result<PartialMeta, Partia
         })
         .collect();
     let channels = header.channels.clone();
-    let width = meta.width as usize;
+    let (width, height) = (meta.width as usize, meta.height as usize);
+    // The grid of blocks: tiles, or rows of scanlines; whether each block was added. The grid
+    // has at most one cell per pixel, so at most 2²⁶ (as the pixels are limited).
+    let block = match header.blocks {
+        BlockDescription::ScanLines => (width, header.compression.scan_lines_per_block()),
+        BlockDescription::Tiles(t) => (t.tile_size.width(), t.tile_size.height()),
+    };
+    if block.0 == 0 || block.1 == 0 {
+        return Err(error(path, "blocks of no pixels"));
+    }
+    let columns = width.div_ceil(block.0);
+    let mut seen = vec![false; columns * height.div_ceil(block.1)];
     let fail = |e: exr::error::Error| error(path, format!("cannot decode: {e}"));
     let mut chunks = reader.all_chunks(false).map_err(fail)?;
     let meta_data = chunks.meta_data().clone();
@@ -365,8 +637,32 @@ pub fn add_partial(path: &Path, sum: &mut [Pixel]) -> Result<PartialMeta, Partia
             .map(|c| UncompressedBlock::decompress_chunk(c, &meta_data, false))
             .collect::<Result<_, _>>()
             .map_err(fail)?;
-        for block in &blocks {
-            for line in block.lines(&channels) {
+        for b in &blocks {
+            // A block is one cell of the grid (its every channel), clipped at the image's edge.
+            let (x, y) = (b.index.pixel_position.x(), b.index.pixel_position.y());
+            let size = (b.index.pixel_size.width(), b.index.pixel_size.height());
+            let expected = (
+                block.0.min(width.saturating_sub(x)),
+                block.1.min(height.saturating_sub(y)),
+            );
+            if b.index.level != exr::math::Vec2(0, 0)
+                || x % block.0 != 0
+                || y % block.1 != 0
+                || size != expected
+                || x >= width
+                || y >= height
+            {
+                return Err(error(path, "a block lies outside the image's grid"));
+            }
+            let cell = &mut seen[y / block.1 * columns + x / block.0];
+            if *cell {
+                return Err(error(
+                    path,
+                    format!("the block at row {y}, column {x} appears twice"),
+                ));
+            }
+            *cell = true;
+            for line in b.lines(&channels) {
                 let Some((colour, word)) = roles[line.location.channel] else {
                     continue;
                 };
@@ -395,7 +691,22 @@ pub fn add_partial(path: &Path, sum: &mut [Pixel]) -> Result<PartialMeta, Partia
             }
         }
     }
+    if let Some(missing) = seen.iter().position(|cell| !cell) {
+        let (y, x) = (missing / columns * block.1, missing % columns * block.0);
+        return Err(error(
+            path,
+            format!("the block at row {y}, column {x} is missing"),
+        ));
+    }
     Ok(meta)
+}
+
+/// The checked metadata and the sums of the partial at `path`, read whole.
+pub fn read_partial(path: &Path) -> Result<(PartialMeta, Vec<Pixel>), PartialError> {
+    let meta = read_meta(path)?;
+    let mut sum = vec![Pixel::ZERO; meta.width as usize * meta.height as usize];
+    add_partial(path, &mut sum)?;
+    Ok((meta, sum))
 }
 
 /// What a merge found: the combined metadata and the samples missing below its end.
@@ -407,8 +718,8 @@ pub struct MergePlan {
     pub missing: Vec<Range<u32>>,
 }
 
-/// Checks that the partials at `paths` can merge: same size, seed and image hash, no sample in
-/// two of them. Gaps (up to `expect_end` if given, else up to the last sample held) are reported
+/// Checks that the partials at `paths` can merge: same size, seed, fixed-point shift, settings
+/// and image hash, no sample in two of them. Gaps (up to `expect_end` if given, else up to the last sample held) are reported
 /// in the plan, not refused here.
 pub fn plan_merge(paths: &[PathBuf], expect_end: Option<u32>) -> Result<MergePlan, PartialError> {
     let Some(first_path) = paths.first() else {
@@ -439,6 +750,16 @@ pub fn plan_merge(paths: &[PathBuf], expect_end: Option<u32>) -> Result<MergePla
         }
         if meta.seed != first.seed {
             return differs("seed", meta.seed.to_string(), first.seed.to_string());
+        }
+        if meta.shift != first.shift {
+            return differs(
+                "fraction bits",
+                meta.shift.to_string(),
+                first.shift.to_string(),
+            );
+        }
+        if let Some((key, mine, theirs)) = setting_difference(&meta.settings, &first.settings) {
+            return differs(key, mine.into(), theirs.into());
         }
         if meta.hash != first.hash {
             return differs(

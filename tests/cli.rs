@@ -200,11 +200,16 @@ fn usage_errors_exit_with_status_2_and_input_errors_with_status_1() {
     let scene = text(&scene);
     let out_png = dir.join("out.png");
     let out_png = text(&out_png);
-    let usage: [&[&str]; 9] = [
+    let usage: [&[&str]; 12] = [
         &[],
         &["paint"],
         &["render", scene],
         &["render", scene, "-o", "out.txt"],
+        // The README's table: an output that does not end in .png or .exr is a usage error for
+        // every command that writes one (issue 25, item 17).
+        &["merge", "part.exr", "-o", "out.txt"],
+        &["merge", "part.exr", "-o", out_png, "--spp", "0"],
+        &["farm", "slurm", scene, "--tasks", "2", "-o", "out.txt"],
         &["render", scene, "-o", out_png, "--spp", "0"],
         &["render", scene, "-o", out_png, "--threads", "0"],
         &["render", scene, "-o", out_png, "--width", "many"],
@@ -238,4 +243,39 @@ fn usage_errors_exit_with_status_2_and_input_errors_with_status_1() {
     }
     let out = rondo(&["check", scene]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+}
+
+/// Issue 25, item 17: the summary of a render of a sample range gives the samples it rendered,
+/// and the rate from them. Every sample traces its camera ray, so rays/s ≥ samples/s holds for
+/// a true count, and fails by far for 1024 spp claimed where 1 was rendered.
+#[test]
+fn a_range_render_reports_the_samples_it_rendered() {
+    let dir = temp_dir("cli-range-summary");
+    let part = dir.join("part.exr");
+    let scene = cornell();
+    let out = rondo(&[
+        "render",
+        text(&scene),
+        "--samples",
+        "1023..1024",
+        "--width",
+        "128",
+        "--height",
+        "128",
+        "-o",
+        text(&part),
+    ]);
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains(", 1 spp (samples 1023..1024),"), "{err}");
+    let rate = |unit: &str| -> f64 {
+        let end = err
+            .find(unit)
+            .unwrap_or_else(|| panic!("no {unit} in {err}"));
+        let start = err[..end].rfind(", ").expect("a number before the unit") + 2;
+        err[start..end].trim().parse().expect("a rate")
+    };
+    let (samples, rays) = (rate(" M samples/s"), rate(" M rays/s"));
+    // Both are printed to 0.01.
+    assert!(rays + 0.01 >= samples, "{err}");
 }

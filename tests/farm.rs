@@ -10,7 +10,9 @@ use std::process::Command;
 
 use rondo::farm::{Samples, prepare, task_range};
 use rondo::film::{Pixel, write_atomically};
-use rondo::partial::{merge, plan_merge, read_meta, write_output};
+use rondo::partial::{PartialMeta, merge, plan_merge, read_meta, read_partial, write_output};
+use rondo::scene::format::{MAX_SPP, Method};
+use rondo::shading::sampler::SamplerKind;
 use rondo::{Overrides, PassPlan, Renderer};
 
 const SPP: u32 = 16;
@@ -64,8 +66,21 @@ fn render_part(
     overrides: Overrides,
     threads: usize,
 ) -> PathBuf {
+    render_part_with(dir, name, range, overrides, threads, |_| {})
+}
+
+/// As [`render_part`], with a renderer `setup` changes first (roulette off, …).
+fn render_part_with(
+    dir: &Path,
+    name: &str,
+    range: Range<u32>,
+    overrides: Overrides,
+    threads: usize,
+    setup: impl FnOnce(&mut Renderer),
+) -> PathBuf {
     let out = dir.join(name);
     let mut r = Renderer::new(Some(threads), PassPlan::Single).expect("pool");
+    setup(&mut r);
     let part = prepare(&mut r, overrides, &cornell(), &out, &Samples::Range(range))
         .unwrap_or_else(|e| panic!("{e}"));
     r.render_to_completion();
@@ -193,7 +208,10 @@ fn merges_refuse_overlaps_and_other_renders_and_report_gaps() {
         2,
     );
     let e = err(&[a.clone(), depth]);
-    assert!(e.contains("depth.exr") && e.contains("hash"), "{e}");
+    assert!(
+        e.contains("depth.exr") && e.contains("max_depth 2") && e.contains("max_depth 8"),
+        "{e}"
+    );
     // Another scene file with the same settings: the contents differ, so does the hash.
     let other = dir.join("other.ron");
     let text = std::fs::read_to_string(cornell()).expect("scene");
@@ -347,4 +365,425 @@ fn the_slurm_script_splits_as_the_library_and_merges_after_the_array() {
         .collect();
     assert_eq!(String::from_utf8_lossy(&ran.stdout), expected);
     assert_eq!(task_range(6, 7, 1000), 857..1000);
+}
+
+/// Issue 25, item 7: every setting that changes the pixels is part of a partial's identity.
+#[test]
+fn partials_of_another_sampler_method_or_roulette_neither_merge_nor_resume() {
+    let dir = common::temp_dir("farm-identity");
+    let sobol = render_part(&dir, "sobol.exr", 0..4, small(), 2);
+    let other = |name: &str, overrides: Overrides| render_part(&dir, name, 4..8, overrides, 2);
+    let independent = other(
+        "independent.exr",
+        Overrides {
+            sampler: Some(SamplerKind::Independent),
+            ..small()
+        },
+    );
+    let e = plan_merge(&[sobol.clone(), independent], None)
+        .expect_err("another sampler must not merge")
+        .0;
+    assert!(
+        e.contains("independent.exr")
+            && e.contains("sampler independent")
+            && e.contains("sampler sobol"),
+        "{e}"
+    );
+    let nee = other(
+        "nee.exr",
+        Overrides {
+            method: Some(Method::Nee),
+            ..small()
+        },
+    );
+    let e = plan_merge(&[sobol.clone(), nee], None)
+        .expect_err("another method must not merge")
+        .0;
+    assert!(e.contains("nee.exr") && e.contains("method nee"), "{e}");
+    let no_roulette = render_part_with(&dir, "no-roulette.exr", 4..8, small(), 2, |r| {
+        r.set_roulette(false)
+    });
+    let e = plan_merge(&[sobol.clone(), no_roulette], None)
+        .expect_err("another roulette must not merge")
+        .0;
+    assert!(
+        e.contains("no-roulette.exr") && e.contains("roulette off"),
+        "{e}"
+    );
+    // A resume with another sampler: refused before anything is rendered.
+    let mut r = Renderer::new(Some(2), PassPlan::Single).expect("pool");
+    let more = Overrides {
+        spp: Some(8),
+        sampler: Some(SamplerKind::Independent),
+        ..small()
+    };
+    let e = prepare(
+        &mut r,
+        more,
+        &cornell(),
+        &dir.join("more.exr"),
+        &Samples::Resume(sobol.clone()),
+    )
+    .expect_err("a resume with another sampler")
+    .to_string();
+    assert!(
+        e.contains("sobol.exr") && e.contains("sampler sobol") && e.contains("--sampler"),
+        "{e}"
+    );
+    // Same settings: the partials do belong together.
+    let same = other("same.exr", small());
+    let plan = plan_merge(&[sobol.clone(), same], None).expect("one render's partials");
+    assert_eq!(plan.meta.ranges, vec![0..8]);
+    assert!(
+        plan.meta.settings.contains("sampler=sobol") && plan.meta.settings.contains("roulette=on"),
+        "{}",
+        plan.meta.settings
+    );
+}
+
+/// Issue 25, item 7: the film's fixed-point shift is stored, read back and must agree.
+#[test]
+fn partials_in_another_fixed_point_scale_do_not_merge() {
+    let dir = common::temp_dir("farm-shift");
+    let a = render_part(&dir, "a.exr", 0..4, small(), 2);
+    let b = render_part(&dir, "b.exr", 4..8, small(), 2);
+    let (meta, sum) = read_partial(&b).expect("read b");
+    let shifted = dir.join("shifted.exr");
+    let moved = PartialMeta {
+        shift: meta.shift - 1,
+        ..meta.clone()
+    };
+    write_output(&shifted, &moved, &sum).expect("write");
+    assert_eq!(read_meta(&shifted).expect("meta").shift, meta.shift - 1);
+    let e = plan_merge(&[a, shifted], None)
+        .expect_err("sums in other units must not add up")
+        .0;
+    assert!(
+        e.contains("shifted.exr") && e.contains(&(meta.shift - 1).to_string()),
+        "{e}"
+    );
+}
+
+/// The attributes of a single-part EXR's header, each with the byte range of its value, and
+/// where the offset table starts (after the header's closing null byte).
+fn exr_header(bytes: &[u8]) -> (Vec<(String, Range<usize>)>, usize) {
+    fn text(bytes: &[u8], at: &mut usize) -> String {
+        let len = bytes[*at..]
+            .iter()
+            .position(|&b| b == 0)
+            .expect("null byte");
+        let s = String::from_utf8_lossy(&bytes[*at..*at + len]).into_owned();
+        *at += len + 1;
+        s
+    }
+    // The magic number and the version field come first.
+    let mut at = 8;
+    let mut attributes = Vec::new();
+    while bytes[at] != 0 {
+        let name = text(bytes, &mut at);
+        let _kind = text(bytes, &mut at);
+        let size = i32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"));
+        at += 4;
+        let size = usize::try_from(size).expect("attribute size");
+        attributes.push((name, at..at + size));
+        at += size;
+    }
+    (attributes, at + 1)
+}
+
+/// A copy of the partial `from` at `to` whose data window says `width` × `height` (and whose
+/// chunk count agrees, as a reader checks).
+fn with_data_window(from: &Path, to: &Path, width: i32, height: i32) {
+    let mut bytes = std::fs::read(from).expect("read");
+    let (attributes, _) = exr_header(&bytes);
+    let value = |name: &str| {
+        let (_, range) = attributes
+            .iter()
+            .find(|(n, _)| n == name)
+            .unwrap_or_else(|| panic!("no {name}"));
+        range.clone()
+    };
+    let int = |bytes: &[u8], at: usize| {
+        i32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"))
+    };
+    // box2i: x min, y min, x max, y max.
+    let window = value("dataWindow");
+    bytes[window.start + 8..window.start + 12].copy_from_slice(&(width - 1).to_le_bytes());
+    bytes[window.start + 12..window.start + 16].copy_from_slice(&(height - 1).to_le_bytes());
+    // tiledesc: tile width, tile height, level mode; one chunk per tile.
+    let tiles = value("tiles");
+    let (tile_w, tile_h) = (int(&bytes, tiles.start), int(&bytes, tiles.start + 4));
+    let chunks = ((width + tile_w - 1) / tile_w) * ((height + tile_h - 1) / tile_h);
+    let count = value("chunkCount");
+    bytes[count].copy_from_slice(&chunks.to_le_bytes());
+    std::fs::write(to, bytes).expect("write");
+}
+
+/// Issue 25, item 8: every attribute and the size of a partial are checked against the limits
+/// of a render before anything is allocated for its pixels.
+#[test]
+fn a_partial_is_checked_before_anything_is_allocated_for_it() {
+    let dir = common::temp_dir("farm-hostile");
+    let good = render_part(&dir, "good.exr", 0..4, small(), 2);
+    let (meta, sum) = read_partial(&good).expect("read");
+    let crafted = |name: &str, meta: PartialMeta| {
+        let path = dir.join(name);
+        write_output(&path, &meta, &sum).expect("write");
+        path
+    };
+    let refused = |path: &Path, reason: &str| {
+        let e = read_meta(path).expect_err("must refuse").0;
+        assert!(
+            e.contains(path.to_str().expect("UTF-8")) && e.contains(reason),
+            "{e}"
+        );
+        let e = plan_merge(&[good.clone(), path.to_path_buf()], None)
+            .expect_err("must not merge")
+            .0;
+        assert!(e.contains(reason), "{e}");
+    };
+    // No samples at all: merged with `good`, the image would be twice as bright.
+    let empty = crafted(
+        "empty.exr",
+        PartialMeta {
+            ranges: vec![],
+            ..meta.clone()
+        },
+    );
+    refused(&empty, "at least one sample range");
+    // Samples beyond the spp limit of a render.
+    let beyond = crafted(
+        "beyond.exr",
+        PartialMeta {
+            ranges: vec![MAX_SPP..MAX_SPP + 1],
+            ..meta.clone()
+        },
+    );
+    refused(&beyond, &format!("spp must be at most {MAX_SPP}"));
+    let settings = crafted(
+        "settings.exr",
+        PartialMeta {
+            settings: meta.settings.replace("max_depth=8", "max_depth=0"),
+            ..meta.clone()
+        },
+    );
+    refused(&settings, "max_depth must be >= 1");
+    let scene = crafted(
+        "scene.exr",
+        PartialMeta {
+            scene: "x".repeat(300),
+            ..meta.clone()
+        },
+    );
+    // The writer cuts a long name to the limit the reader holds it to.
+    assert_eq!(read_meta(&scene).expect("meta").scene.len(), 255);
+    // A data window of 65535² (206 GB of sums), and one within each side's limit but beyond
+    // the pixel limit: refused from the header alone, by the command line too, with exit 1.
+    let huge = dir.join("huge.exr");
+    with_data_window(&good, &huge, 65535, 65535);
+    refused(&huge, "width must be at most 16384");
+    let wide = dir.join("wide.exr");
+    with_data_window(&good, &wide, 16384, 16384);
+    refused(&wide, "width × height must be at most");
+    let out = Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .arg("merge")
+        .arg(&huge)
+        .arg("-o")
+        .arg(dir.join("merged.png"))
+        .output()
+        .expect("run rondo");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("huge.exr") && stderr.contains("65535x65535"),
+        "{stderr}"
+    );
+    // A block that says it is the tile at (0, 0) where the one at (1, 0) belongs: the first
+    // would count twice, the second not at all. (Partials are tiled, 64² per tile; the offset
+    // table says where each tile starts, and a tile starts with its x and y index.)
+    let two_tiles = Overrides {
+        width: Some(128),
+        height: Some(8),
+        ..Default::default()
+    };
+    let tiles = render_part(&dir, "tiles.exr", 0..1, two_tiles, 2);
+    let mut bytes = std::fs::read(&tiles).expect("read");
+    let (_, table) = exr_header(&bytes);
+    let second = u64::from_le_bytes(bytes[table + 8..table + 16].try_into().expect("8 bytes"));
+    let second = usize::try_from(second).expect("offset");
+    assert_eq!(
+        bytes[second..second + 4],
+        1i32.to_le_bytes(),
+        "tile 1 is at x 1"
+    );
+    bytes[second..second + 4].copy_from_slice(&0i32.to_le_bytes());
+    let twice = dir.join("twice.exr");
+    std::fs::write(&twice, bytes).expect("write");
+    let plan = plan_merge(std::slice::from_ref(&twice), None).expect("the header is fine");
+    let Err(e) = merge(std::slice::from_ref(&twice), &plan) else {
+        panic!("a tile twice was merged");
+    };
+    let e = e.0;
+    assert!(e.contains("twice.exr") && e.contains("twice"), "{e}");
+}
+
+/// Issue 25, item 9: a resume reads and checks the whole partial before it renders anything.
+#[test]
+fn a_corrupt_resume_base_is_refused_before_rendering() {
+    let dir = common::temp_dir("farm-corrupt-base");
+    let base = render_part(&dir, "base.exr", 0..4, small(), 2);
+    let mut bytes = std::fs::read(&base).expect("read");
+    bytes.truncate(bytes.len() - 64);
+    let corrupt = dir.join("corrupt.exr");
+    std::fs::write(&corrupt, bytes).expect("write");
+    read_meta(&corrupt).expect("the header alone is fine");
+    let mut r = Renderer::new(Some(2), PassPlan::Single).expect("pool");
+    let o = Overrides {
+        spp: Some(8),
+        ..small()
+    };
+    let e = prepare(
+        &mut r,
+        o,
+        &cornell(),
+        &dir.join("more.exr"),
+        &Samples::Resume(corrupt),
+    )
+    .expect_err("a corrupt base")
+    .to_string();
+    assert!(e.contains("corrupt.exr"), "{e}");
+}
+
+/// Runs `script` with bash in `dir` with the environment `env`; returns its stdout.
+fn run_script(script: &Path, dir: &Path, env: &[(&str, &str)]) -> (bool, String) {
+    let out = Command::new("bash")
+        .arg(script)
+        .current_dir(dir)
+        .envs(env.iter().copied())
+        .output()
+        .expect("bash");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr),
+    )
+}
+
+/// `rondo farm slurm ARGS` into `dir/render.sbatch`.
+fn slurm_script<A: AsRef<std::ffi::OsStr>>(
+    dir: &Path,
+    args: impl IntoIterator<Item = A>,
+) -> PathBuf {
+    let out = Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .args(["farm", "slurm"])
+        .args(args)
+        .output()
+        .expect("run rondo");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let path = dir.join("render.sbatch");
+    std::fs::write(&path, out.stdout).expect("write script");
+    path
+}
+
+/// Issue 25, item 7: a task of the Slurm script renders with every override given to `farm
+/// slurm`: its partial is the library's for the same overrides, bit for bit.
+#[test]
+fn a_slurm_task_renders_with_every_override() {
+    let dir = common::temp_dir("farm-slurm-flags");
+    let flags = "--spp 8 --tasks 2 --width 12 --height 9 --max-depth 5 --seed 3 --method nee \
+        --sampler independent --layout aos -o";
+    let mut args = vec![cornell().into_os_string()];
+    args.extend(flags.split_whitespace().map(Into::into));
+    args.push(dir.join("final.exr").into_os_string());
+    let script = slurm_script(&dir, args);
+    // Task 1 (not the first, so it queues no merge) as Slurm would start it.
+    let (ok, log) = run_script(
+        &script,
+        &dir,
+        &[("SLURM_ARRAY_TASK_ID", "1"), ("SLURM_ARRAY_TASK_MIN", "0")],
+    );
+    assert!(ok, "{log}");
+    let task = read_partial(&dir.join("final.parts/part-0001.exr")).expect("task's partial");
+    let overrides = Overrides {
+        width: Some(12),
+        height: Some(9),
+        max_depth: Some(5),
+        seed: Some(3),
+        method: Some(Method::Nee),
+        sampler: Some(SamplerKind::Independent),
+        spp: None,
+    };
+    let library = render_part(&dir, "library.exr", 4..8, overrides, 2);
+    let library = read_partial(&library).expect("library's partial");
+    assert_eq!(task.0, library.0, "metadata");
+    assert!(task.1 == library.1, "sums differ");
+}
+
+/// Issue 25, item 10: the commands the report prints run as written when pasted into a shell,
+/// whatever the paths hold (spaces, quotes, `$(…)`).
+#[test]
+fn the_report_prints_commands_a_shell_runs_as_written() {
+    let dir = common::temp_dir("farm-report-quoting");
+    let odd = dir.join("a b $(touch pwned) 'q'");
+    std::fs::create_dir_all(odd.join("final.parts")).expect("mkdir");
+    let scene = odd.join("scene one.ron");
+    std::fs::copy(cornell(), &scene).expect("copy scene");
+    let mut args = vec![scene.into_os_string()];
+    args.extend(
+        "--spp 4 --tasks 2 --width 8 --height 6 -o"
+            .split(' ')
+            .map(Into::into),
+    );
+    args.push(odd.join("final.exr").into_os_string());
+    let script = slurm_script(&odd, args);
+    let script_text = script.to_str().expect("UTF-8");
+    let (ok, report) = run_script(
+        &script,
+        &dir,
+        &[
+            ("RONDO_FARM_STEP", "report"),
+            ("RONDO_FARM_ARRAY", "7"),
+            ("RONDO_FARM_SCRIPT", script_text),
+        ],
+    );
+    assert!(!ok, "the report exits 1: {report}");
+    let lines: Vec<&str> = report.lines().collect();
+    let after = |prefix: &str| {
+        let at = lines
+            .iter()
+            .position(|l| l.starts_with(prefix))
+            .unwrap_or_else(|| panic!("no {prefix:?} in {report}"));
+        lines[at + 1].trim_start().to_string()
+    };
+    let rerun = after("task 1 (samples 2..4) failed");
+    let ran = Command::new("sh")
+        .arg("-c")
+        .arg(&rerun)
+        .current_dir(&dir)
+        .output()
+        .expect("sh");
+    assert!(
+        ran.status.success(),
+        "{rerun}: {}",
+        String::from_utf8_lossy(&ran.stderr)
+    );
+    let meta = read_meta(&odd.join("final.parts/part-0001.exr")).expect("the rerun's partial");
+    assert_eq!((meta.ranges, meta.width, meta.height), (vec![2..4], 8, 6));
+    assert!(!dir.join("pwned").exists(), "{rerun} ran a command");
+    // The sbatch line, with sbatch standing in for a function that prints its arguments.
+    let all = after("or rerun them all");
+    let ran = Command::new("sh")
+        .arg("-c")
+        .arg(format!("sbatch() {{ printf '%s\\n' \"$@\"; }}; {all}"))
+        .current_dir(&dir)
+        .output()
+        .expect("sh");
+    assert_eq!(
+        String::from_utf8_lossy(&ran.stdout),
+        format!("--array=0,1\n{script_text}\n")
+    );
+    assert!(!dir.join("pwned").exists(), "{all} ran a command");
 }
