@@ -4,9 +4,12 @@
 # Installs Debian's slurm-wlm and munge if missing, starts a private munged, slurmctld and slurmd
 # (2 CPUs, ports 16817/16818, all state in a temporary directory), submits the script for a small
 # scene in 4 array tasks, waits for the array and the merge, and checks that the merged image
-# equals a single-process render exactly. Then a task is made to fail: the report job must name
-# it with the commands to rerun it, and rerunning it must complete the merge. Stops the daemons
-# and removes everything on exit. Usage: bash tests/slurm.sh (as root; a few minutes at most).
+# equals a single-process render exactly (with a non-default sampler, which every task must be
+# given, and an output directory whose name has a space, a quote and `$(…)`). Then a task is
+# made to fail: the report job must name it with the commands to rerun it, the direct command
+# pasted into sh must render the task's samples, and rerunning it with sbatch must complete the
+# merge. Stops the daemons and removes everything on exit. Usage: bash tests/slurm.sh (as root;
+# a few minutes at most).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -38,14 +41,15 @@ cleanup() {
 trap cleanup EXIT
 fail() {
   echo "FAIL: $*"
-  for f in "$WORK"/*.log "$WORK"/out/*.out; do
+  for f in "$WORK"/*.log "$OUT"/*.out; do
     [ -e "$f" ] && { echo "--- $f"; tail -n 20 "$f"; }
   done
   exit 1
 }
 
 # munge: a private key and socket, so a system munged (if any) is left alone.
-mkdir -p "$WORK/munge" "$WORK/state" "$WORK/spool" "$WORK/out"
+OUT="$WORK/out dir 'q' \$(touch pwned)"
+mkdir -p "$WORK/munge" "$WORK/state" "$WORK/spool" "$OUT"
 dd if=/dev/urandom of="$WORK/munge/munge.key" bs=1024 count=1 status=none
 chmod 400 "$WORK/munge/munge.key"
 munged --force --foreground --key-file="$WORK/munge/munge.key" \
@@ -109,16 +113,16 @@ wait_idle() {
   return 1
 }
 
-SIZE=(--width 40 --height 30)
-"$RONDO" farm slurm scenes/cornell.ron --spp 16 --tasks 4 "${SIZE[@]}" -o "$WORK/out/final.exr" \
+SIZE=(--width 40 --height 30 --sampler independent)
+"$RONDO" farm slurm scenes/cornell.ron --spp 16 --tasks 4 "${SIZE[@]}" -o "$OUT/final.exr" \
   >"$WORK/render.sbatch"
 grep -q -- '--array=0-3' "$WORK/render.sbatch" || fail "no --array=0-3 in the script"
-cd "$WORK/out"
+cd "$OUT"
 array=$(sbatch --parsable "$WORK/render.sbatch")
 echo "submitted array job $array"
 wait_idle 180 || fail "jobs still queued after 180 s"
 [ -s final.exr ] || fail "no merged image"
-ls "$WORK/out/final.parts" | grep -c '^part-.*\.exr$' | grep -qx 4 || fail "not 4 partials"
+ls "$OUT/final.parts" | grep -c '^part-.*\.exr$' | grep -qx 4 || fail "not 4 partials"
 
 "$RONDO" render "$ROOT/scenes/cornell.ron" --spp 16 "${SIZE[@]}" -o "$WORK/single.exr" 2>/dev/null
 "$RONDO" render "$ROOT/scenes/cornell.ron" --spp 16 "${SIZE[@]}" -o "$WORK/single.png" 2>/dev/null
@@ -137,10 +141,18 @@ wait_idle 180 || fail "jobs still queued after 180 s (failure run)"
 report=$(ls rondo-final-report-*.out 2>/dev/null | head -n 1)
 [ -n "$report" ] || fail "no report job ran"
 grep -q 'task 2 (samples 8..12) failed' "$report" || fail "report does not name task 2: $(cat "$report")"
-grep -q "sbatch --array=2 $WORK/render.sbatch" "$report" || fail "report has no rerun command: $(cat "$report")"
-grep -q -- "--samples 8..12 -o $WORK/out/final.parts/part-0002.exr" "$report" ||
-  fail "report has no direct command: $(cat "$report")"
+all=$(grep -A1 '^or rerun them all' "$report" | tail -n 1)
+[ "$(sh -c "sbatch() { printf '%s|' \"\$@\"; }; $all")" = "--array=2|$WORK/render.sbatch|" ] ||
+  fail "report's sbatch command does not parse back: $all"
+# The direct command, pasted into sh as printed: it renders the task's samples, and runs nothing
+# the path holds.
+direct=$(grep -A1 '^task 2 (samples 8..12) failed' "$report" | tail -n 1)
 rmdir final.parts/part-0002.exr
+sh -c "$direct" 2>/dev/null || fail "the report's direct command fails: $direct"
+[ ! -e pwned ] && [ ! -e "$WORK/pwned" ] || fail "the report's direct command ran \$(touch pwned)"
+"$RONDO" merge --allow-gaps final.parts/part-0002.exr -o "$WORK/part2.png" 2>/dev/null ||
+  fail "the direct command wrote no partial"
+rm final.parts/part-0002.exr
 sbatch --parsable --array=2 "$WORK/render.sbatch" >/dev/null
 wait_idle 180 || fail "jobs still queued after 180 s (rerun)"
 [ -s final.exr ] || fail "no merged image after the rerun"
