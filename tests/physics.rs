@@ -738,3 +738,36 @@ fn smooth_normals_leak_no_light_through_a_mesh() {
         assert_eq!(lit, 0, "{method:?}: {lit} pixels lit through the floor");
     }
 }
+
+#[test]
+fn an_image_on_a_sphere_has_its_top_at_plus_y_and_reads_unmirrored_from_outside() {
+    // A 4×2 image: top row red, green, blue, white; bottom row black but for a grey column 2.
+    // On a lamp sphere seen from +z (right = +x), the visible face spans u ∈ (¼, ¾): left of
+    // centre column 1 (green), right of it column 2 (blue); above the equator the top row.
+    let dir = temp_dir("sphere-uv");
+    let top = [[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]];
+    let bottom = [[0, 0, 0], [0, 0, 0], [255, 255, 255], [0, 0, 0]];
+    let pixels: Vec<u8> = top.iter().chain(&bottom).flatten().copied().collect();
+    image::RgbImage::from_raw(4, 2, pixels)
+        .expect("4×2")
+        .save(dir.join("tex.png"))
+        .expect("write png");
+    let scene = write_scene(
+        &dir,
+        "ball.ron",
+        r#"Scene(
+            camera: Camera(position: (0, 0, 5), look_at: (0, 0, 0), fov: 30),
+            settings: Settings(width: 32, height: 32, spp: 1, max_depth: 1, background: (0, 0, 0)),
+            materials: { "tex": Light(emit: Image(path: "tex.png"), intensity: 1, two_sided: true) },
+            entities: [ Entity(name: "ball", material: "tex", shape: Sphere(center: (0, 0, 0), radius: 1)) ],
+        )"#,
+    );
+    let r = render(&scene, Overrides::default(), None);
+    let px = r.film().mean();
+    let at = |x: usize, y: usize| px[y * 32 + x];
+    // Upper left and upper right of the centre, lower left and lower right.
+    assert!((at(12, 12) - Vec3::Y).length() < 1e-6, "{}", at(12, 12));
+    assert!((at(19, 12) - Vec3::Z).length() < 1e-6, "{}", at(19, 12));
+    assert!(at(12, 19).length() < 1e-6, "{}", at(12, 19));
+    assert!((at(19, 19) - Vec3::ONE).length() < 1e-6, "{}", at(19, 19));
+}

@@ -36,17 +36,20 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Opt
     }
 }
 
-/// Texture coordinates of a point on the unit sphere, by the thesis's latitude/longitude formula:
-/// longitude φ = atan2(y, x) about the z axis, latitude θ = asin(z),
-/// `u = 1 − (φ + π) / 2π`, `v = (2θ + π) / 2π`.
+/// Texture coordinates of a point on the unit sphere (its outward normal `unit`, in object
+/// space): latitude–longitude with the pole on **+y**, the image's top row at the north pole and
+/// its centre column facing +z, unmirrored seen from outside:
+/// `u = atan2(−x, −z) / 2π` wrapped into [0, 1), `v = 1 − acos(y) / π` (v = 1 is the image's top
+/// row). This is the environment maps' convention (`u = atan2(x, −z) / 2π`, for a direction seen
+/// from inside) with x mirrored, because a sphere is seen from outside. (The thesis's formula put
+/// the pole on +z and showed the image mirrored.)
 #[inline]
 pub fn sphere_uv(unit: Vec3) -> Vec2 {
-    let phi = unit.y.atan2(unit.x);
-    let theta = unit.z.clamp(-1.0, 1.0).asin();
-    Vec2::new(
-        1.0 - (phi + PI) / (2.0 * PI),
-        (2.0 * theta + PI) / (2.0 * PI),
-    )
+    let u = (-unit.x).atan2(-unit.z) / (2.0 * PI);
+    let u = if u < 0.0 { u + 1.0 } else { u };
+    // atan2 of (−0, −1) is −π: u + 1 then rounds to 1, the same seam as 0.
+    let u = if u >= 1.0 { 0.0 } else { u };
+    Vec2::new(u, 1.0 - unit.y.clamp(-1.0, 1.0).acos() / PI)
 }
 
 #[cfg(test)]
@@ -93,13 +96,35 @@ mod tests {
     }
 
     #[test]
-    fn uv_follows_the_thesis_formula() {
-        // North pole: θ = π/2 → v = 1. Point on −x: φ = π → u = 0.
-        assert!((sphere_uv(Vec3::Z).y - 1.0).abs() < 1e-6);
-        assert!((sphere_uv(-Vec3::Z).y).abs() < 1e-6);
-        let uv = sphere_uv(Vec3::new(-1.0, 1e-7, 0.0));
-        assert!(uv.x.abs() < 1e-5 && (uv.y - 0.5).abs() < 1e-6, "{uv}");
-        let uv = sphere_uv(Vec3::Y); // φ = π/2 → u = 1 − (3π/2)/2π = 0.25
-        assert!((uv.x - 0.25).abs() < 1e-6, "{uv}");
+    fn uv_is_latitude_longitude_about_y_and_unmirrored_from_outside() {
+        // The north pole is the image's top row (v = 1), the south pole its bottom row.
+        assert!((sphere_uv(Vec3::Y).y - 1.0).abs() < 1e-6);
+        assert!(sphere_uv(-Vec3::Y).y.abs() < 1e-6);
+        // The equator is v = ½; +z faces the image's centre column, −z the seam.
+        let uv = sphere_uv(Vec3::Z);
+        assert!((uv - Vec2::new(0.5, 0.5)).length() < 1e-6, "{uv}");
+        assert!(sphere_uv(-Vec3::Z).x < 1e-6);
+        assert!((sphere_uv(-Vec3::X).x - 0.25).abs() < 1e-6);
+        assert!((sphere_uv(Vec3::X).x - 0.75).abs() < 1e-6);
+        // Seen from outside, u grows to the right (the camera's right is forward × up): from
+        // +z (right = +x), from −x (right = +z) and from +x (right = −z).
+        let u = |n: Vec3| sphere_uv(n.normalize()).x;
+        assert!(u(Vec3::new(0.1, 0.0, 1.0)) > u(Vec3::new(-0.1, 0.0, 1.0)));
+        assert!(u(Vec3::new(-1.0, 0.0, 0.1)) > u(Vec3::new(-1.0, 0.0, -0.1)));
+        assert!(u(Vec3::new(1.0, 0.0, -0.1)) > u(Vec3::new(1.0, 0.0, 0.1)));
+        // The same as the environment map's u for the direction mirrored in x.
+        for d in [
+            Vec3::new(0.3, 0.2, -0.9),
+            Vec3::new(-0.7, -0.1, 0.2),
+            Vec3::new(0.5, 0.5, 0.5),
+        ] {
+            let d = d.normalize();
+            let env = d.x.atan2(-d.z) / (2.0 * PI);
+            let env = if env < 0.0 { env + 1.0 } else { env };
+            assert!(
+                (sphere_uv(Vec3::new(-d.x, d.y, d.z)).x - env).abs() < 1e-6,
+                "{d}"
+            );
+        }
     }
 }
