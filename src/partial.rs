@@ -824,4 +824,40 @@ mod tests {
         assert_eq!(gaps(&r, 1024), vec![300..512, 768..1024]);
         assert_eq!(format_ranges(&r), "0..300,512..768");
     }
+
+    #[test]
+    fn settings_text_reads_back_only_in_its_canonical_form() {
+        let s = SettingsDesc {
+            background: glam::Vec3::new(0.1, 1e-10, 5e9),
+            sampler: SamplerKind::Independent,
+            ..SettingsDesc::default()
+        };
+        let off = Tracing {
+            roulette: false,
+            ..Tracing::default()
+        };
+        let text = image_settings(&s, off);
+        assert_eq!(
+            text,
+            "max_depth=8 method=mis sampler=independent background=0.1,0.0000000001,5000000000 roulette=off instancing=on"
+        );
+        assert_eq!(check_settings(&text), Ok(8));
+        let on = image_settings(&s, Tracing::default());
+        assert_eq!(
+            setting_difference(&text, &on),
+            Some(("roulette", "off", "on"))
+        );
+        for bad in [
+            "",
+            "max_depth=8",
+            &text.replace("max_depth=8", "max_depth=08"),
+            &text.replace("max_depth=8", "max_depth=2000"),
+            &text.replace("sampler=independent", "sampler=halton"),
+            &text.replace("0.1,", "NaN,"),
+            &text.replace(" roulette", "  roulette"),
+            &text.replace("roulette=off", "roulette=no"),
+        ] {
+            assert!(check_settings(bad).is_err(), "{bad:?}");
+        }
+    }
 }
