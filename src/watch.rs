@@ -78,13 +78,14 @@ use std::sync::{Arc, Mutex, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use notify::event::{AccessKind, AccessMode, CreateKind, MetadataKind, ModifyKind, RenameMode};
+use notify::event::{AccessKind, AccessMode, MetadataKind, ModifyKind, RenameMode};
 use notify::{EventKind, RecommendedWatcher, RecursiveMode, Watcher};
 
 use crate::app::{Overrides, Renderer};
 use crate::ecs::resources::{ChangeSummary, Counters, PassPlan};
 use crate::film::{Film, OutputKind};
 use crate::geometry::layout::LayoutKind;
+use crate::scene::error::{MAX_MESSAGE, escape_controls, printable};
 
 /// How long the files must be quiet before a save that is not known to be complete is loaded,
 /// and a third of how long a failed load waits for the rest of its save before it is reported.
@@ -95,6 +96,16 @@ use crate::geometry::layout::LayoutKind;
 /// holds a save together with room to spare on a loaded machine. Saves that end in a close or a
 /// rename (every editor on Linux) do not wait for it: they load as soon as that event arrives.
 pub const DEBOUNCE: Duration = Duration::from_millis(50);
+
+/// Whether the platform's watcher says when a writer closes a file (inotify's
+/// `IN_CLOSE_WRITE`): only then can a load wait for the close of a file being written.
+const REPORTS_CLOSE: bool = cfg!(any(target_os = "linux", target_os = "android"));
+
+/// How long a file that a writer still holds open may stay quiet before it is loaded anyway
+/// (where [`REPORTS_CLOSE`]): a close that never comes (a `truncate(2)` by path, a close lost
+/// while a directory was watched afresh) must not stop reloads for good, and a writer that
+/// pauses this long mid-save is taken for having stopped.
+pub const OPEN_WRITER_PATIENCE: Duration = Duration::from_secs(10);
 
 /// How often an idle loop wakes to check its stop flag even without events (stopping also sends
 /// a wake-up, so this is only a safety net).
@@ -137,11 +148,13 @@ pub enum Effect {
     /// Attributes only (times, permissions): never cancels a pass; reloads only a scene whose
     /// last load failed.
     Metadata,
-    /// The contents may be in the middle of changing: a write, a truncation, a creation, a
-    /// removal or a rename away.
+    /// The contents may be in the middle of changing: a creation, a removal, a rename away, a
+    /// directory created (its files follow).
     Partial,
-    /// The contents are final: the writer closed the file, it was renamed into place, or a
-    /// directory was created.
+    /// Data was written (or the file truncated) through a descriptor that is still open: where
+    /// the platform reports closes, the file is complete only once the writer closes it.
+    Writing,
+    /// The contents are final: the writer closed the file or it was renamed into place.
     Complete,
 }
 
@@ -157,7 +170,7 @@ fn effect(kind: &EventKind, index: usize) -> Option<Effect> {
         EventKind::Modify(ModifyKind::Name(RenameMode::To)) => Effect::Complete,
         // `[from, to]`: the old name is gone, the new one is in place.
         EventKind::Modify(ModifyKind::Name(RenameMode::Both)) if index > 0 => Effect::Complete,
-        EventKind::Create(CreateKind::Folder) => Effect::Complete,
+        EventKind::Modify(ModifyKind::Data(_)) => Effect::Writing,
         _ => Effect::Partial,
     })
 }
@@ -595,10 +608,8 @@ impl fmt::Display for ReloadReport {
                 .trigger
                 .iter()
                 .map(|p| {
-                    p.file_name()
-                        .unwrap_or(p.as_os_str())
-                        .to_string_lossy()
-                        .into_owned()
+                    let name = p.file_name().unwrap_or(p.as_os_str()).to_string_lossy();
+                    escape_controls(&name).into_owned()
                 })
                 .collect();
             let names = if names.is_empty() {
@@ -726,8 +737,13 @@ pub enum Report {
     Rendered(ReloadReport),
     /// A save could not be loaded; the previous scene and image are kept.
     Failed {
-        /// The error, starting with `file:line:col` where known.
+        /// The error, starting with `file:line:col` where known: at most
+        /// [`MAX_MESSAGE`](crate::scene::error::MAX_MESSAGE) bytes, control characters escaped.
         message: String,
+        /// The line of the scene or prefab file at that `line:col`, if the error is located in
+        /// one ([`SceneError::source_line`](crate::SceneError::source_line): bounded, escaped;
+        /// never a line of a mesh, an image or another file).
+        source_line: Option<String>,
     },
     /// A load failed but the save may not be over: the error is reported only if no further
     /// event comes within three windows. Not printed.
@@ -750,8 +766,13 @@ pub enum Report {
 
 impl Report {
     /// The line the command line prints, if any (starts, image writes and deferred errors are
-    /// silent).
+    /// silent). Control characters of file names and messages are escaped.
     pub fn line(&self) -> Option<String> {
+        let line = self.raw_line()?;
+        Some(printable(&line, 2 * MAX_MESSAGE).into_owned())
+    }
+
+    fn raw_line(&self) -> Option<String> {
         Some(match self {
             Self::Watching { files, directories } => {
                 let dirs: Vec<String> = directories
@@ -765,7 +786,7 @@ impl Report {
             }
             Self::Started { .. } | Self::Wrote { .. } | Self::Deferred { .. } => return None,
             Self::Rendered(r) => r.to_string(),
-            Self::Failed { message } => {
+            Self::Failed { message, .. } => {
                 format!("error: {message} (keeping the last good image; fix and save again)")
             }
             Self::SceneMissing { path } => {
@@ -822,8 +843,8 @@ impl StopHandle {
 enum Failure {
     /// The scene file does not exist.
     Missing,
-    /// The scene (or a file it reads) is bad.
-    Error(String),
+    /// The scene (or a file it reads) is bad: the error and the line it quotes.
+    Error(String, Option<String>),
 }
 
 /// The changes gathered since the last reload, until they are loaded.
@@ -834,6 +855,8 @@ struct Pending {
     last: Instant,
     /// Files with an event that leaves them unfinished and no completing event since.
     unfinished: HashSet<PathBuf>,
+    /// Those of them written through a descriptor still open: their close is waited for.
+    writing: HashSet<PathBuf>,
     /// Whether an event completed a file.
     completed: bool,
     /// Whether anything but metadata may have changed (always, for the first load).
@@ -853,6 +876,7 @@ impl Pending {
             paths: Vec::new(),
             last: Instant::now(),
             unfinished: HashSet::new(),
+            writing: HashSet::new(),
             completed: true,
             content: true,
             overflow: false,
@@ -867,14 +891,27 @@ impl Pending {
         self.overflow |= change.overflow;
         self.rearm |= change.rearm;
         self.content |= change.overflow;
+        if change.overflow {
+            // Lost events may have held the closes: wait for quiet instead.
+            self.writing.clear();
+        }
         for (path, effect) in change.paths {
             match effect {
                 Effect::Metadata => {}
                 Effect::Partial => {
+                    // Removed or renamed away: a writer still holding the old file no longer
+                    // writes this name.
+                    self.writing.remove(&path);
+                    self.unfinished.insert(path.clone());
+                    self.content = true;
+                }
+                Effect::Writing => {
+                    self.writing.insert(path.clone());
                     self.unfinished.insert(path.clone());
                     self.content = true;
                 }
                 Effect::Complete => {
+                    self.writing.remove(&path);
                     self.unfinished.remove(&path);
                     self.completed = true;
                     self.content = true;
@@ -886,12 +923,14 @@ impl Pending {
         }
     }
 
-    /// When to act: report a failure, load now (every file complete), or load once the files
-    /// have been quiet for `window`.
+    /// When to act: report a failure, load now (every file complete), wait for the close of a
+    /// file a writer holds open (where the platform reports closes; at most
+    /// [`OPEN_WRITER_PATIENCE`] of quiet), or load once the files have been quiet for `window`.
     fn due(&self, window: Duration) -> Instant {
         match &self.failed {
             Some((_, at)) => *at,
             None if self.completed && self.unfinished.is_empty() && !self.overflow => self.last,
+            None if REPORTS_CLOSE && !self.writing.is_empty() => self.last + OPEN_WRITER_PATIENCE,
             None => self.last + window,
         }
     }
@@ -1111,9 +1150,15 @@ impl Watch {
                         out.emit(Report::SceneMissing { path }, None);
                     }
                 }
-                Failure::Error(message) => {
+                Failure::Error(message, source_line) => {
                     self.last_error = Some(message.clone());
-                    out.emit(Report::Failed { message }, None);
+                    out.emit(
+                        Report::Failed {
+                            message,
+                            source_line,
+                        },
+                        None,
+                    );
                 }
             }
             return None;
@@ -1123,7 +1168,7 @@ impl Watch {
             Err(failure) => {
                 let message = match &failure {
                     Failure::Missing => format!("{}: missing", self.options.scene.display()),
-                    Failure::Error(m) => m.clone(),
+                    Failure::Error(m, _) => m.clone(),
                 };
                 out.emit(Report::Deferred { message }, None);
                 p.failed = Some((failure, Instant::now() + 3 * self.options.debounce));
@@ -1195,7 +1240,7 @@ impl Watch {
                     if self.watch_files(&files, out) && !std::mem::replace(&mut retried, true) {
                         continue;
                     }
-                    return Err(Failure::Error(e.to_string()));
+                    return Err(Failure::Error(e.to_string(), e.source_line));
                 }
             };
             let files = self.dependencies(info.dependencies.clone(), out);
@@ -1406,6 +1451,8 @@ impl Drop for WatchSession {
 
 #[cfg(test)]
 mod tests {
+    use notify::event::CreateKind;
+
     use super::*;
 
     #[test]
@@ -1436,7 +1483,7 @@ mod tests {
         );
         assert_eq!(
             e(EventKind::Modify(ModifyKind::Data(DataChange::Any))),
-            Some(Effect::Partial)
+            Some(Effect::Writing)
         );
         assert_eq!(
             e(EventKind::Create(CreateKind::File)),
@@ -1444,11 +1491,97 @@ mod tests {
         );
         assert_eq!(
             e(EventKind::Create(CreateKind::Folder)),
-            Some(Effect::Complete)
+            Some(Effect::Partial),
+            "the files of a new directory follow it"
         );
         let both = EventKind::Modify(ModifyKind::Name(RenameMode::Both));
         assert_eq!(effect(&both, 0), Some(Effect::Partial), "the old name");
         assert_eq!(effect(&both, 1), Some(Effect::Complete), "the new name");
+    }
+
+    /// A change to `path` with `effect`, received `at`.
+    fn change(path: &str, effect: Effect, at: Instant) -> Change {
+        Change {
+            paths: vec![(PathBuf::from(path), effect)],
+            rearm: false,
+            overflow: false,
+            at,
+        }
+    }
+
+    /// Issue 25, item 16: a file written through a descriptor still open is loaded at its close
+    /// (where the platform reports closes), however long the writer pauses before it; a file
+    /// only created or removed, or written where closes are not reported, waits for quiet.
+    #[test]
+    fn a_file_being_written_is_loaded_at_its_close() {
+        let window = DEBOUNCE;
+        let t = Instant::now();
+        let mut p = Pending::initial();
+        p.completed = false;
+        p.last = t;
+        p.add(change("/d/scene.ron", Effect::Writing, t));
+        let held = if REPORTS_CLOSE {
+            t + OPEN_WRITER_PATIENCE
+        } else {
+            t + window
+        };
+        assert_eq!(p.due(window), held, "held until the writer closes");
+        assert!(OPEN_WRITER_PATIENCE > 10 * window);
+        p.add(change("/d/scene.ron", Effect::Writing, t));
+        assert_eq!(p.due(window), held, "more writes, still open");
+        p.add(change("/d/scene.ron", Effect::Complete, t));
+        assert_eq!(p.due(window), t, "closed: load at once");
+
+        let mut p = Pending::initial();
+        p.completed = false;
+        p.last = t;
+        p.add(change("/d/scene.ron", Effect::Writing, t));
+        p.add(change("/d/scene.ron", Effect::Partial, t));
+        assert_eq!(p.due(window), t + window, "removed: no writer of this name");
+
+        let mut p = Pending::initial();
+        p.completed = false;
+        p.last = t;
+        p.add(change("/d/scene.ron", Effect::Writing, t));
+        p.add(Change {
+            paths: Vec::new(),
+            rearm: true,
+            overflow: true,
+            at: t,
+        });
+        assert_eq!(
+            p.due(window),
+            t + window,
+            "events lost: the close may be too"
+        );
+    }
+
+    /// The flaky `issue14_case3` test: a directory created, then a file written into it. Were
+    /// the creation complete, the loop would arm the directory and read at once, possibly
+    /// after the write but before its events arrive; those events then load the same file
+    /// again and report a second render, which a waiter takes for the render of its next save.
+    /// The directory's files follow it: the read waits for them to be quiet.
+    #[test]
+    fn a_created_directory_is_read_once_its_files_are_quiet() {
+        let mut f = Filter::default();
+        f.arms.insert(PathBuf::from("/d/prefabs"));
+        f.files.insert(PathBuf::from("/d/prefabs/wall.ron"));
+        let event = notify::Event::new(EventKind::Create(CreateKind::Folder))
+            .add_path(PathBuf::from("/d/prefabs"));
+        let created = f.change(&event).expect("relevant");
+        assert!(created.rearm);
+        let t = created.at;
+        let mut p = Pending::initial();
+        p.completed = false;
+        p.last = t;
+        p.add(created);
+        assert_eq!(p.due(DEBOUNCE), t + DEBOUNCE, "not read at the creation");
+        // The file's write, its events absorbed before the read.
+        let t2 = t + DEBOUNCE / 2;
+        p.add(change("/d/prefabs/wall.ron", Effect::Partial, t2));
+        p.add(change("/d/prefabs/wall.ron", Effect::Writing, t2));
+        p.add(change("/d/prefabs/wall.ron", Effect::Complete, t2));
+        assert_eq!(p.due(DEBOUNCE), t2 + DEBOUNCE, "read once, after the write");
     }
 
     #[test]

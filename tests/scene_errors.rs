@@ -391,3 +391,154 @@ fn value_errors_in_a_prefab_name_its_entity() {
         "{e}"
     );
 }
+
+/// Issue 25, item 15: a huge bad save gives an error of bounded size (a 50 MB save once
+/// printed a 52 MB line) and a quoted line of at most 200 characters around the column.
+#[test]
+fn a_huge_bad_save_gives_a_bounded_message_and_source_line() {
+    use rondo::scene::error::{MAX_MESSAGE, MAX_SOURCE_LINE};
+    let long = "x".repeat(8 << 20);
+    // One line: an entity named by 8 MB, an unknown material named by 8 MB, and after them
+    // an unknown field, where the error points.
+    let src = format!(
+        "{HEADER}    materials: {{ \"m\": Diffuse(albedo: Constant((1, 1, 1))) }},\n    entities: [ Entity(name: \"{long}\", material: \"{long}y\", shape: Sphere(center: (0, 0, 0), radius: 1), colour: 1) ],\n)"
+    );
+    let dir = temp_dir("errors-huge");
+    let path = write_scene(&dir, "scene.ron", &src);
+    let e = load_scene(&path, &mut AssetCache::default()).expect_err("an unknown field");
+    let text = e.to_string();
+    assert!(text.len() <= MAX_MESSAGE, "{} bytes", text.len());
+    assert!(e.message.len() <= MAX_MESSAGE, "{} bytes", e.message.len());
+    let (line, col) = location(&text);
+    assert_eq!(line, 5, "{}", &text[..200]);
+    assert!(col > 2 * long.len(), "the column is past both names: {col}");
+    assert!(
+        message(&text).contains("unknown field `colour`"),
+        "{}",
+        &text[..200]
+    );
+    let quoted = e.source_line.expect("the scene's line is quoted");
+    assert!(
+        quoted.chars().count() <= MAX_SOURCE_LINE,
+        "{} characters",
+        quoted.chars().count()
+    );
+    assert!(
+        quoted.starts_with('…') && quoted.ends_with("colour: 1) ],"),
+        "a window around the column, to the end of the line: {quoted}"
+    );
+
+    // The unknown material's message names both 8 MB names: cut, keeping its start and its
+    // end.
+    let src = src.replace(", colour: 1", "");
+    let path = write_scene(&dir, "scene.ron", &src);
+    let e = load_scene(&path, &mut AssetCache::default()).expect_err("an unknown material");
+    let text = e.to_string();
+    assert!(text.len() <= MAX_MESSAGE, "{} bytes", text.len());
+    assert!(
+        message(&text).starts_with("entity \"xxx")
+            && text.contains("xxx … xxx")
+            && text.ends_with("xxxy\" (defined: m)"),
+        "{text}"
+    );
+}
+
+/// Issue 25, item 15: control characters from a file (an escape sequence that would clear the
+/// terminal, a bell, C1 controls, DEL) are escaped in the message and in the quoted line;
+/// other characters, any script, are kept.
+#[test]
+fn control_characters_from_the_file_are_escaped() {
+    let evil = "\u{1b}[2J\u{7}é\u{9b}31m\u{7f}猫";
+    let src = format!(
+        "{HEADER}    materials: {{ \"m\": Diffuse(albedo: Constant((1, 1, 1))) }},\n    entities: [ Entity(name: \"{evil}\", material: \"\t{evil}\", shape: Sphere(center: (0, 0, 0), radius: 1)) ],\n)"
+    );
+    let dir = temp_dir("errors-controls");
+    let path = write_scene(&dir, "scene.ron", &src);
+    let e = load_scene(&path, &mut AssetCache::default()).expect_err("an unknown material");
+    let text = e.to_string();
+    let quoted = e.source_line.clone().expect("a quoted line");
+    for shown in [&text, &quoted] {
+        assert!(
+            !shown.chars().any(char::is_control),
+            "a control character is shown as it is: {shown:?}"
+        );
+        assert!(
+            shown.contains("\\u{1b}[2J\\u{7}é\\u{9b}31m\\u{7f}猫"),
+            "{shown}"
+        );
+    }
+    let line = src.lines().nth(4).expect("line 5");
+    let col = line[..line.find("\"\t").expect("the material")]
+        .chars()
+        .count()
+        + 1;
+    assert_eq!(location(&text), (5, col), "{text}");
+    assert!(
+        quoted.contains("material: \" \\u{1b}"),
+        "a tab is shown as one space: {quoted}"
+    );
+}
+
+/// Issue 25, item 15: a file named as a prefab that is not a `.ron` file (a mesh, an image,
+/// any file) is never quoted, even when its text is located by the parse error; a prefab is.
+#[test]
+fn source_lines_are_quoted_from_scene_and_prefab_files_only() {
+    let dir = temp_dir("errors-quoting");
+    write_scene(
+        &dir,
+        "tri.obj",
+        "# secret\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    );
+    write_scene(
+        &dir,
+        "part.ron",
+        "Prefab(entities: [\n    Entity(name: 1),\n])",
+    );
+    for (prefab, quoted) in [("tri.obj", false), ("part.ron", true)] {
+        let path = write_scene(
+            &dir,
+            "scene.ron",
+            &format!(
+                "{HEADER}    materials: {{ \"m\": Diffuse(albedo: Constant((1, 1, 1))) }},\n    entities: [ Entity(name: \"door\", prefab: \"{prefab}\") ],\n)"
+            ),
+        );
+        let e = load_scene(&path, &mut AssetCache::default()).expect_err("a bad prefab");
+        assert!(e.path.ends_with(prefab), "{e}");
+        assert!(e.location.is_some(), "{e}");
+        assert_eq!(e.source_line.is_some(), quoted, "{prefab}: {e:?}");
+    }
+}
+
+/// Issue 25, item 17: numbers in errors stay short (1e308 printed as its 309 digits).
+#[test]
+fn huge_numbers_in_errors_are_written_short() {
+    let src = format!(
+        "{HEADER}    materials: {{ \"w\": Diffuse(albedo: Constant((1, 1, 1))) }},\n    entities: [\n        Entity(material: \"w\", shape: Sphere(center: (0, 0, 0), radius: 1e308)),\n    ],\n)"
+    );
+    let e = error_of("huge-number", &src);
+    assert_eq!(
+        message(&e),
+        "entity \"#0\": radius must be a finite number (got 1e308)"
+    );
+    let src = format!(
+        "{HEADER}    materials: {{ \"w\": Diffuse(albedo: Constant((1, 1, 1))) }},\n    entities: [\n        Entity(material: \"w\", shape: Sphere(center: (0, 0, 0), radius: -3e38)),\n    ],\n)"
+    );
+    let e = error_of("huge-negative", &src);
+    assert_eq!(message(&e), "entity \"#0\": radius must be > 0 (got -3e38)");
+}
+
+/// Issue 25, item 17: too deep a nesting says what to do, not which `ron` option to change.
+#[test]
+fn too_deep_a_nesting_is_named_in_the_users_words() {
+    let depth = 300;
+    let src = format!(
+        "{HEADER}    materials: {{ \"m\": Diffuse(albedo: {}Constant((1, 1, 1)){}) }},\n)",
+        "Checker(scale: 1, odd: Constant((0, 0, 0)), even: ".repeat(depth),
+        ")".repeat(depth)
+    );
+    let e = error_of("deep", &src);
+    assert!(
+        message(&e).contains("nesting deeper than 128 levels") && !e.contains("ron::"),
+        "{e}"
+    );
+}

@@ -432,7 +432,7 @@ impl Bench {
         match report {
             Report::Started { .. } | Report::Deferred { .. } => self.shown = Shown::Busy,
             Report::Rendered(r) if r.completed() => self.shown = Shown::Image,
-            Report::Failed { message } => self.shown = Shown::Error(message.clone()),
+            Report::Failed { message, .. } => self.shown = Shown::Error(message.clone()),
             Report::SceneMissing { .. } => self.shown = Shown::Missing,
             _ => {}
         }

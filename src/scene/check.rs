@@ -34,7 +34,7 @@ use crate::shading::sampling::{Frame, cosine_hemisphere};
 use crate::shading::texture::Texture;
 use crate::systems::world_primitives;
 
-use super::error::Location;
+use super::error::{Location, number, write_located};
 use super::load::LoadedScene;
 use super::locate::Places;
 
@@ -94,13 +94,9 @@ pub struct Warning {
 }
 
 impl fmt::Display for Warning {
-    /// `path:line:col: message`, as errors are written.
+    /// `path:line:col: message`, as errors are written (escaped and bounded the same way).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.path.display())?;
-        if let Some(l) = self.location {
-            write!(f, ":{}:{}", l.line, l.col)?;
-        }
-        write!(f, ": {}", self.message)
+        write_located(f, &self.path, self.location, &self.message)
     }
 }
 
@@ -739,7 +735,8 @@ fn albedo_above_one(scene: &LoadedScene, out: &mut Out) {
                 name,
                 WarningKind::AlbedoAboveOne,
                 format!(
-                    "material \"{name}\": albedo component {max} is above 1 (it reflects more light than it receives)"
+                    "material \"{name}\": albedo component {} is above 1 (it reflects more light than it receives)",
+                    number(max)
                 ),
             );
         }

@@ -1,5 +1,12 @@
 //! Scene errors: every one names the file and, where the input has one, the line and column.
+//!
+//! Everything in an error may come from a file (a name, a value, a whole line of text), so it is
+//! made safe to print when the error is made: control characters are escaped
+//! ([`escape_controls`]) and the message is bounded ([`MAX_MESSAGE`]), and the line quoted with
+//! it ([`SceneError::source_line`]) is a window of at most [`MAX_SOURCE_LINE`] characters around
+//! the column, taken only from the text of a scene or prefab file.
 
+use std::borrow::Cow;
 use std::fmt;
 use std::path::PathBuf;
 
@@ -24,6 +31,13 @@ impl Location {
     }
 }
 
+/// Longest error message, in bytes: the text after `file:line:col: `, and the whole error as
+/// displayed. A longer one keeps its start and its end around a `…`.
+pub const MAX_MESSAGE: usize = 4096;
+
+/// Most characters of a quoted source line (escapes and `…` markers included).
+pub const MAX_SOURCE_LINE: usize = 200;
+
 /// Why a scene could not be loaded.
 #[derive(Debug, thiserror::Error)]
 pub struct SceneError {
@@ -31,12 +45,16 @@ pub struct SceneError {
     pub path: PathBuf,
     /// Where in it, if known.
     pub location: Option<Location>,
-    /// What is wrong.
+    /// What is wrong: at most [`MAX_MESSAGE`] bytes, control characters escaped.
     pub message: String,
+    /// The line at [`SceneError::location`], when it is in a scene or prefab file: at most
+    /// [`MAX_SOURCE_LINE`] characters around the column (`…` where the line goes on), control
+    /// characters escaped and tabs shown as spaces (so columns still count).
+    pub source_line: Option<String>,
 }
 
 impl SceneError {
-    /// An error at a location of `path`.
+    /// An error at a location of `path`, quoting no source line.
     pub fn at(
         path: impl Into<PathBuf>,
         location: Option<Location>,
@@ -45,8 +63,22 @@ impl SceneError {
         Self {
             path: path.into(),
             location,
-            message: message.into(),
+            message: printable(&message.into(), MAX_MESSAGE).into_owned(),
+            source_line: None,
         }
+    }
+
+    /// The same error quoting its line from `source`, the text of its file, which must be a
+    /// scene or a prefab file: never a mesh, an image or another file a path points to.
+    pub fn quoting(mut self, source: &str) -> Self {
+        self.source_line = self.location.and_then(|l| quote_line(source, l));
+        self
+    }
+
+    /// The same error without its source line.
+    pub fn unquoted(mut self) -> Self {
+        self.source_line = None;
+        self
     }
 
     /// The RON parse or value-validation error of `path`, whose text is `source`, raised while
@@ -66,7 +98,163 @@ impl SceneError {
             }),
             describe(&error.code, at, source),
         )
+        .quoting(source)
     }
+}
+
+/// Whether `c` must not reach a terminal or a page as it is: C0 controls (tab and newline
+/// included), DEL, C1 controls (some terminals take U+009B for an escape sequence), the line
+/// and paragraph separators and the bidirectional overrides and isolates, which reorder what
+/// is shown around them.
+fn is_unsafe(c: char) -> bool {
+    c.is_control()
+        || matches!(c, '\u{2028}' | '\u{2029}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+}
+
+/// `text` with every character that is not safe to print ([`is_unsafe`]: controls, DEL,
+/// separators and bidirectional overrides) written as a Rust escape, `\u{1b}`; every other
+/// character, any script or emoji, is kept. Borrowed when nothing needs escaping.
+pub fn escape_controls(text: &str) -> Cow<'_, str> {
+    if !text.chars().any(is_unsafe) {
+        return Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        push_escaped(&mut out, c);
+    }
+    Cow::Owned(out)
+}
+
+/// Appends `c`, escaped if it is unsafe to print.
+fn push_escaped(out: &mut String, c: char) {
+    use fmt::Write as _;
+    if is_unsafe(c) {
+        let _ = write!(out, "\\u{{{:x}}}", u32::from(c));
+    } else {
+        out.push(c);
+    }
+}
+
+/// Bytes that `c` takes once escaped.
+fn escaped_len(c: char) -> usize {
+    if is_unsafe(c) {
+        // `\u{` + hex digits + `}`
+        let digits = (32 - u32::from(c).leading_zeros()).div_ceil(4).max(1) as usize;
+        4 + digits
+    } else {
+        c.len_utf8()
+    }
+}
+
+/// `text` made safe to print: control characters escaped ([`escape_controls`]) and, if the
+/// result would be longer than `max` bytes, its first three quarters and its last quarter
+/// around ` … `. Reads only as much of `text` as it keeps, however long `text` is.
+pub fn printable(text: &str, max: usize) -> Cow<'_, str> {
+    const MARK: &str = " … ";
+    // The end of the longest start of `text` that fits `budget` bytes once escaped, and
+    // whether that is all of it.
+    let head = |budget: usize| {
+        let mut used = 0;
+        for (i, c) in text.char_indices() {
+            used += escaped_len(c);
+            if used > budget {
+                return (i, false);
+            }
+        }
+        (text.len(), true)
+    };
+    if let (_, true) = head(max) {
+        return escape_controls(text);
+    }
+    let tail_budget = max.saturating_sub(MARK.len()) / 4;
+    let (head_end, _) = head(max.saturating_sub(MARK.len() + tail_budget));
+    let mut tail_start = text.len();
+    let mut used = 0;
+    for (i, c) in text[head_end..].char_indices().rev() {
+        used += escaped_len(c);
+        if used > tail_budget {
+            break;
+        }
+        tail_start = head_end + i;
+    }
+    let mut out = escape_controls(&text[..head_end]).into_owned();
+    out.push_str(MARK);
+    out.push_str(&escape_controls(&text[tail_start..]));
+    Cow::Owned(out)
+}
+
+/// The line of `source` at `at`, as [`SceneError::source_line`] holds it: the characters
+/// around the column that fit [`MAX_SOURCE_LINE`] once escaped, about a third of them before
+/// the column, with `…` where the line goes on. `None` past the end of the text.
+pub fn quote_line(source: &str, at: Location) -> Option<String> {
+    let start = match at.line {
+        0 | 1 => 0,
+        n => source.match_indices('\n').nth(n - 2)?.0 + 1,
+    };
+    let line = source[start..].split('\n').next().unwrap_or_default();
+    let line = line.strip_suffix('\r').unwrap_or(line);
+    // The byte offset of the column (the end of the line if it lies beyond).
+    let col = line
+        .char_indices()
+        .nth(at.col.saturating_sub(1))
+        .map_or(line.len(), |(i, _)| i);
+    // Escaped widths in characters; a tab is shown as one space.
+    let width = |c: char| {
+        if is_unsafe(c) && c != '\t' {
+            escaped_len(c)
+        } else {
+            1
+        }
+    };
+    let budget = MAX_SOURCE_LINE - 2; // room for a `…` at each end
+    let mut begin = col;
+    let mut used = 0;
+    for (i, c) in line[..col].char_indices().rev() {
+        if used + width(c) > budget / 3 {
+            break;
+        }
+        used += width(c);
+        begin = i;
+    }
+    let mut out = String::new();
+    if begin > 0 {
+        out.push('…');
+    }
+    let mut end = begin;
+    for c in line[begin..].chars() {
+        if used + width(c) > budget {
+            break;
+        }
+        used += width(c);
+        end += c.len_utf8();
+        if c == '\t' {
+            out.push(' ');
+        } else {
+            push_escaped(&mut out, c);
+        }
+    }
+    if end < line.len() {
+        out.push('…');
+    }
+    Some(out)
+}
+
+/// A number as errors print it: short whatever its size, and read back as the same value
+/// (`0.5`, `-3`, `1e308`, `1.5e-7`, `inf`, `NaN`), never the 309 digits of `1e308` that `{}`
+/// writes.
+pub fn number<T: Copy + Into<f64> + fmt::Display + fmt::LowerExp>(v: T) -> String {
+    let x: f64 = v.into();
+    if x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&x.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// A vector as errors print it: `[x, y, z]`, each coordinate as [`number`] writes it.
+pub fn vector(v: glam::Vec3) -> String {
+    let [x, y, z] = v.to_array().map(number);
+    format!("[{x}, {y}, {z}]")
 }
 
 /// How the value validators of `format.rs` start their messages; replaced by the field's name
@@ -123,6 +311,11 @@ fn describe(error: &ron::Error, at: &[Segment], source: &str) -> String {
         ron::Error::DuplicateStructField { field, outer } => {
             format!("field `{field}` given twice{}", within(outer.as_deref()))
         }
+        // ron's own text names its API (`ron::Options::recursion_limit`); say what it means.
+        ron::Error::ExceededRecursionLimit => format!(
+            "nesting deeper than {} levels (brackets, structs or textures inside one another)",
+            ron::Options::default().recursion_limit.unwrap_or_default()
+        ),
         other => match field {
             Some(field) => format!("{field}: {other}"),
             None => other.to_string(),
@@ -194,13 +387,28 @@ fn entity_name(source: &str, index: usize) -> Option<String> {
     }
 }
 
+/// `path:line:col: message` (or `path: message`), safe to print: escaped and at most
+/// [`MAX_MESSAGE`] bytes. How errors and `rondo check` warnings are written.
+pub fn write_located(
+    f: &mut fmt::Formatter<'_>,
+    path: &std::path::Path,
+    location: Option<Location>,
+    message: &str,
+) -> fmt::Result {
+    let mut text = path.display().to_string();
+    if let Some(l) = location {
+        text.push_str(&format!(":{}:{}", l.line, l.col));
+    }
+    text.push_str(": ");
+    // Only as much of the message as can be shown is copied.
+    let room = MAX_MESSAGE.saturating_sub(text.len());
+    text.push_str(&printable(message, room.max(MAX_MESSAGE / 4)));
+    f.write_str(&printable(&text, MAX_MESSAGE))
+}
+
 impl fmt::Display for SceneError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.path.display())?;
-        if let Some(l) = self.location {
-            write!(f, ":{}:{}", l.line, l.col)?;
-        }
-        write!(f, ": {}", self.message)
+        write_located(f, &self.path, self.location, &self.message)
     }
 }
 
@@ -217,5 +425,73 @@ mod tests {
             Location::of_offset(s, s.len()),
             Location { line: 3, col: 2 }
         );
+    }
+
+    #[test]
+    fn controls_are_escaped_and_other_characters_kept() {
+        assert!(matches!(escape_controls("plain é 猫 🦀"), Cow::Borrowed(_)));
+        assert_eq!(
+            escape_controls("a\u{1b}[2J\u{7}\n\t\u{7f}\u{85}\u{9b}\u{202e}é"),
+            "a\\u{1b}[2J\\u{7}\\u{a}\\u{9}\\u{7f}\\u{85}\\u{9b}\\u{202e}é"
+        );
+        for c in ['\0', '\u{1b}', '\u{7f}', '\u{9f}', '\u{2028}'] {
+            assert_eq!(
+                escaped_len(c),
+                escape_controls(&c.to_string()).len(),
+                "{c:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn printable_text_is_bounded_keeping_its_start_and_end() {
+        assert_eq!(printable("short", 10), "short");
+        let long = format!("start{}é\u{1b}end", "x".repeat(100_000));
+        let p = printable(&long, 400);
+        assert!(p.len() <= 400, "{}", p.len());
+        assert!(
+            p.starts_with("startxx") && p.ends_with("xé\\u{1b}end"),
+            "{p}"
+        );
+        assert!(p.contains(" … "));
+        // Escapes count towards the bound.
+        let controls = "\u{7}".repeat(1000);
+        assert!(printable(&controls, 100).len() <= 100);
+        assert!(!printable(&controls, 100).chars().any(char::is_control));
+    }
+
+    #[test]
+    fn a_quoted_line_is_a_window_around_the_column() {
+        let at = |line, col| Location { line, col };
+        let text = "first\r\nsecond\tline\n";
+        assert_eq!(quote_line(text, at(1, 1)).as_deref(), Some("first"));
+        assert_eq!(quote_line(text, at(2, 3)).as_deref(), Some("second line"));
+        assert_eq!(quote_line(text, at(3, 1)).as_deref(), Some(""));
+        assert_eq!(quote_line(text, at(4, 1)), None);
+        let long = format!("{}HERE{}", "a".repeat(5000), "b".repeat(5000));
+        let q = quote_line(&long, at(1, 5001)).expect("line 1");
+        assert!(
+            q.chars().count() <= MAX_SOURCE_LINE,
+            "{}",
+            q.chars().count()
+        );
+        assert!(q.starts_with("…a") && q.ends_with("b…"), "{q}");
+        let before = q.find("HERE").expect("the column is shown");
+        assert!((20..=80).contains(&before), "{before}");
+    }
+
+    #[test]
+    fn numbers_are_short_and_exact() {
+        assert_eq!(number(1e308), "1e308");
+        assert_eq!(number(-3e38f32), "-3e38");
+        assert_eq!(number(0.1f32), "0.1");
+        assert_eq!(number(-4.0), "-4");
+        assert_eq!(number(1.5e-7), "1.5e-7");
+        assert_eq!(number(f64::INFINITY), "inf");
+        assert_eq!(number(f32::NAN), "NaN");
+        for v in [1e308, 1.2345678901234567e-300, 123456.789, f64::MAX] {
+            assert_eq!(number(v).parse::<f64>().ok(), Some(v));
+            assert!(number(v).len() <= 24, "{}", number(v));
+        }
     }
 }

@@ -10,7 +10,7 @@ use serde::de::{DeserializeOwned, Error as _};
 use serde::{Deserialize, Deserializer};
 
 use crate::ecs::components::Shape;
-use crate::scene::error::{SceneError, VALUE};
+use crate::scene::error::{SceneError, VALUE, number, vector};
 use crate::shading::sampler::SamplerKind;
 
 /// Parses the RON text `source` of the scene or prefab file `path`. RON's `implicit_some` is on,
@@ -45,7 +45,8 @@ impl<'de> Deserialize<'de> for Real {
         let f = v as f32;
         if !f.is_finite() {
             return Err(D::Error::custom(format!(
-                "{VALUE} must be a finite number (got {v})"
+                "{VALUE} must be a finite number (got {})",
+                number(v)
             )));
         }
         Ok(Self(f))
@@ -60,7 +61,10 @@ impl<'de> Deserialize<'de> for Positive {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let Real(v) = Real::deserialize(d)?;
         if v <= 0.0 {
-            return Err(D::Error::custom(format!("{VALUE} must be > 0 (got {v})")));
+            return Err(D::Error::custom(format!(
+                "{VALUE} must be > 0 (got {})",
+                number(v)
+            )));
         }
         Ok(Self(v))
     }
@@ -74,7 +78,10 @@ impl<'de> Deserialize<'de> for NonNegative {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let Real(v) = Real::deserialize(d)?;
         if v < 0.0 {
-            return Err(D::Error::custom(format!("{VALUE} must be >= 0 (got {v})")));
+            return Err(D::Error::custom(format!(
+                "{VALUE} must be >= 0 (got {})",
+                number(v)
+            )));
         }
         Ok(Self(v))
     }
@@ -89,7 +96,8 @@ impl<'de> Deserialize<'de> for Count {
         let v = f64::deserialize(d)?;
         if !(v >= 1.0 && v <= f64::from(u32::MAX) && v.fract() == 0.0) {
             return Err(D::Error::custom(format!(
-                "{VALUE} must be a whole number >= 1 (got {v})"
+                "{VALUE} must be a whole number >= 1 (got {})",
+                number(v)
             )));
         }
         Ok(Self(v as u32))
@@ -194,7 +202,7 @@ impl TryFrom<RawCamera> for CameraDesc {
         if raw.position.0.abs().max_element() > MAX_COORDINATE {
             return Err(format!(
                 "position must be within ±{MAX_COORDINATE:e} on every axis (got {})",
-                raw.position.0
+                vector(raw.position.0)
             ));
         }
         let up = unit_max(raw.up.0);
@@ -203,7 +211,10 @@ impl TryFrom<RawCamera> for CameraDesc {
         }
         let fov = raw.fov.0;
         if !(fov > 0.0 && fov < 180.0) {
-            return Err(format!("fov must be in (0, 180) degrees (got {fov})"));
+            return Err(format!(
+                "fov must be in (0, 180) degrees (got {})",
+                number(fov)
+            ));
         }
         Ok(Self {
             position: raw.position.0,
@@ -526,7 +537,10 @@ impl TryFrom<RawShape> for ShapeDesc {
             RawShape::Plane { point, normal } => {
                 let n = normal.0;
                 if n.length_squared() == 0.0 || !n.length_squared().is_normal() {
-                    return Err(format!("plane: `normal` must be non-zero (got {n})"));
+                    return Err(format!(
+                        "plane: `normal` must be non-zero (got {})",
+                        vector(n)
+                    ));
                 }
                 Shape::Plane {
                     point: point.0,
@@ -625,7 +639,7 @@ impl TryFrom<RawTransform> for TransformDesc {
         if t.scale.abs().min_element() < 1e-12 {
             return Err(format!(
                 "scale must be non-zero on every axis (got {})",
-                t.scale
+                vector(t.scale)
             ));
         }
         Ok(t)

@@ -287,8 +287,10 @@ impl SourceFile {
         offset.map(|o| locator.location(o))
     }
 
+    /// An error at `anchor` (see [`SourceFile::location`]), quoting its line: this file parsed
+    /// as a scene or a prefab.
     fn error(&self, anchor: Anchor, then: Option<&str>, message: impl Into<String>) -> SceneError {
-        SceneError::at(&self.path, self.location(anchor, then), message)
+        SceneError::at(&self.path, self.location(anchor, then), message).quoting(&self.source)
     }
 
     fn dir(&self) -> &Path {
@@ -717,7 +719,15 @@ impl Expander<'_> {
                         ),
                     )
                 })?;
-                let desc: PrefabDesc = parse(&path, &source)?;
+                // Its text is quoted with a parse error only if it is meant to be RON: a mesh,
+                // an image or any other file named as a prefab by mistake (or to read it
+                // through the viewer) is not shown.
+                let desc: PrefabDesc = parse(&path, &source).map_err(|e| {
+                    let ron = path
+                        .extension()
+                        .is_some_and(|x| x.eq_ignore_ascii_case("ron"));
+                    if ron { e } else { e.unquoted() }
+                })?;
                 let file = SourceFile {
                     id: self.sources.len() as u32,
                     path: path.clone(),
@@ -841,14 +851,16 @@ impl Expander<'_> {
             };
             let (a, _) = describe(first);
             let (b, location) = describe(k);
+            let file = &self.sources[self.origins[k].file as usize];
             return Err(SceneError::at(
-                &self.sources[self.origins[k].file as usize].path,
+                &file.path,
                 location,
                 format!(
                     "two entities are named \"{}\": {b} and {a}; one would replace the other, rename one",
                     e.name
                 ),
-            ));
+            )
+            .quoting(&file.text));
         }
         Ok(())
     }

@@ -412,7 +412,7 @@ impl Feed {
                 "full_ms": r.full.map(ms),
                 "line": r.to_string(),
             }),
-            (Report::Failed { message }, _) => {
+            (Report::Failed { message, .. }, _) => {
                 let at = error_location(message);
                 let (file, line, col) = match &at {
                     Some((f, l, c)) => (Some(f.display().to_string()), Some(*l), Some(*c)),
