@@ -81,6 +81,10 @@ enum Command {
         /// default 127.0.0.1:8730, or a free port if that one is taken).
         #[arg(long, value_name = "ADDR")]
         serve: Option<Option<String>>,
+        /// With --serve: also answer requests whose Host is NAME (repeatable). IP addresses and
+        /// localhost are always answered; any other name is refused (DNS rebinding).
+        #[arg(long, value_name = "NAME", requires = "serve", value_parser = rondo::serve::parse_host_name)]
+        allow_host: Vec<String>,
         /// Samples per pixel of the first pass.
         #[arg(long, default_value_t = 1, value_parser = at_least_one_u32())]
         first_spp: u32,
@@ -478,6 +482,7 @@ fn run(cli: Cli) -> Result<()> {
             scene,
             output,
             serve,
+            allow_host,
             first_spp,
             options,
         } => {
@@ -487,7 +492,7 @@ fn run(cli: Cli) -> Result<()> {
                 first_spp,
             )?;
             watch_options.output = output;
-            watch(watch_options, serve)
+            watch(watch_options, serve, allow_host)
         }
         Command::Bench {
             what:
@@ -762,7 +767,11 @@ impl RenderArgs {
 
 /// `rondo watch`: runs until Ctrl-C, one line per reload on stderr; with `serve`, also serves
 /// the live viewer.
-fn watch(options: WatchOptions, serve: Option<Option<String>>) -> Result<()> {
+fn watch(
+    options: WatchOptions,
+    serve: Option<Option<String>>,
+    allowed_hosts: Vec<String>,
+) -> Result<()> {
     if let Some(output) = &options.output {
         check_output_file(output)?;
     }
@@ -773,7 +782,11 @@ fn watch(options: WatchOptions, serve: Option<Option<String>>) -> Result<()> {
             let fall_back = addr.is_none();
             let addr =
                 rondo::serve::parse_addr(addr.as_deref().unwrap_or(rondo::serve::DEFAULT_ADDR))?;
-            let (viewer, feed) = rondo::serve::Viewer::start(addr, fall_back)?;
+            let serve_options = rondo::serve::Options {
+                allowed_hosts,
+                ..Default::default()
+            };
+            let (viewer, feed) = rondo::serve::Viewer::start(addr, fall_back, serve_options)?;
             if let Some(warning) = viewer.exposure_warning() {
                 eprintln!("warning: {warning}");
             }

@@ -1,7 +1,8 @@
 //! The live viewer over HTTP: the real `rondo watch --serve` binary on a scene in a temporary
-//! directory, talked to through plain sockets (so request targets reach the server exactly as
-//! written, `/../` included, and a client can refuse to read). Waits are bounded (an event or a
-//! timeout), never sleeps; nothing here times the render.
+//! directory, or the library's server with small limits, talked to through plain sockets (so
+//! request targets and heads reach the server exactly as written, `/../` included, and a client
+//! can refuse to read or to send). Waits are bounded (an event or a timeout), never sleeps;
+//! nothing here times the render.
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpStream};
@@ -10,6 +11,7 @@ use std::process::{Child, Command, Stdio};
 use std::sync::mpsc::{Receiver, channel};
 use std::time::{Duration, Instant};
 
+use rondo::serve::{CUT, Limits, MAX_MESSAGE, MAX_SOURCE_LINE, Options, Viewer};
 use serde_json::Value;
 
 mod common;
@@ -42,7 +44,8 @@ fn scene(wall: &str, size: u32, spp: u32) -> String {
 }
 
 /// `rondo watch scene.ron --serve 127.0.0.1:0 ARGS` in a fresh directory (`{dir}` in an
-/// argument names it); killed on drop.
+/// argument names it); killed on drop. `addr` is the address to connect to (loopback for a
+/// server bound to all addresses).
 struct Rondo {
     child: Child,
     dir: common::TestDir,
@@ -53,13 +56,18 @@ struct Rondo {
 
 impl Rondo {
     fn start(name: &str, text: &str, args: &[&str]) -> Self {
+        Self::start_on(name, text, "127.0.0.1:0", args)
+    }
+
+    /// As [`Rondo::start`], serving on `serve`.
+    fn start_on(name: &str, text: &str, serve: &str, args: &[&str]) -> Self {
         let dir = common::temp_dir(&format!("serve-{name}"));
         let scene = dir.join("scene.ron");
         std::fs::write(&scene, text).expect("write scene");
         let mut child = Command::new(env!("CARGO_BIN_EXE_rondo"))
             .arg("watch")
             .arg(&scene)
-            .args(["--serve", "127.0.0.1:0", "--threads", "2"])
+            .args(["--serve", serve, "--threads", "2"])
             .args(
                 args.iter()
                     .map(|a| a.replace("{dir}", &dir.to_string_lossy())),
@@ -89,7 +97,12 @@ impl Rondo {
         let url = line
             .trim_start_matches("viewer: http://")
             .trim_end_matches('/');
-        rondo.addr = url.parse().expect("viewer: http://ADDR/");
+        let addr: SocketAddr = url.parse().expect("viewer: http://ADDR/");
+        rondo.addr = if addr.ip().is_unspecified() {
+            SocketAddr::from(([127, 0, 0, 1], addr.port()))
+        } else {
+            addr
+        };
         rondo
     }
 
@@ -135,8 +148,8 @@ fn wait_on<T: std::fmt::Debug>(
     panic!("timed out waiting for {what}; seen meanwhile: {seen:#?}");
 }
 
-/// An HTTP/1.0 reply: tiny_http answers 1.0 with a Content-Length body and closes, so reading
-/// to the end and splitting off the head is the whole client.
+/// An HTTP reply: the server answers one request per connection and closes, so reading to the
+/// end and splitting off the head is the whole client.
 struct Reply {
     status: u16,
     head: String,
@@ -158,10 +171,33 @@ fn request(addr: SocketAddr, method: &str, target: &str) -> Reply {
 
 fn request_as(addr: SocketAddr, method: &str, target: &str, host: &str) -> Reply {
     let mut s = TcpStream::connect(addr).expect("connect");
-    s.set_read_timeout(Some(WAIT)).expect("timeout");
-    write!(s, "{method} {target} HTTP/1.0\r\nHost: {host}\r\n\r\n").expect("send");
+    // A server that refuses the connection may close it before the request is sent.
+    let _ = write!(s, "{method} {target} HTTP/1.0\r\nHost: {host}\r\n\r\n");
+    reply(s)
+}
+
+/// Reads a reply to the end. A server that refuses a request without reading it may reset the
+/// connection after its answer: what arrived before the reset is the reply.
+fn reply(mut s: TcpStream) -> Reply {
+    let deadline = Instant::now() + WAIT;
     let mut all = Vec::new();
-    s.read_to_end(&mut all).expect("read reply");
+    let mut buf = [0; 64 * 1024];
+    loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        assert!(
+            !left.is_zero(),
+            "the reply did not end: {:?}",
+            String::from_utf8_lossy(&all[..all.len().min(300)])
+        );
+        s.set_read_timeout(Some(left)).expect("timeout");
+        match s.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => all.extend_from_slice(&buf[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) if e.kind() == std::io::ErrorKind::ConnectionReset && !all.is_empty() => break,
+            Err(e) => panic!("no whole reply: {e} after {} bytes", all.len()),
+        }
+    }
     let split = all
         .windows(4)
         .position(|w| w == b"\r\n\r\n")
@@ -310,12 +346,19 @@ fn routes_have_their_content_types_and_everything_else_is_404() {
         (format!("evil.example:{port}"), 403),
         (format!("localhost:{port}"), 200),
         ("localhost:9000".into(), 200),
+        (format!("[::1]:{port}"), 200),
+        ("10.1.2.3".into(), 200),
     ] {
         let reply = request_as(rondo.addr, "GET", "/image.png", &host);
         assert_eq!(reply.status, status, "Host: {host}");
     }
     let head = request(rondo.addr, "HEAD", "/image.png");
     assert_eq!((head.status, head.body.len()), (200, 0));
+    assert_eq!(
+        head.header("Content-Length"),
+        Some(png.body.len().to_string().as_str()),
+        "HEAD has GET's headers"
+    );
 
     // A new client gets the present at once: the latest pass (full spp) and its done.
     let late = rondo.events();
@@ -361,7 +404,12 @@ fn a_save_streams_a_pass_and_a_broken_save_an_error_while_the_image_stays() {
     assert_eq!(error["line"], 5);
     let col = error["col"].as_u64().expect("a column") as usize;
     let line5 = broken.lines().nth(4).expect("line 5");
-    assert_eq!(error["source_line"], line5);
+    // The watch loop may quote a window of a long line, starting with "…".
+    let quoted = error["source_line"].as_str().expect("a source line");
+    assert!(
+        line5.ends_with(quoted.trim_start_matches('…')) && quoted.contains("1.0 1.0"),
+        "{quoted:?} is the end of {line5:?}, the stray value included"
+    );
     assert!(
         line5[col - 1..].starts_with("1.0"),
         "column {col} points at the stray value in {line5:?}"
@@ -495,4 +543,259 @@ fn serve_without_output_and_a_bad_address_are_handled() {
         std::slice::from_ref(&rondo.scene),
         "no image written without -o"
     );
+}
+
+/// The library's server on a free loopback port with `limits`; no image is ever fed to it.
+fn library_server(limits: Limits) -> (Viewer, rondo::serve::Feed) {
+    let options = Options {
+        allowed_hosts: Vec::new(),
+        limits,
+    };
+    let addr = SocketAddr::from(([127, 0, 0, 1], 0));
+    Viewer::start(addr, false, options).expect("start the viewer")
+}
+
+/// Peak resident memory of process `pid` in KiB (Linux's `VmHWM`).
+#[cfg(target_os = "linux")]
+fn peak_rss_kib(pid: u32) -> u64 {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).expect("/proc status");
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
+        .expect("VmHWM in /proc/PID/status")
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn an_oversized_request_head_is_refused_without_being_kept() {
+    // Issue 25, item 13: tiny_http kept a 200 MB header line in memory.
+    let rondo = Rondo::start("big-head", &scene(RED, 32, 4), &[]);
+    rondo.events().done(0);
+    let pid = rondo.child.id();
+    let before = peak_rss_kib(pid);
+    let mut s = TcpStream::connect(rondo.addr).expect("connect");
+    let writer = {
+        let mut s = s.try_clone().expect("clone the socket");
+        std::thread::spawn(move || {
+            // 64 MiB of one header line; the server stops reading long before the end, so the
+            // writes fail once it has closed (that is the point).
+            let _ = write!(s, "GET / HTTP/1.1\r\nHost: localhost\r\nX-Big: ");
+            let block = vec![b'a'; 1 << 20];
+            for _ in 0..64 {
+                if s.write_all(&block).is_err() {
+                    return;
+                }
+            }
+            let _ = s.write_all(b"\r\n\r\n");
+        })
+    };
+    s.set_read_timeout(Some(WAIT)).expect("timeout");
+    let mut head = Vec::new();
+    let mut byte = [0];
+    while !head.ends_with(b"\r\n") && s.read(&mut byte).expect("a reply") == 1 {
+        head.push(byte[0]);
+    }
+    let status_line = String::from_utf8_lossy(&head);
+    assert!(
+        status_line.starts_with("HTTP/1.1 431 "),
+        "an oversized head is refused: {status_line:?}"
+    );
+    drop(s);
+    writer.join().expect("writer");
+    let grown = peak_rss_kib(pid).saturating_sub(before);
+    assert!(
+        grown < 16 * 1024,
+        "the head was not kept: peak memory grew by {grown} KiB"
+    );
+    assert_eq!(rondo.get("/").status, 200, "the server goes on");
+    let heads = [
+        "GET / HTTP/2.0\r\nHost: localhost\r\n\r\n",
+        "GET / HTTP/1.1\r\nHost: localhost\r\n folded\r\n\r\n",
+        "GET / HTTP/1.1\r\n\r\n",
+    ];
+    for (head, status) in heads.iter().zip([505, 400, 400]) {
+        let mut s = TcpStream::connect(rondo.addr).expect("connect");
+        s.write_all(head.as_bytes()).expect("send");
+        assert_eq!(reply(s).status, status, "{head:?}");
+    }
+}
+
+#[test]
+fn connections_over_the_limit_are_refused_and_idle_ones_do_not_block_a_request() {
+    // Issue 25, item 13: tiny_http started a thread for every connection, without a limit.
+    let limits = Limits {
+        max_connections: 8,
+        head_timeout: WAIT,
+        ..Limits::default()
+    };
+    // Seven connections that send nothing: the eighth, a real request, is answered.
+    let (viewer, _feed) = library_server(limits.clone());
+    let idle: Vec<TcpStream> = (0..7)
+        .map(|_| TcpStream::connect(viewer.addr()).expect("connect"))
+        .collect();
+    let page = request(viewer.addr(), "GET", "/");
+    assert_eq!(page.status, 200);
+    assert!(String::from_utf8_lossy(&page.body).contains("<canvas"));
+    drop((idle, viewer));
+
+    // Eight hold every place: more connections are answered 503 and closed at once, not held.
+    let (viewer, _feed) = library_server(limits);
+    let idle: Vec<TcpStream> = (0..8)
+        .map(|_| TcpStream::connect(viewer.addr()).expect("connect"))
+        .collect();
+    for _ in 0..20 {
+        let refused = request(viewer.addr(), "GET", "/");
+        assert_eq!(refused.status, 503, "{}", refused.head);
+    }
+    // Once the idle ones are gone, requests are answered again (each closed connection gives
+    // its place back as soon as its thread sees the close).
+    drop(idle);
+    let deadline = Instant::now() + WAIT;
+    while request(viewer.addr(), "GET", "/").status != 200 {
+        assert!(Instant::now() < deadline, "no place came back");
+    }
+}
+
+#[test]
+fn a_client_that_does_not_finish_its_head_in_time_is_disconnected() {
+    // Issue 25, item 13: tiny_http set no read timeout, so an idle connection held its thread
+    // forever.
+    let (viewer, _feed) = library_server(Limits {
+        head_timeout: Duration::from_millis(200),
+        ..Limits::default()
+    });
+    // Sends nothing: closed without an answer.
+    let mut silent = TcpStream::connect(viewer.addr()).expect("connect");
+    silent.set_read_timeout(Some(WAIT)).expect("timeout");
+    let mut buf = Vec::new();
+    let read = silent.read_to_end(&mut buf);
+    assert!(
+        matches!(read, Ok(0)),
+        "an idle connection is closed: {read:?}, {buf:?}"
+    );
+    // Sends part of a head: 408.
+    let mut partial = TcpStream::connect(viewer.addr()).expect("connect");
+    partial
+        .write_all(b"GET / HTTP/1.1\r\nHost: localhost\r\n")
+        .expect("send");
+    assert_eq!(reply(partial).status, 408);
+}
+
+#[test]
+fn any_bind_answers_only_ip_addresses_localhost_and_allowed_names() {
+    // Issue 25, item 14: on 0.0.0.0 the Host check was off, so DNS rebinding worked.
+    let rondo = Rondo::start_on("any-bind", &scene(RED, 32, 4), "0.0.0.0:0", &[]);
+    rondo.events().done(0);
+    let port = rondo.addr.port();
+    let get = |host: &str| request_as(rondo.addr, "GET", "/image.png", host).status;
+    for host in [
+        format!("127.0.0.1:{port}"),
+        format!("192.168.7.20:{port}"),
+        "[::1]".into(),
+        format!("[fe80::1]:{port}"),
+        format!("localhost:{port}"),
+    ] {
+        assert_eq!(get(&host), 200, "Host: {host}");
+    }
+    for host in [
+        format!("evil.com:{port}"),
+        "evil.com".into(),
+        "localhost.evil.com".into(),
+        "127.0.0.1.evil.com".into(),
+    ] {
+        assert_eq!(get(&host), 403, "Host: {host}");
+    }
+    drop(rondo);
+
+    let allowed = Rondo::start_on(
+        "allow-host",
+        &scene(RED, 32, 4),
+        "0.0.0.0:0",
+        &["--allow-host", "evil.com", "--allow-host", "viewer.lan"],
+    );
+    allowed.events().done(0);
+    let get = |host: &str| request_as(allowed.addr, "GET", "/image.png", host).status;
+    for host in ["evil.com", "EVIL.com:8730", "viewer.lan", "127.0.0.1"] {
+        assert_eq!(get(host), 200, "allowed Host: {host}");
+    }
+    assert_eq!(get("other.com"), 403);
+
+    for bad in [
+        &["watch", "x.ron", "--serve", "--allow-host", "evil.com:80"][..],
+        &["watch", "x.ron", "-o", "x.png", "--allow-host", "evil.com"],
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_rondo"))
+            .args(bad)
+            .output()
+            .expect("run rondo");
+        assert_eq!(out.status.code(), Some(2), "{bad:?} is a usage error");
+        let text = String::from_utf8_lossy(&out.stderr);
+        assert!(text.contains("--allow-host"), "{text}");
+    }
+}
+
+#[test]
+fn head_requests_get_headers_and_no_body() {
+    // Issue 25, item 17: HEAD /events streamed events.
+    let (viewer, _feed) = library_server(Limits::default());
+    let events = request(viewer.addr(), "HEAD", "/events");
+    assert_eq!(events.status, 200);
+    assert_eq!(events.header("Content-Type"), Some("text/event-stream"));
+    assert!(events.body.is_empty(), "{:?}", events.body);
+    for (target, status) in [("/", 200), ("/image.png", 503), ("/nope", 404)] {
+        let get = request(viewer.addr(), "GET", target);
+        let head = request(viewer.addr(), "HEAD", target);
+        assert_eq!((get.status, head.status), (status, status), "{target}");
+        assert!(head.body.is_empty(), "HEAD {target}: {:?}", head.body);
+        assert_eq!(
+            head.header("Content-Length"),
+            Some(get.body.len().to_string().as_str()),
+            "HEAD {target} says GET's length"
+        );
+    }
+}
+
+#[test]
+fn a_huge_error_is_cut_in_the_event_stream() {
+    // Issue 25, item 15: a 50 MB bad save became a 52 MB event, replayed to every new client.
+    // The watch loop bounds its messages too; the server does not count on it.
+    let (viewer, feed) = library_server(Limits::default());
+    let message = format!(
+        "scene.ron:2:7: bad \x1b]0;title\x07\n{}",
+        "x".repeat(8 << 20)
+    );
+    let source_line = Some(format!("\x1b[31m\r{}", "é".repeat(512 * 1024)));
+    feed.observe(
+        &rondo::watch::Report::Failed {
+            message,
+            source_line,
+        },
+        None,
+    );
+
+    let events = Events::open(viewer.addr());
+    let (error, _) = events.wait("the error", |e| e["kind"] == "error");
+    let message = error["message"].as_str().expect("a message");
+    assert!(
+        message.len() <= MAX_MESSAGE + CUT.len() && message.ends_with(CUT),
+        "the message is cut: {} bytes",
+        message.len()
+    );
+    assert!(
+        message.starts_with("scene.ron:2:7: bad \x1b]0;title\x07\nxxx"),
+        "control characters travel escaped in one JSON line"
+    );
+    assert_eq!(
+        (error["line"].as_u64(), error["col"].as_u64()),
+        (Some(2), Some(7))
+    );
+    let source = error["source_line"].as_str().expect("a source line");
+    assert!(source.starts_with("\x1b[31m\ré"), "{:?}", &source[..20]);
+    assert_eq!(
+        source.chars().count(),
+        MAX_SOURCE_LINE + CUT.chars().count(),
+        "the source line is cut"
+    );
+    assert!(source.ends_with(CUT));
 }

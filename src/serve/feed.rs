@@ -17,10 +17,15 @@
 //! flight, `done` ends a render at full quality, and `error` is a save that did not load (the
 //! last good image stays; `reload` is the number of the render still shown). A new client
 //! first gets the latest `reload`, `pass`, `done` and `error` that still apply.
+//!
+//! An error's `message` is at most [`MAX_MESSAGE`] bytes and its `source_line` (the report's,
+//! from a scene or prefab file only) at most [`MAX_SOURCE_LINE`] characters, each ending in
+//! [`CUT`] when cut, whatever the watch loop sends; events are kept and replayed, so they must
+//! stay small. JSON escapes every control character, so an event is always one `data:` line.
 
 use std::collections::VecDeque;
 use std::io::Cursor;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock, PoisonError};
 use std::time::{Duration, Instant};
 
@@ -40,6 +45,15 @@ pub const RAW_MAGIC: &[u8; 8] = b"RONDOF32";
 
 /// Events a stalled client may have queued; older ones are dropped.
 const QUEUE: usize = 32;
+
+/// The longest error message (and file name) an event carries, in bytes.
+pub const MAX_MESSAGE: usize = 4096;
+
+/// The longest source line an error event quotes, in characters.
+pub const MAX_SOURCE_LINE: usize = 512;
+
+/// What ends a message or source line that was cut.
+pub const CUT: &str = " …[cut]";
 
 /// The encodings of a [`Frame`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -92,9 +106,9 @@ impl Frame {
                 out.extend_from_slice(&v.to_le_bytes());
             }
             // As `Film::mean`, without its intermediate vector.
-            let count = f.count();
+            let (count, fixed) = (f.count(), f.fixed());
             for s in &f.sum {
-                for v in s.mean(count).to_array() {
+                for v in fixed.mean(s, count).to_array() {
                     out.extend_from_slice(&v.to_le_bytes());
                 }
             }
@@ -412,25 +426,33 @@ impl Feed {
                 "full_ms": r.full.map(ms),
                 "line": r.to_string(),
             }),
-            (Report::Failed { message, .. }, _) => {
-                let at = error_location(message);
-                let (file, line, col) = match &at {
-                    Some((f, l, c)) => (Some(f.display().to_string()), Some(*l), Some(*c)),
+            (
+                Report::Failed {
+                    message,
+                    source_line,
+                },
+                _,
+            ) => {
+                let (file, line, col) = match error_location(message) {
+                    Some((f, l, c)) => (Some(f.display().to_string()), Some(l), Some(c)),
                     None => (None, None, None),
                 };
                 json!({
                     "kind": "error",
-                    "message": message,
-                    "file": file,
+                    "message": bounded(message, MAX_MESSAGE),
+                    "file": file.map(|f| bounded(&f, MAX_MESSAGE)),
                     "line": line,
                     "col": col,
-                    "source_line": at.and_then(|(f, l, _)| source_line(&f, l)),
+                    "source_line": source_line.as_deref().map(|l| bounded_chars(l, MAX_SOURCE_LINE)),
                     "reload": shown,
                 })
             }
             (Report::SceneMissing { path }, _) => json!({
                 "kind": "error",
-                "message": format!("{}: deleted; waiting for it to come back", path.display()),
+                "message": bounded(
+                    &format!("{}: deleted; waiting for it to come back", path.display()),
+                    MAX_MESSAGE,
+                ),
                 "reload": shown,
             }),
             _ => return,
@@ -504,12 +526,25 @@ pub fn error_location(message: &str) -> Option<(PathBuf, usize, usize)> {
     })
 }
 
-/// Line `line` (from 1) of `file`, if it can be read; long lines are cut.
-fn source_line(file: &Path, line: usize) -> Option<String> {
-    const MAX: usize = 400;
-    let text = std::fs::read_to_string(file).ok()?;
-    let l = text.lines().nth(line.checked_sub(1)?)?;
-    Some(l.chars().take(MAX).collect())
+/// `text` if it has at most `max` bytes, else its longest start of at most `max` bytes that
+/// ends on a character boundary, followed by [`CUT`].
+fn bounded(text: &str, max: usize) -> String {
+    if text.len() <= max {
+        return text.to_string();
+    }
+    let end = (0..=max)
+        .rev()
+        .find(|&i| text.is_char_boundary(i))
+        .unwrap_or(0);
+    format!("{}{CUT}", &text[..end])
+}
+
+/// `text` if it has at most `max` characters, else its first `max` followed by [`CUT`].
+fn bounded_chars(text: &str, max: usize) -> String {
+    match text.char_indices().nth(max) {
+        Some((end, _)) => format!("{}{CUT}", &text[..end]),
+        None => text.to_string(),
+    }
 }
 
 #[cfg(test)]
@@ -528,6 +563,17 @@ mod tests {
         );
         assert_eq!(error_location("scene.ron: cannot read: gone"), None);
         assert_eq!(error_location("no location at all"), None);
+    }
+
+    #[test]
+    fn long_texts_are_cut_on_a_character_boundary() {
+        assert_eq!(bounded("short", 5), "short");
+        assert_eq!(bounded("ééé", 3), format!("é{CUT}"));
+        assert_eq!(bounded("ééé", 1), CUT);
+        let long = "x".repeat(10 * MAX_MESSAGE);
+        assert_eq!(bounded(&long, MAX_MESSAGE).len(), MAX_MESSAGE + CUT.len());
+        assert_eq!(bounded_chars("ééé", 3), "ééé");
+        assert_eq!(bounded_chars("éééé", 3), format!("ééé{CUT}"));
     }
 
     #[test]
@@ -586,8 +632,9 @@ mod tests {
     #[test]
     fn raw_frames_carry_size_reload_samples_and_linear_means() {
         let mut film = Film::new(2, 1);
-        film.sum[0].add(glam::Vec3::new(4.0, 0.5, -1.0));
-        film.sum[1].add(glam::Vec3::new(0.0, 2.0, 0.0));
+        let fixed = film.fixed();
+        film.sum[0].add(glam::Vec3::new(4.0, 0.5, -1.0), fixed);
+        film.sum[1].add(glam::Vec3::new(0.0, 2.0, 0.0), fixed);
         film.samples = 2;
         let frame = Frame::new(7, film);
         let raw = frame.raw();

@@ -1,6 +1,7 @@
 //! The live viewer of `rondo watch --serve`: an HTTP server that shows every pass in a browser.
 //!
-//! Routes (anything else is `404 Not Found`; methods other than GET and HEAD are `405`):
+//! Routes (anything else is `404 Not Found`; methods other than GET and HEAD are `405`; `HEAD`
+//! answers the same headers as `GET`, without a body):
 //!
 //! | route | content |
 //! |---|---|
@@ -13,31 +14,36 @@
 //!
 //! The images answer `503` until the first pass exists. Query strings are ignored (`/image.png?t=1`
 //! is `/image.png`); paths are matched exactly, so `/../image.png` or `//image.png` are 404.
-//! Bound to loopback, the server answers only requests whose `Host` names a loopback host
-//! (`127.0.0.1`, `localhost`, `[::1]`, any port, so SSH port forwards work) and `403` to the rest:
-//! a web page elsewhere cannot rebind its own name to 127.0.0.1 and read the images.
+//!
+//! Whatever the bound address, the server answers only requests whose `Host` names an IP
+//! address (`127.0.0.1`, `192.168.1.5`, `[::1]`), `localhost`, or a name given with
+//! `--allow-host` (any port, so SSH port forwards work), and `403` to the rest: a web page
+//! elsewhere cannot rebind its own name to the server's address and read the images.
+//!
+//! The server is `http.rs`: std sockets, one thread and one request per connection, every
+//! resource bounded by [`Limits`] (head size, time to send it, stalled writes, open
+//! connections, event streams); a connection over the limit gets `503` and is closed at once.
 //!
 //! The render loop talks to the server only through the watch loop's event point
 //! ([`crate::watch::Observer`], made by [`Feed::observer`]): each report copies what it needs
-//! under a short lock and returns. Every
-//! event-stream client has its own thread and a bounded queue: a client that stalls loses its
-//! oldest queued events, never blocks the render; a closed client is dropped at its next write.
-//!
-//! [`tiny_http`] parses the requests. It cannot flush a streamed body part by part (its chunked
-//! writer buffers 8 KiB), so the event stream takes the socket over with [`Request::upgrade`]
-//! after tiny_http wrote the response head; the body then runs until either side closes.
+//! under a short lock and returns. Every event-stream client has its own thread and a bounded
+//! queue: a client that stalls loses its oldest queued events, never blocks the render; a
+//! closed client is dropped at its next write.
 
 mod feed;
+mod http;
 
-use std::net::{SocketAddr, ToSocketAddrs};
+use std::io::Write;
+use std::net::{IpAddr, Ipv4Addr, Ipv6Addr, SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use tiny_http::{Header, Method, Request, Response, Server, StatusCode};
-
-pub use feed::{Client, Encoding, Feed, Frame, RAW_MAGIC, changed_text, error_location};
+pub use feed::{
+    CUT, Client, Encoding, Feed, Frame, MAX_MESSAGE, MAX_SOURCE_LINE, RAW_MAGIC, changed_text,
+    error_location,
+};
 
 /// The page, compiled into the binary.
 pub const PAGE: &str = include_str!("page.html");
@@ -52,8 +58,46 @@ const KEEP_ALIVE: Duration = Duration::from_secs(10);
 /// How often the progress of the pass in flight is sent, at most.
 const PROGRESS_TICK: Duration = Duration::from_millis(50);
 
-/// At most this many event streams at once; more get `503` (each holds a thread).
-const MAX_STREAMS: usize = 64;
+/// What one client can hold of the server.
+#[derive(Clone, Debug)]
+pub struct Limits {
+    /// Longest request head (request line and headers), in bytes; longer ones get `431`.
+    pub max_head: usize,
+    /// Time from the connection to the end of its request head; a client that sends nothing
+    /// in that time is disconnected (one that sent part of a head gets `408`).
+    pub head_timeout: Duration,
+    /// A write to a client that makes no progress for this long ends its connection (a client
+    /// that stopped reading an image or the event stream).
+    pub write_timeout: Duration,
+    /// Connections open at once, event streams included; more get `503` and are closed.
+    pub max_connections: usize,
+    /// Event streams open at once; more get `503` (each holds a thread).
+    pub max_streams: usize,
+}
+
+impl Default for Limits {
+    /// 16 KiB heads sent within 10 s, writes stalled for at most 30 s, 128 connections of
+    /// which at most 64 are event streams (so images are served even with every stream open).
+    fn default() -> Self {
+        Self {
+            max_head: 16 * 1024,
+            head_timeout: Duration::from_secs(10),
+            write_timeout: Duration::from_secs(30),
+            max_connections: 128,
+            max_streams: 64,
+        }
+    }
+}
+
+/// How the viewer serves, besides its address.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// Host names accepted in `Host` besides IP addresses and `localhost` (`--allow-host`;
+    /// compared without regard to case).
+    pub allowed_hosts: Vec<String>,
+    /// The bounds on every client.
+    pub limits: Limits,
+}
 
 /// Why the server could not start.
 #[derive(Debug, thiserror::Error)]
@@ -83,43 +127,132 @@ pub fn parse_addr(text: &str) -> Result<SocketAddr, ServeError> {
         .ok_or_else(bad)
 }
 
-/// A running viewer server. Dropping it stops accepting requests.
+/// Checks the argument of `--allow-host`: a DNS name (letters, digits, `-` and `.`, at most
+/// 253 characters, no port); returns it in lower case.
+pub fn parse_host_name(text: &str) -> Result<String, String> {
+    let valid = !text.is_empty()
+        && text.len() <= 253
+        && text.split('.').all(|label| {
+            (1..=63).contains(&label.len())
+                && label
+                    .bytes()
+                    .all(|b| b.is_ascii_alphanumeric() || b == b'-')
+        });
+    if valid {
+        Ok(text.to_ascii_lowercase())
+    } else {
+        Err(format!(
+            "{text:?} is not a host name (letters, digits, '-' and '.', no port; IP addresses and localhost are always accepted)"
+        ))
+    }
+}
+
+/// Whether a `Host` header value may be answered: an IP address (IPv6 in brackets),
+/// `localhost` or one of `allowed`, with or without a port.
+fn host_allowed(host: &str, allowed: &[String]) -> bool {
+    let (name, port) = match host.strip_prefix('[') {
+        Some(rest) => match rest.split_once(']') {
+            Some((ip, "")) => (ip, None),
+            Some((ip, port)) => match port.strip_prefix(':') {
+                Some(port) => (ip, Some(port)),
+                None => return false,
+            },
+            None => return false,
+        },
+        None => match host.split_once(':') {
+            Some((name, port)) => (name, Some(port)),
+            None => (host, None),
+        },
+    };
+    if port.is_some_and(|p| p.parse::<u16>().is_err() || !p.bytes().all(|b| b.is_ascii_digit())) {
+        return false;
+    }
+    if host.starts_with('[') {
+        return name.parse::<Ipv6Addr>().is_ok();
+    }
+    name.parse::<Ipv4Addr>().is_ok()
+        || name.eq_ignore_ascii_case("localhost")
+        || allowed.iter().any(|a| a.eq_ignore_ascii_case(name))
+}
+
+/// What every connection's thread shares.
+struct Context {
+    feed: Feed,
+    options: Options,
+    /// Connections open now.
+    open: AtomicUsize,
+}
+
+/// A connection's place in [`Context::open`], given back on drop.
+struct Slot(Arc<Context>);
+
+impl Slot {
+    /// A place, if fewer than the limit are taken.
+    fn take(context: &Arc<Context>) -> Option<Self> {
+        let max = context.options.limits.max_connections;
+        context
+            .open
+            .fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| {
+                (n < max).then_some(n + 1)
+            })
+            .ok()
+            .map(|_| Self(context.clone()))
+    }
+}
+
+impl Drop for Slot {
+    fn drop(&mut self) {
+        self.0.open.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
+/// A running viewer server. Dropping it stops accepting connections.
 pub struct Viewer {
-    server: Arc<Server>,
     addr: SocketAddr,
     stop: Arc<AtomicBool>,
-    threads: Vec<JoinHandle<()>>,
+    accept: Option<JoinHandle<()>>,
+    ticker: Option<JoinHandle<()>>,
 }
 
 impl Viewer {
     /// Binds `addr` and starts serving the returned [`Feed`]'s images and events. With
     /// `fall_back`, a taken port is replaced by a free one (for the default address).
-    pub fn start(addr: SocketAddr, fall_back: bool) -> Result<(Self, Feed), ServeError> {
+    pub fn start(
+        addr: SocketAddr,
+        fall_back: bool,
+        options: Options,
+    ) -> Result<(Self, Feed), ServeError> {
         let bind = |a: SocketAddr| {
-            Server::http(a).map_err(|e| ServeError::Bind {
+            TcpListener::bind(a).map_err(|e| ServeError::Bind {
                 addr: a.to_string(),
                 message: e.to_string(),
             })
         };
-        let server = match bind(addr) {
+        let listener = match bind(addr) {
             Err(_) if fall_back => bind(SocketAddr::new(addr.ip(), 0))?,
             other => other?,
         };
-        let addr = server
-            .server_addr()
-            .to_ip()
-            .ok_or_else(|| ServeError::Bind {
-                addr: addr.to_string(),
-                message: "not an IP socket".into(),
-            })?;
-        let server = Arc::new(server);
+        let addr = listener.local_addr().map_err(|e| ServeError::Bind {
+            addr: addr.to_string(),
+            message: e.to_string(),
+        })?;
         let feed = Feed::new();
         let stop = Arc::new(AtomicBool::new(false));
+        let context = Arc::new(Context {
+            feed: feed.clone(),
+            options,
+            open: AtomicUsize::new(0),
+        });
+        let bind_error = |e: std::io::Error| ServeError::Bind {
+            addr: addr.to_string(),
+            message: format!("cannot start a thread: {e}"),
+        };
         let accept = {
-            let (server, feed) = (server.clone(), feed.clone());
+            let stop = stop.clone();
             std::thread::Builder::new()
                 .name("rondo-serve".into())
-                .spawn(move || accept_requests(&server, &feed, addr.ip().is_loopback()))
+                .spawn(move || accept_connections(&listener, &context, &stop))
+                .map_err(bind_error)?
         };
         let ticker = {
             let (feed, stop) = (feed.clone(), stop.clone());
@@ -132,20 +265,15 @@ impl Viewer {
                     }
                 })
         };
-        let bind_error = |e: std::io::Error| ServeError::Bind {
-            addr: addr.to_string(),
-            message: format!("cannot start a thread: {e}"),
+        let mut viewer = Self {
+            addr,
+            stop,
+            accept: Some(accept),
+            ticker: None,
         };
-        let threads = vec![accept.map_err(bind_error)?, ticker.map_err(bind_error)?];
-        Ok((
-            Self {
-                server,
-                addr,
-                stop,
-                threads,
-            },
-            feed,
-        ))
+        // On an error the viewer is dropped, which stops the accept thread.
+        viewer.ticker = Some(ticker.map_err(bind_error)?);
+        Ok((viewer, feed))
     }
 
     /// The bound address (with the real port if 0 was asked for).
@@ -172,23 +300,93 @@ impl Viewer {
 impl Drop for Viewer {
     fn drop(&mut self) {
         self.stop.store(true, Ordering::Relaxed);
-        self.server.unblock();
-        for t in self.threads.drain(..) {
-            let _ = t.join();
+        // Wake the accept loop with a connection of our own; if none can be made, the thread
+        // is left to end with the process rather than waited for.
+        let ip = match self.addr.ip() {
+            IpAddr::V4(ip) if ip.is_unspecified() => IpAddr::V4(Ipv4Addr::LOCALHOST),
+            IpAddr::V6(ip) if ip.is_unspecified() => IpAddr::V6(Ipv6Addr::LOCALHOST),
+            ip => ip,
+        };
+        let woken = TcpStream::connect_timeout(
+            &SocketAddr::new(ip, self.addr.port()),
+            Duration::from_secs(1),
+        )
+        .is_ok();
+        if let Some(accept) = self.accept.take().filter(|_| woken) {
+            let _ = accept.join();
+        }
+        if let Some(ticker) = self.ticker.take() {
+            let _ = ticker.join();
         }
     }
 }
 
-/// The accept loop: one short-lived thread per request, so a client that never reads its
-/// response holds only its own thread.
-fn accept_requests(server: &Server, feed: &Feed, loopback: bool) {
-    while let Ok(request) = server.recv() {
-        let feed = feed.clone();
-        // If no thread can be started, the request is dropped (the client sees a closed
-        // connection) and the server goes on.
+/// The accept loop: one thread per connection, at most [`Limits::max_connections`] at once.
+fn accept_connections(listener: &TcpListener, context: &Arc<Context>, stop: &AtomicBool) {
+    for connection in listener.incoming() {
+        if stop.load(Ordering::Relaxed) {
+            return;
+        }
+        let Ok(stream) = connection else {
+            // Out of descriptors, most likely: give the open connections a moment to end
+            // rather than spin.
+            std::thread::sleep(Duration::from_millis(10));
+            continue;
+        };
+        let Some(slot) = Slot::take(context) else {
+            refuse(stream);
+            continue;
+        };
+        // If no thread can be started, the closure is dropped: the connection closes and its
+        // slot is given back.
         let _ = std::thread::Builder::new()
-            .name("rondo-serve-request".into())
-            .spawn(move || handle(request, &feed, loopback));
+            .name("rondo-serve-connection".into())
+            .spawn(move || {
+                let context = slot.0.clone();
+                serve_connection(stream, &context);
+                drop(slot);
+            });
+    }
+}
+
+/// Answers a connection over the limit with `503` without reading it, on the accept thread:
+/// the answer fits a fresh socket's buffer, and a write that would block is given up.
+fn refuse(mut stream: TcpStream) {
+    if stream.set_nonblocking(true).is_ok() {
+        let _ = http::respond_text(&mut stream, 503, "too many connections\n", true);
+    }
+    let _ = stream.shutdown(std::net::Shutdown::Both);
+}
+
+/// Reads one request and answers it.
+fn serve_connection(mut stream: TcpStream, context: &Context) {
+    let limits = &context.options.limits;
+    let _ = stream.set_nodelay(true);
+    if stream
+        .set_write_timeout(Some(limits.write_timeout))
+        .is_err()
+    {
+        return;
+    }
+    let request = match http::read_head(&mut stream, limits.max_head, limits.head_timeout) {
+        Ok(request) => request,
+        Err(error) => {
+            let (status, text) = match error {
+                http::HeadError::Closed | http::HeadError::Timeout { partial: false } => return,
+                http::HeadError::Timeout { partial: true } => {
+                    (408, "the request head took too long")
+                }
+                http::HeadError::TooLarge => (431, "the request head is too large"),
+                http::HeadError::Version => (505, "only HTTP/1.x"),
+                http::HeadError::Malformed(why) => (400, why),
+            };
+            let _ = http::respond_text(&mut stream, status, &format!("{text}\n"), true);
+            return http::finish(stream);
+        }
+    };
+    // A write error means the client is gone: nothing to do then.
+    if answer(&mut stream, &request, context).is_ok() {
+        http::finish(stream);
     }
 }
 
@@ -219,127 +417,101 @@ impl Route {
     }
 }
 
-fn header(name: &str, value: &str) -> Header {
-    // Both are ASCII constants or digits here, which tiny_http always accepts.
-    Header::from_bytes(name.as_bytes(), value.as_bytes()).expect("ASCII header")
-}
-
-fn text(status: u16, body: &str) -> Response<std::io::Cursor<Vec<u8>>> {
-    Response::from_string(body)
-        .with_status_code(StatusCode(status))
-        .with_header(header("Content-Type", "text/plain; charset=utf-8"))
-        .with_header(header("Cache-Control", "no-store"))
-}
-
-/// Whether a `Host` header value names a loopback host (any port).
-fn loopback_host(host: &str) -> bool {
-    let name = match host.strip_prefix('[') {
-        Some(rest) => rest.split(']').next().unwrap_or(""),
-        None => host.rsplit_once(':').map_or(host, |(h, _)| h),
+/// Answers a request: the Host check, the route, the method, then the content.
+fn answer(
+    stream: &mut TcpStream,
+    request: &http::Request,
+    context: &Context,
+) -> std::io::Result<()> {
+    let with_body = request.method != "HEAD";
+    let text = |stream: &mut TcpStream, status, text: &str| {
+        http::respond_text(stream, status, text, with_body)
     };
-    name.eq_ignore_ascii_case("localhost")
-        || name
-            .parse::<std::net::IpAddr>()
-            .is_ok_and(|ip| ip.is_loopback())
-}
-
-fn handle(request: Request, feed: &Feed, loopback: bool) {
-    if loopback {
-        let host = request
-            .headers()
-            .iter()
-            .find(|h| h.field.equiv("Host"))
-            .map(|h| h.value.as_str().to_string());
-        if !host.as_deref().is_some_and(loopback_host) {
-            let _ = request.respond(text(403, "the viewer answers only to a loopback Host\n"));
-            return;
-        }
+    let Some(host) = &request.host else {
+        return text(stream, 400, "a Host header is required\n");
+    };
+    if !host_allowed(host, &context.options.allowed_hosts) {
+        return text(
+            stream,
+            403,
+            "the viewer answers only to an IP address, localhost or a name given with --allow-host\n",
+        );
     }
-    let route = Route::of(request.url());
-    let method_ok = matches!(request.method(), Method::Get | Method::Head);
-    let response = match route {
-        None => text(404, "not found\n"),
-        Some(_) if !method_ok => {
-            text(405, "only GET and HEAD\n").with_header(header("Allow", "GET, HEAD"))
-        }
-        Some(Route::Events) => return stream_events(request, feed),
-        Some(Route::Page) => Response::from_string(PAGE)
-            .with_header(header("Content-Type", "text/html; charset=utf-8"))
-            .with_header(header("Cache-Control", "no-store")),
-        Some(route) => {
-            let (frame, content_type) = match route {
-                Route::PreviousRaw => (feed.previous(), "application/octet-stream"),
-                Route::Png => (feed.current(), "image/png"),
-                Route::Exr => (feed.current(), "image/x-exr"),
-                _ => (feed.current(), "application/octet-stream"),
-            };
-            let Some(frame) = frame else {
-                let _ = request.respond(text(503, "no image yet\n"));
-                return;
-            };
-            let encoding = match route {
-                Route::Png => Encoding::Png,
-                Route::Exr => Encoding::Exr,
-                _ => Encoding::Raw,
-            };
-            match frame.bytes(encoding).map(<[u8]>::len) {
-                Ok(len) => {
-                    let headers = vec![
-                        header("Content-Type", content_type),
-                        header("Cache-Control", "no-store"),
-                        header("X-Rondo-Reload", &frame.reload().to_string()),
-                        header("X-Rondo-Samples", &frame.samples().to_string()),
-                    ];
-                    let body = FrameBody {
-                        frame,
-                        encoding,
-                        at: 0,
-                    };
-                    // A Content-Length body, not 8 KiB chunks; read from the shared frame, no copy.
-                    let response = Response::new(StatusCode(200), headers, body, Some(len), None)
-                        .with_chunked_threshold(usize::MAX);
-                    let _ = request.respond(response);
-                    return;
-                }
-                Err(e) => text(500, &format!("cannot encode the image: {e}\n")),
-            }
-        }
+    let Some(route) = Route::of(&request.target) else {
+        return text(stream, 404, "not found\n");
     };
-    // The client may be gone already; nothing to do then.
-    let _ = request.respond(response);
-}
-
-/// A response body that reads one encoding of a shared frame.
-struct FrameBody {
-    frame: Arc<feed::Frame>,
-    encoding: Encoding,
-    at: usize,
-}
-
-impl std::io::Read for FrameBody {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let bytes = self.frame.bytes(self.encoding).unwrap_or_default();
-        let n = buf.len().min(bytes.len().saturating_sub(self.at));
-        buf[..n].copy_from_slice(&bytes[self.at..self.at + n]);
-        self.at += n;
-        Ok(n)
+    if !matches!(request.method.as_str(), "GET" | "HEAD") {
+        return http::respond(
+            stream,
+            405,
+            &[
+                ("Content-Type", "text/plain; charset=utf-8"),
+                ("Allow", "GET, HEAD"),
+            ],
+            b"only GET and HEAD\n",
+            with_body,
+        );
+    }
+    let feed = &context.feed;
+    let (frame, content_type, encoding) = match route {
+        Route::Events => return stream_events(stream, context, with_body),
+        Route::Page => {
+            return http::respond(
+                stream,
+                200,
+                &[("Content-Type", "text/html; charset=utf-8")],
+                PAGE.as_bytes(),
+                with_body,
+            );
+        }
+        Route::Png => (feed.current(), "image/png", Encoding::Png),
+        Route::Exr => (feed.current(), "image/x-exr", Encoding::Exr),
+        Route::Raw => (feed.current(), "application/octet-stream", Encoding::Raw),
+        Route::PreviousRaw => (feed.previous(), "application/octet-stream", Encoding::Raw),
+    };
+    let Some(frame) = frame else {
+        return text(stream, 503, "no image yet\n");
+    };
+    match frame.bytes(encoding) {
+        // Written from the shared frame, no copy.
+        Ok(bytes) => http::respond(
+            stream,
+            200,
+            &[
+                ("Content-Type", content_type),
+                ("X-Rondo-Reload", &frame.reload().to_string()),
+                ("X-Rondo-Samples", &frame.samples().to_string()),
+            ],
+            bytes,
+            with_body,
+        ),
+        Err(e) => text(stream, 500, &format!("cannot encode the image: {e}\n")),
     }
 }
 
-/// Answers `/events`: writes the response head, then hands the socket to a loop that writes
-/// the client's queued events until a write fails.
-fn stream_events(request: Request, feed: &Feed) {
-    let Some(client) = feed.subscribe(MAX_STREAMS) else {
-        let _ = request.respond(text(503, "too many event streams\n"));
-        return;
+/// Answers `/events`: the response head, then the client's queued events until a write fails
+/// (the client closed, or stopped reading for [`Limits::write_timeout`]). `HEAD` gets the head.
+fn stream_events(
+    stream: &mut TcpStream,
+    context: &Context,
+    with_body: bool,
+) -> std::io::Result<()> {
+    let feed = &context.feed;
+    let client = if with_body {
+        match feed.subscribe(context.options.limits.max_streams) {
+            Some(client) => Some(client),
+            None => return http::respond_text(stream, 503, "too many event streams\n", true),
+        }
+    } else {
+        None
     };
-    let head = Response::empty(StatusCode(200))
-        .with_header(header("Content-Type", "text/event-stream"))
-        .with_header(header("Cache-Control", "no-store"));
-    let mut stream = request.upgrade("rondo-events", head);
+    let head = http::write_head(stream, 200, &[("Content-Type", "text/event-stream")], None);
+    let Some(client) = client else {
+        return head.and_then(|()| stream.flush());
+    };
     // Tell EventSource to reconnect quickly if the stream breaks.
-    let mut ok = stream.write_all(b"retry: 500\n\n").is_ok();
-    while ok {
+    let mut result = head.and_then(|()| stream.write_all(b"retry: 500\n\n"));
+    while result.is_ok() {
         let events = client.next_batch(KEEP_ALIVE);
         let mut out = String::new();
         if events.is_empty() {
@@ -350,9 +522,12 @@ fn stream_events(request: Request, feed: &Feed) {
             out.push_str(e);
             out.push_str("\n\n");
         }
-        ok = stream.write_all(out.as_bytes()).is_ok() && stream.flush().is_ok();
+        result = stream
+            .write_all(out.as_bytes())
+            .and_then(|()| stream.flush());
     }
     feed.unsubscribe(&client);
+    result
 }
 
 #[cfg(test)]
@@ -380,24 +555,57 @@ mod tests {
     }
 
     #[test]
-    fn only_loopback_host_names_pass() {
+    fn ip_addresses_localhost_and_allowed_names_pass() {
+        let allowed = ["viewer.lan".to_string()];
         for ok in [
             "127.0.0.1:8730",
+            "192.168.1.2",
+            "0.0.0.0:80",
             "localhost:9000",
             "LOCALHOST",
             "[::1]:8730",
-            "127.1.2.3",
+            "[fe80::1]",
+            "viewer.lan",
+            "Viewer.LAN:8730",
         ] {
-            assert!(loopback_host(ok), "{ok}");
+            assert!(host_allowed(ok, &allowed), "{ok}");
         }
         for bad in [
             "evil.example:8730",
-            "192.168.1.2:8730",
             "localhost.evil.example",
-            "[::2]:80",
+            "viewer.lan.evil.example",
+            "127.0.0.1.evil.example",
+            "localhost:x",
+            "localhost:99999",
+            "localhost:+80",
+            "localhost:",
+            "[::1]x",
+            "[::1",
+            "[localhost]",
+            "[127.0.0.1]",
+            "::1",
+            "127.1",
+            "2130706433",
             "",
         ] {
-            assert!(!loopback_host(bad), "{bad}");
+            assert!(!host_allowed(bad, &allowed), "{bad}");
+        }
+    }
+
+    #[test]
+    fn allowed_host_names_are_dns_names() {
+        assert_eq!(parse_host_name("My-Box.lan").as_deref(), Ok("my-box.lan"));
+        for bad in [
+            "",
+            "a..b",
+            "box:8080",
+            "a b",
+            "évil",
+            ".lan",
+            &"a".repeat(64),
+            "*.lan",
+        ] {
+            assert!(parse_host_name(bad).is_err(), "{bad}");
         }
     }
 
