@@ -156,7 +156,7 @@ pub struct SobolPixel {
     /// sample of the pixel draws from it (they are the same for every sample of the pixel).
     seeds: [DimensionSeeds; CACHED_DIMENSIONS],
     /// Bit `d` set once `seeds[d]` holds dimension `d`'s seeds.
-    cached: u32,
+    cached: u64,
 }
 
 impl SobolPixel {
@@ -187,9 +187,10 @@ pub struct SobolSampler<'a> {
     dimension: u32,
 }
 
-/// How many dimensions' seeds a [`SobolPixel`] keeps: every dimension a path of the
-/// default depth draws from (the pixel, then four per bounce).
-const CACHED_DIMENSIONS: usize = 32;
+/// How many dimensions' seeds a [`SobolPixel`] keeps (at most 64, the bits of its mask): every
+/// dimension a path of the default depth 8 draws from (the pixel, then the integrator's five
+/// per bounce: 1 + 8 · 5).
+const CACHED_DIMENSIONS: usize = 41;
 
 /// The seeds of one dimension: the index shuffle's, its value at index 0, and the two
 /// coordinates' scrambles.
