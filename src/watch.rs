@@ -31,13 +31,16 @@
 //! # When a save is loaded
 //!
 //! As soon as it is complete. On Linux the kernel says when: the writer closed the file
-//! (`IN_CLOSE_WRITE`) or renamed it into place (`IN_MOVED_TO`). The loop then loads at once;
-//! a file that is still being written (an event without its close) holds the load back until
-//! [`DEBOUNCE`] has passed without events, which is also the fallback where the platform reports
-//! no close. A load that fails is not reported at once: the rest of the save may follow (a slow
-//! writer, a delete-then-recreate), so the error waits three windows for more events and is
+//! (`IN_CLOSE_WRITE`) or renamed it into place (`IN_MOVED_TO`). The loop then loads at once.
+//! A file written through a descriptor that is still open (a write event without its close)
+//! holds the load back until the writer closes it, however long it pauses mid-save (bounded
+//! only by [`OPEN_WRITER_PATIENCE`] of quiet, for a close that never comes). Other unfinished
+//! changes (a file created or removed, a directory created: its files follow) wait until
+//! [`DEBOUNCE`] has passed without events, which is also the fallback where the platform
+//! reports no close. A load that fails is not reported at once: the rest of the save may follow
+//! (a delete-then-recreate), so the error waits three windows for more events and is
 //! reported only if none come ([`Report::Deferred`] says that it waits). A half-written save is
-//! therefore never rendered on Linux (its close has not happened) and never reported as an
+//! therefore never loaded on Linux (its close has not happened) and never reported as an
 //! error that the complete save then replaces. A newer event cancels the pass in flight and
 //! starts over. A metadata-only event (`touch`, the `chmod` at the end of a vim save) neither
 //! cancels nor reloads, unless the last load failed (a `chmod +r` may fix it); and a reload that
