@@ -105,7 +105,7 @@ pub const DEBOUNCE: Duration = Duration::from_millis(50);
 const REPORTS_CLOSE: bool = cfg!(any(target_os = "linux", target_os = "android"));
 
 /// How long a file that a writer still holds open may stay quiet before it is loaded anyway
-/// (where [`REPORTS_CLOSE`]): a close that never comes (a `truncate(2)` by path, a close lost
+/// (where `REPORTS_CLOSE`): a close that never comes (a `truncate(2)` by path, a close lost
 /// while a directory was watched afresh) must not stop reloads for good, and a writer that
 /// pauses this long mid-save is taken for having stopped.
 pub const OPEN_WRITER_PATIENCE: Duration = Duration::from_secs(10);
@@ -741,7 +741,7 @@ pub enum Report {
     /// A save could not be loaded; the previous scene and image are kept.
     Failed {
         /// The error, starting with `file:line:col` where known: at most
-        /// [`MAX_MESSAGE`](crate::scene::error::MAX_MESSAGE) bytes, control characters escaped.
+        /// [`MAX_MESSAGE`] bytes, control characters escaped.
         message: String,
         /// The line of the scene or prefab file at that `line:col`, if the error is located in
         /// one ([`SceneError::source_line`](crate::SceneError::source_line): bounded, escaped;

@@ -111,7 +111,7 @@ fn is_unsafe(c: char) -> bool {
         || matches!(c, '\u{2028}' | '\u{2029}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
 }
 
-/// `text` with every character that is not safe to print ([`is_unsafe`]: controls, DEL,
+/// `text` with every character that is not safe to print (`is_unsafe`: controls, DEL,
 /// separators and bidirectional overrides) written as a Rust escape, `\u{1b}`; every other
 /// character, any script or emoji, is kept. Borrowed when nothing needs escaping.
 pub fn escape_controls(text: &str) -> Cow<'_, str> {
@@ -183,9 +183,10 @@ pub fn printable(text: &str, max: usize) -> Cow<'_, str> {
     Cow::Owned(out)
 }
 
-/// The line of `source` at `at`, as [`SceneError::source_line`] holds it: the characters
-/// around the column that fit [`MAX_SOURCE_LINE`] once escaped, about a third of them before
-/// the column, with `…` where the line goes on. `None` past the end of the text.
+/// The line of `source` at `at`, as [`SceneError::source_line`] holds it: the whole line if it
+/// fits [`MAX_SOURCE_LINE`] characters once escaped, else the characters around the column that
+/// fit, about a third of them before the column, with `…` where the line goes on. `None` past
+/// the end of the text.
 pub fn quote_line(source: &str, at: Location) -> Option<String> {
     let start = match at.line {
         0 | 1 => 0,
@@ -206,16 +207,29 @@ pub fn quote_line(source: &str, at: Location) -> Option<String> {
             1
         }
     };
-    let budget = MAX_SOURCE_LINE - 2; // room for a `…` at each end
-    let mut begin = col;
-    let mut used = 0;
-    for (i, c) in line[..col].char_indices().rev() {
-        if used + width(c) > budget / 3 {
-            break;
+    // A line that fits is quoted whole, so the column indexes the quote.
+    let fits = line
+        .chars()
+        .map(width)
+        .try_fold(0, |total, w| {
+            (total + w <= MAX_SOURCE_LINE).then_some(total + w)
+        })
+        .is_some();
+    let (begin, budget) = if fits {
+        (0, MAX_SOURCE_LINE)
+    } else {
+        let budget = MAX_SOURCE_LINE - 2; // room for a `…` at each end
+        let (mut begin, mut before) = (col, 0);
+        for (i, c) in line[..col].char_indices().rev() {
+            if before + width(c) > budget / 3 {
+                break;
+            }
+            before += width(c);
+            begin = i;
         }
-        used += width(c);
-        begin = i;
-    }
+        (begin, budget)
+    };
+    let mut used = 0;
     let mut out = String::new();
     if begin > 0 {
         out.push('…');
@@ -468,6 +482,12 @@ mod tests {
         assert_eq!(quote_line(text, at(2, 3)).as_deref(), Some("second line"));
         assert_eq!(quote_line(text, at(3, 1)).as_deref(), Some(""));
         assert_eq!(quote_line(text, at(4, 1)), None);
+        // A line that fits is quoted whole wherever the column is, so the column indexes it.
+        let fitting = format!("{}x", "a".repeat(MAX_SOURCE_LINE - 1));
+        assert_eq!(
+            quote_line(&fitting, at(1, MAX_SOURCE_LINE)).as_deref(),
+            Some(fitting.as_str())
+        );
         let long = format!("{}HERE{}", "a".repeat(5000), "b".repeat(5000));
         let q = quote_line(&long, at(1, 5001)).expect("line 1");
         assert!(
