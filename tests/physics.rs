@@ -611,42 +611,6 @@ fn a_rendered_glass_ball_in_a_white_furnace_is_nowhere_brighter_than_the_sky() {
     );
 }
 
-/// An OBJ UV sphere of unit radius, `nu` × `nv` quads (split into triangles), with vertex
-/// normals (`vn`, the exact sphere normals) if `smooth`.
-fn uv_sphere_obj(nu: usize, nv: usize, smooth: bool) -> String {
-    let mut obj = String::new();
-    for j in 0..=nv {
-        for i in 0..nu {
-            let (theta, phi) = (
-                std::f32::consts::PI * j as f32 / nv as f32,
-                2.0 * std::f32::consts::PI * i as f32 / nu as f32,
-            );
-            let p = Vec3::new(
-                theta.sin() * phi.cos(),
-                theta.cos(),
-                theta.sin() * phi.sin(),
-            );
-            obj += &format!("v {} {} {}\n", p.x, p.y, p.z);
-            if smooth {
-                obj += &format!("vn {} {} {}\n", p.x, p.y, p.z);
-            }
-        }
-    }
-    let idx = |i: usize, j: usize| j * nu + (i % nu) + 1;
-    for j in 0..nv {
-        for i in 0..nu {
-            let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1));
-            // Degenerate triangles at the poles are skipped by the loader's checks if any.
-            if smooth {
-                obj += &format!("f {a}//{a} {c}//{c} {b}//{b}\nf {a}//{a} {d}//{d} {c}//{c}\n");
-            } else {
-                obj += &format!("f {a} {c} {b}\nf {a} {d} {c}\n");
-            }
-        }
-    }
-    obj
-}
-
 #[test]
 fn a_smooth_shaded_white_mesh_in_a_white_furnace_stays_white() {
     // A closed white (albedo 1) object under a uniform sky of radiance 1 reflects all of it, so
@@ -655,7 +619,11 @@ fn a_smooth_shaded_white_mesh_in_a_white_furnace_stays_white() {
     // averaged 0.987 with silhouette pixels at 0.67.
     let dir = temp_dir("smooth-furnace");
     for (name, smooth) in [("flat", false), ("smooth", true)] {
-        write_scene(&dir, &format!("{name}.obj"), &uv_sphere_obj(10, 6, smooth));
+        write_scene(
+            &dir,
+            &format!("{name}.obj"),
+            &common::uv_sphere_obj(10, 6, smooth),
+        );
         let scene = write_scene(
             &dir,
             &format!("{name}.ron"),

@@ -402,36 +402,8 @@ fn a_smooth_low_poly_sphere_renders_without_facets_or_nonfinite_samples() {
     // A 12×8 UV sphere with and without vertex normals, lit by a lamp: facet edges show as
     // jumps between neighbouring pixels, which smooth normals must reduce.
     let dir = temp_dir("smooth-sphere");
-    let (nu, nv) = (12usize, 8usize);
-    let mut flat = String::new();
-    let mut normals = String::new();
-    for j in 0..=nv {
-        for i in 0..nu {
-            let (theta, phi) = (
-                std::f32::consts::PI * j as f32 / nv as f32,
-                2.0 * std::f32::consts::PI * i as f32 / nu as f32,
-            );
-            let p = Vec3::new(
-                theta.sin() * phi.cos(),
-                theta.cos(),
-                theta.sin() * phi.sin(),
-            );
-            flat += &format!("v {} {} {}\n", p.x, p.y, p.z);
-            normals += &format!("vn {} {} {}\n", p.x, p.y, p.z);
-        }
-    }
-    let mut faces = String::new();
-    let mut faces_n = String::new();
-    let idx = |i: usize, j: usize| j * nu + (i % nu) + 1;
-    for j in 0..nv {
-        for i in 0..nu {
-            let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1));
-            faces += &format!("f {a} {c} {b}\nf {a} {d} {c}\n");
-            faces_n += &format!("f {a}//{a} {c}//{c} {b}//{b}\nf {a}//{a} {d}//{d} {c}//{c}\n");
-        }
-    }
-    write_scene(&dir, "flat.obj", &(flat.clone() + &faces));
-    write_scene(&dir, "smooth.obj", &(flat + &normals + &faces_n));
+    write_scene(&dir, "flat.obj", &common::uv_sphere_obj(12, 8, false));
+    write_scene(&dir, "smooth.obj", &common::uv_sphere_obj(12, 8, true));
     let scene = |mesh: &str| {
         write_scene(
             &dir,

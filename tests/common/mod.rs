@@ -6,6 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
+use glam::Vec3;
 use rondo::{Film, Overrides, PassPlan, Renderer};
 
 /// A test's temporary directory: removed with its contents when dropped, unless the test is
@@ -151,4 +152,39 @@ pub fn end_watch(session: Option<rondo::watch::WatchSession>) {
             stopped.expect("watch thread ends cleanly");
         }
     }
+}
+
+/// An OBJ UV sphere of unit radius, `nu` × `nv` quads (split into triangles), with vertex
+/// normals (`vn`, the exact sphere normals) if `smooth`.
+pub fn uv_sphere_obj(nu: usize, nv: usize, smooth: bool) -> String {
+    let mut obj = String::new();
+    for j in 0..=nv {
+        for i in 0..nu {
+            let (theta, phi) = (
+                std::f32::consts::PI * j as f32 / nv as f32,
+                2.0 * std::f32::consts::PI * i as f32 / nu as f32,
+            );
+            let p = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            );
+            obj += &format!("v {} {} {}\n", p.x, p.y, p.z);
+            if smooth {
+                obj += &format!("vn {} {} {}\n", p.x, p.y, p.z);
+            }
+        }
+    }
+    let idx = |i: usize, j: usize| j * nu + (i % nu) + 1;
+    for j in 0..nv {
+        for i in 0..nu {
+            let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1));
+            if smooth {
+                obj += &format!("f {a}//{a} {c}//{c} {b}//{b}\nf {a}//{a} {d}//{d} {c}//{c}\n");
+            } else {
+                obj += &format!("f {a} {c} {b}\nf {a} {d} {c}\n");
+            }
+        }
+    }
+    obj
 }
