@@ -285,12 +285,12 @@ fn front(s: &Surface, d: Vec3) -> Vec3 {
 /// A smooth surface's lobe, sampled around the shading normal, folded onto the side of the
 /// geometric surface the ray came from: a direction that would pass through the surface (near
 /// silhouettes) is mirrored at it. Following such a direction would leak light through the
-/// mesh, and dropping it would darken the silhouettes (a white closed mesh lost 1.3 % of its
-/// light, 33 % at silhouette pixels); folded, the lobe keeps its energy on the right side. Its
-/// value and density at a direction are the sums over the direction and its mirror image
-/// ([`folded_eval`]), so the sampled weight is their ratio (exactly the albedo for a diffuse
-/// surface) and next-event estimation and MIS use the very density sampled from. `None` for a
-/// direction in the surface's plane or of zero density.
+/// mesh, and dropping it darkened the silhouettes (a white 10×6 UV sphere in a white furnace
+/// averaged 0.993, silhouette pixels 0.69); folded, the lobe keeps its energy on the right
+/// side. Its value and density at a direction are the sums over the direction and its mirror
+/// image ([`folded_eval`]), so the sampled weight is their ratio (exactly the albedo for a
+/// diffuse surface) and next-event estimation and MIS use the very density sampled from. `None`
+/// for a direction in the surface's plane or of zero density.
 #[inline]
 fn fold(s: &Surface, material: &Material, d: Vec3, scatter: Scatter) -> Option<Scatter> {
     let n = front(s, d);
@@ -302,13 +302,13 @@ fn fold(s: &Surface, material: &Material, d: Vec3, scatter: Scatter) -> Option<S
     if direction.dot(n) <= 0.0 {
         return None;
     }
-    let Some(_) = scatter.pdf else {
+    if scatter.pdf.is_none() {
         // A lobe without a density (the fuzzed metal): only its direction is folded.
         return Some(Scatter {
             direction,
             ..scatter
         });
-    };
+    }
     let (f_cos, pdf) = folded_eval(s, material, d, direction)?;
     (pdf > 0.0).then(|| Scatter {
         direction,
