@@ -1,0 +1,10 @@
+//! The bodies of the `rondo` commands; `main.rs` holds only the argument types and the dispatch.
+
+pub mod args;
+pub mod bench;
+pub mod check;
+pub mod diff;
+pub mod farm;
+pub mod merge;
+pub mod render;
+pub mod watch;

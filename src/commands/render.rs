@@ -1,0 +1,86 @@
+//! `rondo render`: one image, a sample range or a resumed partial, and its summary line.
+
+use std::path::Path;
+use std::time::Duration;
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use super::args::RenderArgs;
+use rondo::Renderer;
+use rondo::cli::check_output_file;
+
+pub fn run(
+    scene: &Path,
+    output: &Path,
+    options: &RenderArgs,
+    part: Option<rondo::farm::Samples>,
+) -> Result<()> {
+    check_output_file(output)?;
+    let mut r = options.renderer()?;
+    let part = match &part {
+        Some(p) => Some(rondo::farm::prepare(
+            &mut r,
+            options.overrides(),
+            scene,
+            output,
+            p,
+        )?),
+        None => None,
+    };
+    let s = match &part {
+        Some(p) => p.settings,
+        None => r.load(scene)?.settings,
+    };
+    if part.is_none() {
+        r.set_output(Some(output), false);
+    }
+    let bar =
+        ProgressBar::with_draw_target(Some(u64::from(s.height)), ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} rendering [{bar:40}] {percent}% eta {eta}")
+            .context("progress template")?,
+    );
+    r.set_progress(Some(bar.clone()));
+    let wall = r.render_to_completion();
+    bar.finish_and_clear();
+    if let Some(e) = &r.output().last_error {
+        bail!("{e}");
+    }
+    if let Some(part) = part {
+        let ranges = rondo::partial::format_ranges(part.ranges());
+        part.finish(&mut r)?;
+        eprintln!("{} holds samples {ranges}", output.display());
+    }
+    eprintln!("{}", summary(&r, wall));
+    Ok(())
+}
+
+/// The one-line summary printed after a render: the samples per pixel and the rate are those
+/// this process rendered (`--samples 1023..1024` renders 1 spp, a resume the samples after its
+/// partial's), with their range when it does not start at 0.
+pub fn summary(r: &Renderer, wall: Duration) -> String {
+    let s = r.settings();
+    let film = r.film();
+    let stats = r.stats();
+    let secs = wall.as_secs_f64().max(1e-9);
+    let spp = film.count();
+    let samples = f64::from(s.width) * f64::from(s.height) * spp as f64;
+    let range = if film.start > 0 {
+        format!(" (samples {}..{})", film.start, film.samples)
+    } else {
+        String::new()
+    };
+    format!(
+        "{}x{}, {spp} spp{range}, {:.2} s, {:.2} M samples/s, {:.2} M rays/s, BVH {:.2} ms ({} primitives), {} non-finite samples (dropped), {} beyond the film's range (clamped)",
+        s.width,
+        s.height,
+        secs,
+        samples / secs / 1e6,
+        stats.rays as f64 / secs / 1e6,
+        r.timings().bvh.as_secs_f64() * 1e3,
+        r.primitive_count(),
+        stats.nonfinite,
+        stats.clamped,
+    )
+}

@@ -1,0 +1,52 @@
+//! `rondo watch`: the live loop, printed and optionally served.
+
+use anyhow::Result;
+
+use rondo::cli::check_output_file;
+use rondo::watch::{Watch, WatchOptions};
+
+/// `rondo watch`: runs until Ctrl-C, one line per reload on stderr; with `serve`, also serves
+/// the live viewer.
+pub fn run(
+    options: WatchOptions,
+    serve: Option<Option<String>>,
+    allowed_hosts: Vec<String>,
+) -> Result<()> {
+    if let Some(output) = &options.output {
+        check_output_file(output)?;
+    }
+    let mut watch = Watch::new(options)?;
+    // Viewer hook: start the server and feed it every reload, pass and report.
+    let viewer = match serve {
+        Some(addr) => {
+            let fall_back = addr.is_none();
+            let addr =
+                rondo::serve::parse_addr(addr.as_deref().unwrap_or(rondo::serve::DEFAULT_ADDR))?;
+            let serve_options = rondo::serve::Options {
+                allowed_hosts,
+                ..Default::default()
+            };
+            let (viewer, feed) = rondo::serve::Viewer::start(addr, fall_back, serve_options)?;
+            if let Some(warning) = viewer.exposure_warning() {
+                eprintln!("warning: {warning}");
+            }
+            eprintln!("viewer: {}", viewer.url());
+            watch.set_observer(feed.observer());
+            watch.set_progress(feed.progress_bar());
+            Some(viewer)
+        }
+        None => None,
+    };
+    let stop = watch.stop_handle();
+    // The first SIGINT/SIGTERM ends the session after its current step (an image being written
+    // is finished); a second one exits at once, removing the temporary.
+    rondo::output_file::stop_on_termination(move || stop.stop());
+    watch.run(|report| {
+        if let Some(line) = report.line() {
+            eprintln!("{line}");
+        }
+    });
+    drop(viewer);
+    eprintln!("stopped");
+    Ok(())
+}
