@@ -72,737 +72,31 @@
 //! # Ok::<(), rondo::watch::WatchError>(())
 //! ```
 
-use std::collections::{BTreeSet, HashSet};
-use std::fmt;
+use std::collections::HashSet;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender};
-use std::sync::{Arc, Mutex, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use notify::event::{AccessKind, AccessMode, MetadataKind, ModifyKind, RenameMode};
-use notify::{EventKind, RecommendedWatcher, RecursiveMode, Watcher};
-
-use crate::app::{Overrides, Renderer};
-use crate::ecs::resources::{ChangeSummary, Counters, PassPlan};
+use crate::app::Renderer;
+use crate::ecs::resources::{Counters, PassPlan};
 use crate::film::{Film, OutputKind};
-use crate::geometry::layout::LayoutKind;
-use crate::scene::error::{MAX_MESSAGE, escape_controls, printable};
 
-/// How long the files must be quiet before a save that is not known to be complete is loaded,
-/// and a third of how long a failed load waits for the rest of its save before it is reported.
-///
-/// 50 ms: the steps of one save (truncate + write + fsync + chmod, or write a temporary file and
-/// rename it, or vim's backup-rename + write + delete) land within about 10 ms of each other
-/// (vim here: 8 ms from truncate to the last attribute change, the fsync in between), so 50 ms
-/// holds a save together with room to spare on a loaded machine. Saves that end in a close or a
-/// rename (every editor on Linux) do not wait for it: they load as soon as that event arrives.
-pub const DEBOUNCE: Duration = Duration::from_millis(50);
+mod error;
+mod files;
+mod options;
+mod report;
 
-/// Whether the platform's watcher says when a writer closes a file (inotify's
-/// `IN_CLOSE_WRITE`): only then can a load wait for the close of a file being written.
-const REPORTS_CLOSE: bool = cfg!(any(target_os = "linux", target_os = "android"));
-
-/// How long a file that a writer still holds open may stay quiet before it is loaded anyway
-/// (where `REPORTS_CLOSE`): a close that never comes (a `truncate(2)` by path, a close lost
-/// while a directory was watched afresh) must not stop reloads for good, and a writer that
-/// pauses this long mid-save is taken for having stopped.
-pub const OPEN_WRITER_PATIENCE: Duration = Duration::from_secs(10);
-
-/// How often an idle loop wakes to check its stop flag even without events (stopping also sends
-/// a wake-up, so this is only a safety net).
-const IDLE_POLL: Duration = Duration::from_millis(500);
-
-/// Why watching could not start.
-#[derive(Debug, thiserror::Error)]
-pub enum WatchError {
-    /// The output file has an unsupported extension.
-    #[error("{0}: output must end in .png or .exr")]
-    Output(PathBuf),
-    /// The render thread pool could not be built.
-    #[error("cannot start the render threads: {0}")]
-    Threads(#[from] rayon::ThreadPoolBuildError),
-    /// The file watcher could not be created.
-    #[error("cannot watch files: {0}")]
-    Notify(#[from] notify::Error),
-    /// The scene's directory cannot be watched.
-    #[error("{path}: cannot watch: {message}")]
-    Directory {
-        /// The scene file.
-        path: PathBuf,
-        /// Why.
-        message: String,
-    },
-    /// The session thread could not be started.
-    #[error("cannot start the watch thread: {0}")]
-    Thread(#[from] std::io::Error),
-    /// The session thread panicked (a bug: please report it).
-    #[error("the watch thread panicked")]
-    Panicked,
-}
-
-// ------------------------------------------------------------------------------------------------
-// The file watcher: notify → channel.
-
-/// What an event says about a file's contents.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Effect {
-    /// Attributes only (times, permissions): never cancels a pass; reloads only a scene whose
-    /// last load failed.
-    Metadata,
-    /// The contents may be in the middle of changing: a creation, a removal, a rename away, a
-    /// directory created (its files follow).
-    Partial,
-    /// Data was written (or the file truncated) through a descriptor that is still open: where
-    /// the platform reports closes, the file is complete only once the writer closes it.
-    Writing,
-    /// The contents are final: the writer closed the file or it was renamed into place.
-    Complete,
-}
-
-/// What an event of `kind` means for the path at `index` of its paths; `None` if it cannot
-/// change contents (opening and reading, which the loader's own reads would otherwise turn into
-/// reloads forever, and access-time updates).
-fn effect(kind: &EventKind, index: usize) -> Option<Effect> {
-    Some(match kind {
-        EventKind::Access(AccessKind::Close(AccessMode::Write)) => Effect::Complete,
-        EventKind::Access(_) => return None,
-        EventKind::Modify(ModifyKind::Metadata(MetadataKind::AccessTime)) => return None,
-        EventKind::Modify(ModifyKind::Metadata(_)) => Effect::Metadata,
-        EventKind::Modify(ModifyKind::Name(RenameMode::To)) => Effect::Complete,
-        // `[from, to]`: the old name is gone, the new one is in place.
-        EventKind::Modify(ModifyKind::Name(RenameMode::Both)) if index > 0 => Effect::Complete,
-        EventKind::Modify(ModifyKind::Data(_)) => Effect::Writing,
-        _ => Effect::Partial,
-    })
-}
-
-/// A batch of file events, as the loop receives it.
-#[derive(Clone, Debug)]
-pub struct Change {
-    /// The files concerned, as watched (parent directory canonicalised), with what happened to
-    /// each. Empty after an event overflow.
-    pub paths: Vec<(PathBuf, Effect)>,
-    /// Whether the directories to watch may have changed: a watched directory or one on the way
-    /// to a dependency was created, removed or renamed (or events were lost).
-    pub rearm: bool,
-    /// Events were lost (the kernel queue overflowed): anything may have changed.
-    pub overflow: bool,
-    /// When the watcher received it.
-    pub at: Instant,
-}
-
-/// What the file watcher tells the loop.
-#[derive(Clone, Debug)]
-pub enum FileEvent {
-    /// Files the scene depends on (or may come to depend on) changed.
-    Changed(Change),
-    /// The watcher reported an error (e.g. too many watches).
-    Error(String),
-    /// Nothing happened; sent to wake the loop (see [`StopHandle::stop`]).
-    Wake,
-}
-
-/// How a path matters.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Class {
-    /// A file the scene reads (or a failed load asked for).
-    File,
-    /// A directory whose creation, removal or rename changes what must be watched.
-    Arm,
-}
-
-/// Which paths are relevant. Shared with the notify thread.
-#[derive(Default)]
-struct Filter {
-    /// Files, as [`watch_key`]s.
-    files: HashSet<PathBuf>,
-    /// Watched directories (seen from their parents, or reporting their own removal) and missing
-    /// directories on the way to a file.
-    arms: HashSet<PathBuf>,
-    /// Never relevant (the output image, which we write ourselves).
-    ignore: HashSet<PathBuf>,
-}
-
-impl Filter {
-    fn classify(&self, path: &Path) -> Option<Class> {
-        if self.ignore.contains(path) {
-            None
-        } else if self.files.contains(path) {
-            Some(Class::File)
-        } else if self.arms.contains(path) {
-            Some(Class::Arm)
-        } else {
-            None
-        }
-    }
-
-    /// The change `event` makes, if it concerns any path of interest.
-    fn change(&self, event: &notify::Event) -> Option<Change> {
-        let at = Instant::now();
-        if event.need_rescan() {
-            return Some(Change {
-                paths: Vec::new(),
-                rearm: true,
-                overflow: true,
-                at,
-            });
-        }
-        let mut change = Change {
-            paths: Vec::new(),
-            rearm: false,
-            overflow: false,
-            at,
-        };
-        for (i, path) in event.paths.iter().enumerate() {
-            let (Some(class), Some(effect)) = (self.classify(path), effect(&event.kind, i)) else {
-                continue;
-            };
-            change.rearm |= class == Class::Arm && effect != Effect::Metadata;
-            change.paths.push((path.clone(), effect));
-        }
-        (!change.paths.is_empty()).then_some(change)
-    }
-}
-
-/// The key under which a file is watched: its parent directory, made absolute with symlinks and
-/// `..` resolved (as notify reports paths of a canonical watch root), joined with its name.
-/// Returns `(directory, key)`. The file itself need not exist; its directory must.
-pub fn watch_key(path: &Path) -> std::io::Result<(PathBuf, PathBuf)> {
-    let absolute = std::path::absolute(path)?;
-    let name = absolute
-        .file_name()
-        .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file name"))?;
-    let dir = absolute.parent().unwrap_or(Path::new("/")).canonicalize()?;
-    let key = dir.join(name);
-    Ok((dir, key))
-}
-
-/// For a file whose directory does not exist: the nearest existing ancestor (canonical) and the
-/// path of the missing directory under it whose creation is to be watched for.
-fn nearest_ancestor(path: &Path) -> Option<(PathBuf, PathBuf)> {
-    let absolute = std::path::absolute(path).ok()?;
-    let mut below: Option<&Path> = None;
-    for dir in absolute.parent()?.ancestors() {
-        if dir.is_dir() {
-            let canonical = dir.canonicalize().ok()?;
-            let name = below?.file_name()?;
-            return Some((canonical.clone(), canonical.join(name)));
-        }
-        below = Some(dir);
-    }
-    None
-}
-
-/// What to watch for a set of files.
-#[derive(Default, PartialEq, Eq)]
-struct Plan {
-    files: HashSet<PathBuf>,
-    arms: HashSet<PathBuf>,
-    /// Directories holding files (shown to the user).
-    dirs: BTreeSet<PathBuf>,
-    /// Parents and ancestors watched for arms.
-    guards: BTreeSet<PathBuf>,
-}
-
-impl Plan {
-    fn new(files: &[PathBuf]) -> Self {
-        let mut plan = Self::default();
-        for file in files {
-            match watch_key(file) {
-                Ok((dir, key)) => {
-                    plan.dirs.insert(dir);
-                    plan.files.insert(key);
-                    // A symlinked file changes when its target does.
-                    let link = std::fs::symlink_metadata(file).is_ok_and(|m| m.is_symlink());
-                    if let Some((dir, key)) = link
-                        .then(|| std::fs::canonicalize(file).ok())
-                        .flatten()
-                        .and_then(|target| watch_key(&target).ok())
-                    {
-                        plan.dirs.insert(dir);
-                        plan.files.insert(key);
-                    }
-                }
-                Err(_) => {
-                    if let Some((ancestor, missing)) = nearest_ancestor(file) {
-                        plan.guards.insert(ancestor);
-                        plan.arms.insert(missing);
-                    }
-                }
-            }
-        }
-        for dir in &plan.dirs {
-            plan.arms.insert(dir.clone());
-            if let Some(parent) = dir.parent() {
-                plan.guards.insert(parent.to_path_buf());
-            }
-        }
-        plan
-    }
-
-    fn directories(&self) -> BTreeSet<PathBuf> {
-        self.dirs.union(&self.guards).cloned().collect()
-    }
-}
-
-/// Watches the directories (non-recursively) around a set of files and sends a
-/// [`FileEvent::Changed`] for each event that concerns them, after raising the cancel flag if
-/// contents may have changed. See the module docs for what is watched.
-pub struct FileWatcher {
-    watcher: RecommendedWatcher,
-    filter: Arc<Mutex<Filter>>,
-    /// The files as last given to [`FileWatcher::set_files`].
-    files: Vec<PathBuf>,
-    /// Directories shown to the user (those holding files).
-    dirs: BTreeSet<PathBuf>,
-    /// Every directory watched.
-    watched: BTreeSet<PathBuf>,
-}
-
-impl FileWatcher {
-    /// Starts the notify watcher. Relevant events set `cancel` (unless they change only
-    /// metadata) and are sent to `events`. Nothing is watched until [`FileWatcher::set_files`].
-    pub fn new(cancel: Arc<AtomicBool>, events: Sender<FileEvent>) -> Result<Self, notify::Error> {
-        let filter = Arc::new(Mutex::new(Filter::default()));
-        let shared = filter.clone();
-        let handler = move |result: notify::Result<notify::Event>| match result {
-            Ok(event) => {
-                let change = shared
-                    .lock()
-                    .unwrap_or_else(PoisonError::into_inner)
-                    .change(&event);
-                if let Some(change) = change {
-                    if change.overflow || change.paths.iter().any(|(_, e)| *e != Effect::Metadata) {
-                        cancel.store(true, Ordering::SeqCst);
-                    }
-                    let _ = events.send(FileEvent::Changed(change));
-                }
-            }
-            Err(error) => {
-                let _ = events.send(FileEvent::Error(error.to_string()));
-            }
-        };
-        Ok(Self {
-            watcher: notify::recommended_watcher(handler)?,
-            filter,
-            files: Vec::new(),
-            dirs: BTreeSet::new(),
-            watched: BTreeSet::new(),
-        })
-    }
-
-    fn filter(&self) -> std::sync::MutexGuard<'_, Filter> {
-        self.filter.lock().unwrap_or_else(PoisonError::into_inner)
-    }
-
-    /// Makes `files` the watched set: watches the directories it needs that are not watched yet,
-    /// unwatches those no longer needed. Returns whether anything is watched now that was not
-    /// (a directory, a file or a missing directory on the way to one), and a warning per
-    /// directory that cannot be watched (the others still are).
-    ///
-    /// Until this call, events for the new paths are dropped as irrelevant, so a caller that
-    /// read those files before must read them again when this returns `true`: a file deleted or
-    /// written between the read and this call would otherwise never be noticed.
-    pub fn set_files(&mut self, files: &[PathBuf]) -> (bool, Vec<String>) {
-        self.files = files.to_vec();
-        let plan = Plan::new(files);
-        let wanted = plan.directories();
-        let mut added = {
-            let mut filter = self.filter();
-            let added = !plan.files.is_subset(&filter.files) || !plan.arms.is_subset(&filter.arms);
-            filter.files = plan.files;
-            filter.arms = plan.arms;
-            added
-        };
-        for dir in self.watched.difference(&wanted) {
-            // The directory may be gone already; nothing to do then.
-            let _ = self.watcher.unwatch(dir);
-        }
-        let mut warnings = Vec::new();
-        let mut watched = BTreeSet::new();
-        for dir in wanted {
-            if self.watched.contains(&dir) {
-                watched.insert(dir);
-                continue;
-            }
-            match self.watcher.watch(&dir, RecursiveMode::NonRecursive) {
-                Ok(()) => {
-                    added = true;
-                    watched.insert(dir);
-                }
-                Err(e) => {
-                    if plan.dirs.contains(&dir) {
-                        warnings.push(format!("{}: cannot watch: {e}", dir.display()));
-                    }
-                }
-            }
-        }
-        self.watched = watched;
-        self.dirs = plan.dirs;
-        (added, warnings)
-    }
-
-    /// Watches every directory afresh: after a directory was deleted, renamed or replaced, a
-    /// watch may follow an inode that is no longer at its path.
-    pub fn rearm(&mut self) -> (bool, Vec<String>) {
-        for dir in std::mem::take(&mut self.watched) {
-            let _ = self.watcher.unwatch(&dir);
-        }
-        let files = std::mem::take(&mut self.files);
-        self.set_files(&files)
-    }
-
-    /// Never report `path` (for the output image, which the loop writes itself).
-    pub fn ignore(&self, path: &Path) {
-        if let Ok((_, key)) = watch_key(path) {
-            self.filter().ignore.insert(key);
-        }
-    }
-
-    /// The directories holding watched files (their parents are watched too, unlisted).
-    pub fn directories(&self) -> Vec<PathBuf> {
-        self.dirs.iter().cloned().collect()
-    }
-
-    /// The number of files watched (symlink targets included).
-    pub fn file_count(&self) -> usize {
-        self.filter().files.len()
-    }
-}
+pub use error::WatchError;
+pub use files::*;
+use files::{IDLE_POLL, REPORTS_CLOSE};
+pub use options::WatchOptions;
+pub use report::*;
 
 // ------------------------------------------------------------------------------------------------
 // The loop: events → Renderer.
-
-/// What to watch and render.
-#[derive(Clone, Debug)]
-pub struct WatchOptions {
-    /// The scene file.
-    pub scene: PathBuf,
-    /// The output image (`.png` or `.exr`), rewritten atomically after every pass; `None` to
-    /// write no file (when an [`Observer`] shows the images instead: `watch --serve`).
-    pub output: Option<PathBuf>,
-    /// Render threads (all cores if `None`).
-    pub threads: Option<usize>,
-    /// Settings overrides applied to every load.
-    pub overrides: Overrides,
-    /// Geometry layout (speed only; images are identical).
-    pub layout: LayoutKind,
-    /// Samples of the first pass; later passes double the total up to the scene's spp.
-    pub first_pass: u32,
-    /// The quiet window (see [`DEBOUNCE`]).
-    pub debounce: Duration,
-}
-
-impl WatchOptions {
-    /// Defaults: all cores, no overrides, the default layout, a first pass of 1 sample, the
-    /// [`DEBOUNCE`] window.
-    pub fn new(scene: impl Into<PathBuf>, output: impl Into<PathBuf>) -> Self {
-        Self {
-            scene: scene.into(),
-            output: Some(output.into()),
-            threads: None,
-            overrides: Overrides::default(),
-            layout: LayoutKind::default(),
-            first_pass: 1,
-            debounce: DEBOUNCE,
-        }
-    }
-}
-
-/// What one (re)load changed, rebuilt and cost: the line printed per reload.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ReloadReport {
-    /// 0 for the first load, then 1, 2, … for each successful reload.
-    pub number: u64,
-    /// The changed files that caused it (empty for the first load).
-    pub trigger: Vec<PathBuf>,
-    /// Whether its first frame ran (the scene was applied to the world); a reload superseded
-    /// before that hands its changes on to the next one.
-    pub applied: bool,
-    /// What the scene diff changed in the world.
-    pub changes: ChangeSummary,
-    /// Whether the geometry and its BVH were rebuilt.
-    pub bvh_rebuilt: bool,
-    /// Primitives in the geometry.
-    pub primitives: usize,
-    /// Whether material assignments were rebuilt.
-    pub materials_synced: bool,
-    /// Image textures decoded by the load (unchanged textures come from the cache).
-    pub textures_decoded: u64,
-    /// Reading, parsing and validating the scene, textures included.
-    pub parse: Duration,
-    /// Applying the scene to the world and assigning materials (the BVH excluded).
-    pub ecs: Duration,
-    /// Packing geometry and building the BVH (zero if not rebuilt).
-    pub bvh: Duration,
-    /// The first pass: its sample count and duration.
-    pub first_pass: Option<(u32, Duration)>,
-    /// Whether the first pass was the reduced-resolution preview (one sample per block).
-    pub preview: bool,
-    /// From the save to the first image written.
-    pub first_image: Option<Duration>,
-    /// From the save to the full-quality image written; `None` if superseded by a newer save.
-    pub full: Option<Duration>,
-    /// Samples per pixel of the last image written.
-    pub samples: u32,
-    /// Samples per pixel the scene asks for.
-    pub spp: u32,
-    /// Passes abandoned (cancelled) and started over.
-    pub restarts: u32,
-    /// The renderer's counters when the report was made.
-    pub counters: Counters,
-}
-
-impl ReloadReport {
-    /// The report of reload `number` of a scene of `spp` samples, before anything happened.
-    fn started(number: u64, trigger: Vec<PathBuf>, spp: u32) -> Self {
-        Self {
-            number,
-            trigger,
-            applied: false,
-            changes: ChangeSummary::default(),
-            bvh_rebuilt: false,
-            primitives: 0,
-            materials_synced: false,
-            textures_decoded: 0,
-            parse: Duration::ZERO,
-            ecs: Duration::ZERO,
-            bvh: Duration::ZERO,
-            first_pass: None,
-            preview: false,
-            first_image: None,
-            full: None,
-            samples: 0,
-            spp,
-            restarts: 0,
-            counters: Counters::default(),
-        }
-    }
-
-    /// Whether the render reached the scene's spp (not superseded).
-    pub fn completed(&self) -> bool {
-        self.full.is_some()
-    }
-}
-
-/// Formats a duration for humans: `0.42 ms`, `12.3 ms`, `2.31 s`.
-fn human(d: Duration) -> String {
-    let ms = d.as_secs_f64() * 1e3;
-    if ms < 10.0 {
-        format!("{ms:.2} ms")
-    } else if ms < 1000.0 {
-        format!("{ms:.1} ms")
-    } else {
-        format!("{:.2} s", ms / 1e3)
-    }
-}
-
-impl fmt::Display for ReloadReport {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.number == 0 {
-            write!(f, "loaded: ")?;
-        } else {
-            write!(f, "reload {}: ", self.number)?;
-        }
-        if !self.applied {
-            let names: Vec<String> = self
-                .trigger
-                .iter()
-                .map(|p| {
-                    let name = p.file_name().unwrap_or(p.as_os_str()).to_string_lossy();
-                    escape_controls(&name).into_owned()
-                })
-                .collect();
-            let names = if names.is_empty() {
-                "files".to_string()
-            } else {
-                names.join(", ")
-            };
-            return write!(
-                f,
-                "{names} changed | superseded by a newer save before its first frame"
-            );
-        }
-        let c = &self.changes;
-        let mut changed = Vec::new();
-        for (n, what) in [
-            (c.added, "added"),
-            (c.changed, "changed"),
-            (c.removed, "removed"),
-        ] {
-            if n > 0 {
-                let s = if n == 1 { "entity" } else { "entities" };
-                changed.push(format!("{n} {s} {what}"));
-            }
-        }
-        for (flag, what) in [
-            (c.reordered, "entities reordered"),
-            (c.materials, "materials"),
-            (c.camera, "camera"),
-            (c.settings, "settings"),
-        ] {
-            if flag {
-                changed.push(what.to_string());
-            }
-        }
-        if changed.is_empty() {
-            changed.push("no changes".into());
-        }
-        let mut rebuilt = Vec::new();
-        if self.bvh_rebuilt {
-            rebuilt.push(format!("BVH ({} primitives)", self.primitives));
-        }
-        if self.materials_synced {
-            rebuilt.push("materials".into());
-        }
-        if self.textures_decoded > 0 {
-            rebuilt.push(format!("{} texture(s) decoded", self.textures_decoded));
-        }
-        let rebuilt = if rebuilt.is_empty() {
-            "nothing".to_string()
-        } else {
-            rebuilt.join(", ")
-        };
-        write!(f, "{} | rebuilt {rebuilt} | ", changed.join(", "))?;
-        write!(f, "parse {}, ECS {}, ", human(self.parse), human(self.ecs))?;
-        if self.bvh_rebuilt {
-            write!(f, "BVH {}, ", human(self.bvh))?;
-        } else {
-            write!(f, "BVH -, ")?;
-        }
-        match self.first_pass {
-            Some((_, d)) if self.preview => write!(f, "first pass {} (preview), ", human(d))?,
-            Some((spp, d)) => write!(f, "first pass {} ({spp} spp), ", human(d))?,
-            None => write!(f, "first pass -, ")?,
-        }
-        let since = if self.number == 0 {
-            "since start"
-        } else {
-            "since save"
-        };
-        if let Some(d) = self.first_image {
-            write!(f, "first image {} {since}, ", human(d))?;
-        }
-        match self.full {
-            Some(d) => write!(f, "full {} ({} spp)", human(d), self.spp)?,
-            None => write!(f, "superseded at {}/{} spp", self.samples, self.spp)?,
-        }
-        if self.restarts > 0 {
-            write!(f, ", {} restart(s)", self.restarts)?;
-        }
-        Ok(())
-    }
-}
-
-/// What the loop did, for the command line to print, tests to wait on and observers (see the
-/// module docs, "The event point").
-#[derive(Clone, Debug)]
-pub enum Report {
-    /// The set of watched files changed.
-    Watching {
-        /// Files watched.
-        files: usize,
-        /// Their directories.
-        directories: Vec<PathBuf>,
-    },
-    /// A save loaded; its render starts (the reload is not applied to the world yet).
-    Started {
-        /// The reload ([`ReloadReport::number`]).
-        reload: u64,
-        /// The changed files that caused it (empty for the first load).
-        trigger: Vec<PathBuf>,
-        /// Samples per pixel the scene asks for.
-        spp: u32,
-        /// When the save happened (the latest file event).
-        saved: Instant,
-    },
-    /// A pass improved the image and it was written (an observer gets the film with it).
-    Wrote {
-        /// The reload it belongs to ([`ReloadReport::number`]).
-        reload: u64,
-        /// Samples per pixel in it (1 for the preview).
-        samples: u32,
-        /// Whether it is the reduced-resolution preview.
-        preview: bool,
-        /// Samples per pixel the scene asks for.
-        spp: u32,
-        /// What the reload changed in the world.
-        changes: ChangeSummary,
-        /// Whether this is the first image of a scene other than the last image written: the
-        /// scene changed since, by this reload or by one superseded before it wrote any.
-        new_scene: bool,
-        /// When the write finished.
-        at: Instant,
-    },
-    /// A render finished, or was superseded by a newer save.
-    Rendered(ReloadReport),
-    /// A save could not be loaded; the previous scene and image are kept.
-    Failed {
-        /// The error, starting with `file:line:col` where known: at most
-        /// [`MAX_MESSAGE`] bytes, control characters escaped.
-        message: String,
-        /// The line of the scene or prefab file at that `line:col`, if the error is located in
-        /// one ([`SceneError::source_line`](crate::SceneError::source_line): bounded, escaped;
-        /// never a line of a mesh, an image or another file).
-        source_line: Option<String>,
-    },
-    /// A load failed but the save may not be over: the error is reported only if no further
-    /// event comes within three windows. Not printed.
-    Deferred {
-        /// The error so far.
-        message: String,
-    },
-    /// The scene file is gone; the loop waits for it to come back.
-    SceneMissing {
-        /// The scene file.
-        path: PathBuf,
-    },
-    /// Something went wrong that does not stop watching (an unwatchable directory, a failed
-    /// image write, a watcher error).
-    Warning {
-        /// What.
-        message: String,
-    },
-}
-
-impl Report {
-    /// The line the command line prints, if any (starts, image writes and deferred errors are
-    /// silent). Control characters of file names and messages are escaped.
-    pub fn line(&self) -> Option<String> {
-        let line = self.raw_line()?;
-        Some(printable(&line, 2 * MAX_MESSAGE).into_owned())
-    }
-
-    fn raw_line(&self) -> Option<String> {
-        Some(match self {
-            Self::Watching { files, directories } => {
-                let dirs: Vec<String> = directories
-                    .iter()
-                    .map(|d| d.display().to_string())
-                    .collect();
-                format!(
-                    "watching {files} file(s) in {} (Ctrl-C to stop)",
-                    dirs.join(", ")
-                )
-            }
-            Self::Started { .. } | Self::Wrote { .. } | Self::Deferred { .. } => return None,
-            Self::Rendered(r) => r.to_string(),
-            Self::Failed { message, .. } => {
-                format!("error: {message} (keeping the last good image; fix and save again)")
-            }
-            Self::SceneMissing { path } => {
-                format!("{}: deleted; waiting for it to come back", path.display())
-            }
-            Self::Warning { message } => format!("warning: {message}"),
-        })
-    }
-}
-
-/// Sees every [`Report`] of a [`Watch`] before its [`Watch::run`] callback does, with the film
-/// of a [`Report::Wrote`] (`None` for the other reports). Runs on the render thread.
-pub type Observer = Box<dyn FnMut(&Report, Option<&Film>) + Send>;
 
 /// The one point through which the loop reports (see the module docs, "The event point").
 struct Emitter<'a> {
@@ -1454,63 +748,11 @@ impl Drop for WatchSession {
 
 #[cfg(test)]
 mod tests {
+    use super::files::Filter;
+    use notify::EventKind;
     use notify::event::CreateKind;
 
     use super::*;
-
-    #[test]
-    fn reads_and_opens_do_not_count_as_changes_and_closes_complete_a_file() {
-        use notify::event::DataChange;
-        let e = |kind| effect(&kind, 0);
-        assert_eq!(
-            e(EventKind::Access(AccessKind::Open(AccessMode::Any))),
-            None
-        );
-        assert_eq!(
-            e(EventKind::Access(AccessKind::Close(AccessMode::Read))),
-            None
-        );
-        assert_eq!(
-            e(EventKind::Modify(ModifyKind::Metadata(
-                MetadataKind::AccessTime
-            ))),
-            None
-        );
-        assert_eq!(
-            e(EventKind::Modify(ModifyKind::Metadata(MetadataKind::Any))),
-            Some(Effect::Metadata)
-        );
-        assert_eq!(
-            e(EventKind::Access(AccessKind::Close(AccessMode::Write))),
-            Some(Effect::Complete)
-        );
-        assert_eq!(
-            e(EventKind::Modify(ModifyKind::Data(DataChange::Any))),
-            Some(Effect::Writing)
-        );
-        assert_eq!(
-            e(EventKind::Create(CreateKind::File)),
-            Some(Effect::Partial)
-        );
-        assert_eq!(
-            e(EventKind::Create(CreateKind::Folder)),
-            Some(Effect::Partial),
-            "the files of a new directory follow it"
-        );
-        let both = EventKind::Modify(ModifyKind::Name(RenameMode::Both));
-        assert_eq!(effect(&both, 0), Some(Effect::Partial), "the old name");
-        assert_eq!(effect(&both, 1), Some(Effect::Complete), "the new name");
-    }
-
-    /// A change to `path` with `effect`, received `at`.
-    fn change(path: &str, effect: Effect, at: Instant) -> Change {
-        Change {
-            paths: vec![(PathBuf::from(path), effect)],
-            rearm: false,
-            overflow: false,
-            at,
-        }
-    }
 
     /// Issue 25, item 16: a file written through a descriptor still open is loaded at its close
     /// (where the platform reports closes), however long the writer pauses before it; a file
@@ -1557,53 +799,6 @@ mod tests {
             t + window,
             "events lost: the close may be too"
         );
-    }
-
-    /// The flaky `issue14_case3` test: a directory created, then a file written into it. Were
-    /// the creation complete, the loop would arm the directory and read at once, possibly
-    /// after the write but before its events arrive; those events then load the same file
-    /// again and report a second render, which a waiter takes for the render of its next save.
-    /// The directory's files follow it: the read waits for them to be quiet.
-    #[test]
-    fn a_created_directory_is_read_once_its_files_are_quiet() {
-        let mut f = Filter::default();
-        f.arms.insert(PathBuf::from("/d/prefabs"));
-        f.files.insert(PathBuf::from("/d/prefabs/wall.ron"));
-        let event = notify::Event::new(EventKind::Create(CreateKind::Folder))
-            .add_path(PathBuf::from("/d/prefabs"));
-        let created = f.change(&event).expect("relevant");
-        assert!(created.rearm);
-        let t = created.at;
-        let mut p = Pending::initial();
-        p.completed = false;
-        p.last = t;
-        p.add(created);
-        assert_eq!(p.due(DEBOUNCE), t + DEBOUNCE, "not read at the creation");
-        // The file's write, its events absorbed before the read.
-        let t2 = t + DEBOUNCE / 2;
-        p.add(change("/d/prefabs/wall.ron", Effect::Partial, t2));
-        p.add(change("/d/prefabs/wall.ron", Effect::Writing, t2));
-        p.add(change("/d/prefabs/wall.ron", Effect::Complete, t2));
-        assert_eq!(p.due(DEBOUNCE), t2 + DEBOUNCE, "read once, after the write");
-    }
-
-    #[test]
-    fn filter_ignores_the_output_and_flags_directories_for_rearming() {
-        let mut f = Filter::default();
-        f.files.insert(PathBuf::from("/d/scene.ron"));
-        f.arms.insert(PathBuf::from("/d/prefabs"));
-        f.ignore.insert(PathBuf::from("/d/out.png"));
-        assert_eq!(f.classify(Path::new("/d/scene.ron")), Some(Class::File));
-        assert_eq!(f.classify(Path::new("/d/prefabs")), Some(Class::Arm));
-        assert_eq!(f.classify(Path::new("/d/tex.png")), None);
-        assert_eq!(f.classify(Path::new("/d/out.png")), None);
-        let event = notify::Event::new(EventKind::Remove(notify::event::RemoveKind::Folder))
-            .add_path(PathBuf::from("/d/prefabs"));
-        let change = f.change(&event).expect("relevant");
-        assert!(change.rearm);
-        let event = notify::Event::new(EventKind::Create(CreateKind::File))
-            .add_path(PathBuf::from("/d/scene.ron.swp"));
-        assert!(f.change(&event).is_none());
     }
 
     #[test]
@@ -1703,24 +898,6 @@ mod tests {
     }
 
     #[test]
-    fn a_file_in_missing_directories_arms_the_nearest_existing_ancestor() {
-        let dir = std::env::temp_dir();
-        let canonical = dir.canonicalize().expect("temp dir exists");
-        let file = dir.join("no-such-dir-rondo").join("deeper").join("a.png");
-        let (ancestor, missing) = nearest_ancestor(&file).expect("the temp dir exists");
-        assert_eq!(ancestor, canonical);
-        assert_eq!(missing, canonical.join("no-such-dir-rondo"));
-        let plan = Plan::new(&[file, dir.join("b.ron")]);
-        assert!(plan.guards.contains(&canonical));
-        assert!(plan.arms.contains(&canonical.join("no-such-dir-rondo")));
-        assert!(
-            plan.arms.contains(&canonical),
-            "a watched directory is armed"
-        );
-        assert!(plan.files.contains(&canonical.join("b.ron")));
-    }
-
-    #[test]
     fn watching_a_file_not_watched_before_asks_for_a_second_read() {
         // The race behind it (seen in `watch_differential`, seed 14): a reload reads a prefab the
         // last scene did not use, the prefab's directory is deleted before the watcher knows the
@@ -1763,5 +940,43 @@ mod tests {
             w.set_files(&[scene.clone(), wall.clone()]).0,
             "a new file whose directory is gone: the missing directory is new to watch for"
         );
+    }
+
+    /// A change to `path` with `effect`, received `at`.
+    fn change(path: &str, effect: Effect, at: Instant) -> Change {
+        Change {
+            paths: vec![(PathBuf::from(path), effect)],
+            rearm: false,
+            overflow: false,
+            at,
+        }
+    }
+
+    /// The flaky `issue14_case3` test: a directory created, then a file written into it. Were
+    /// the creation complete, the loop would arm the directory and read at once, possibly
+    /// after the write but before its events arrive; those events then load the same file
+    /// again and report a second render, which a waiter takes for the render of its next save.
+    /// The directory's files follow it: the read waits for them to be quiet.
+    #[test]
+    fn a_created_directory_is_read_once_its_files_are_quiet() {
+        let mut f = Filter::default();
+        f.arms.insert(PathBuf::from("/d/prefabs"));
+        f.files.insert(PathBuf::from("/d/prefabs/wall.ron"));
+        let event = notify::Event::new(EventKind::Create(CreateKind::Folder))
+            .add_path(PathBuf::from("/d/prefabs"));
+        let created = f.change(&event).expect("relevant");
+        assert!(created.rearm);
+        let t = created.at;
+        let mut p = Pending::initial();
+        p.completed = false;
+        p.last = t;
+        p.add(created);
+        assert_eq!(p.due(DEBOUNCE), t + DEBOUNCE, "not read at the creation");
+        // The file's write, its events absorbed before the read.
+        let t2 = t + DEBOUNCE / 2;
+        p.add(change("/d/prefabs/wall.ron", Effect::Partial, t2));
+        p.add(change("/d/prefabs/wall.ron", Effect::Writing, t2));
+        p.add(change("/d/prefabs/wall.ron", Effect::Complete, t2));
+        assert_eq!(p.due(DEBOUNCE), t2 + DEBOUNCE, "read once, after the write");
     }
 }

@@ -1,0 +1,45 @@
+//! What a watch loop watches and renders.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use crate::app::Overrides;
+use crate::geometry::layout::LayoutKind;
+
+use super::files::DEBOUNCE;
+
+/// What to watch and render.
+#[derive(Clone, Debug)]
+pub struct WatchOptions {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// The output image (`.png` or `.exr`), rewritten atomically after every pass; `None` to
+    /// write no file (when an [`Observer`](super::Observer) shows the images instead: `watch --serve`).
+    pub output: Option<PathBuf>,
+    /// Render threads (all cores if `None`).
+    pub threads: Option<usize>,
+    /// Settings overrides applied to every load.
+    pub overrides: Overrides,
+    /// Geometry layout (speed only; images are identical).
+    pub layout: LayoutKind,
+    /// Samples of the first pass; later passes double the total up to the scene's spp.
+    pub first_pass: u32,
+    /// The quiet window (see [`DEBOUNCE`]).
+    pub debounce: Duration,
+}
+
+impl WatchOptions {
+    /// Defaults: all cores, no overrides, the default layout, a first pass of 1 sample, the
+    /// [`DEBOUNCE`] window.
+    pub fn new(scene: impl Into<PathBuf>, output: impl Into<PathBuf>) -> Self {
+        Self {
+            scene: scene.into(),
+            output: Some(output.into()),
+            threads: None,
+            overrides: Overrides::default(),
+            layout: LayoutKind::default(),
+            first_pass: 1,
+            debounce: DEBOUNCE,
+        }
+    }
+}
