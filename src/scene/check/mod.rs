@@ -30,7 +30,6 @@ use crate::geometry::ray::{Ray, gamma, spawn_origin};
 use crate::shading::material::Material;
 use crate::shading::rng::Rng;
 use crate::shading::sampling::{Frame, cosine_hemisphere};
-use crate::shading::texture::Texture;
 use crate::systems::world_primitives;
 
 mod coplanar;
@@ -436,15 +435,6 @@ fn outside_view(scene: &LoadedScene, out: &mut Out) {
     }
 }
 
-/// The largest component of any constant colour in a texture (images are ≤ 1 by construction).
-fn max_component(t: &Texture) -> f32 {
-    match t {
-        Texture::Constant(c) => c.max_element(),
-        Texture::Checker { even, odd, .. } => max_component(even).max(max_component(odd)),
-        Texture::Image(_) => 1.0,
-    }
-}
-
 /// [`WarningKind::AlbedoAboveOne`].
 fn albedo_above_one(scene: &LoadedScene, out: &mut Out) {
     for (name, m) in &scene.materials {
@@ -454,7 +444,7 @@ fn albedo_above_one(scene: &LoadedScene, out: &mut Out) {
             | Material::Glossy { albedo, .. } => albedo,
             _ => continue,
         };
-        let max = max_component(albedo);
+        let max = albedo.max_channel();
         if max > 1.0 {
             out.material(
                 name,
@@ -473,6 +463,7 @@ mod tests {
     use std::collections::BTreeMap;
 
     use super::coplanar::{Flat, triangles_overlap};
+    use crate::shading::texture::Texture;
 
     use glam::{Affine3A, Quat};
 
