@@ -157,6 +157,18 @@ impl Renderer {
         self.overrides = overrides;
     }
 
+    /// Whether the film collects the feature buffers (albedo and normal, [`crate::film::Features`])
+    /// for a denoiser, from the next render on. Off by default: a render that needs no denoiser
+    /// pays nothing for them. The image is the same either way.
+    pub fn set_features(&mut self, on: bool) {
+        let mut acc = self.world.resource_mut::<Accumulation>();
+        if acc.features != on {
+            acc.features = on;
+            // A new film of the right kind at the next pass.
+            acc.film = Film::default();
+        }
+    }
+
     /// Sets the output file; `every_pass` writes after each pass (live preview).
     pub fn set_output(&mut self, path: Option<&Path>, every_pass: bool) {
         let mut out = self.world.resource_mut::<Output>();

@@ -183,6 +183,99 @@ impl OutputKind {
     }
 }
 
+/// The fixed-point shift of the normal feature buffer: normals are unit vectors, so the shift of
+/// radiance 1.
+pub const NORMAL_SHIFT: i32 = DEFAULT_SHIFT;
+
+/// The feature buffers (AOVs) a denoiser is guided by: per pixel, the exact sums of each
+/// sample's albedo and shading normal at the first hit that is not a perfect mirror or glass
+/// (see [`crate::render::trace_path`]). Summed like the colour, so they split, merge and resume
+/// bit-exactly too. The albedo is in the film's fixed point, the normal in [`NORMAL_SHIFT`]'s.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Features {
+    /// Sums of the albedo samples.
+    pub albedo: Vec<Pixel>,
+    /// Sums of the normal samples.
+    pub normal: Vec<Pixel>,
+}
+
+impl Features {
+    /// Zero sums for `pixels` pixels.
+    pub fn new(pixels: usize) -> Self {
+        Self {
+            albedo: vec![Pixel::ZERO; pixels],
+            normal: vec![Pixel::ZERO; pixels],
+        }
+    }
+
+    /// Adds another film's feature sums (exact, so in any order).
+    pub fn merge(&mut self, other: &Self) {
+        for (a, b) in self.albedo.iter_mut().zip(&other.albedo) {
+            a.merge(b);
+        }
+        for (a, b) in self.normal.iter_mut().zip(&other.normal) {
+            a.merge(b);
+        }
+    }
+
+    /// The mean albedo of every pixel (`count` samples, the colour's `fixed` point).
+    pub fn albedo_mean(&self, count: u64, fixed: FixedPoint) -> Vec<Vec3> {
+        self.albedo.iter().map(|s| fixed.mean(s, count)).collect()
+    }
+
+    /// The mean normal of every pixel (`count` samples): not renormalised, so shorter where a
+    /// pixel's samples see surfaces facing different ways, and zero where they see the sky.
+    pub fn normal_mean(&self, count: u64) -> Vec<Vec3> {
+        let fixed = FixedPoint::new(NORMAL_SHIFT);
+        self.normal.iter().map(|s| fixed.mean(s, count)).collect()
+    }
+}
+
+/// One sample's feature values (see [`Features`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FeatureSample {
+    /// Albedo (reflectance, or emitted radiance of an emitter).
+    pub albedo: Vec3,
+    /// Unit shading normal on the side the path arrived from; zero for the sky.
+    pub normal: Vec3,
+}
+
+/// A band of rows of a film, for one worker: its colour sums and, if the film has them, its
+/// feature sums.
+pub struct FilmBand<'a> {
+    /// Colour sums.
+    pub sum: &'a mut [Pixel],
+    /// Albedo and normal sums.
+    pub features: Option<(&'a mut [Pixel], &'a mut [Pixel])>,
+}
+
+impl FilmBand<'_> {
+    /// Adds one sample to pixel `i` of the band, in `fixed` point: its features (if the band
+    /// has them and they are finite) and its radiance `l`. Returns `None` if `l` is not finite
+    /// (the radiance is then dropped), else whether any value was clamped.
+    #[inline]
+    pub fn add(
+        &mut self,
+        i: usize,
+        l: Vec3,
+        features: &FeatureSample,
+        fixed: FixedPoint,
+    ) -> Option<bool> {
+        let mut clamped = false;
+        if let Some((albedo, normal)) = &mut self.features
+            && features.albedo.is_finite()
+            && features.normal.is_finite()
+        {
+            clamped |= albedo[i].add(features.albedo, fixed);
+            clamped |= normal[i].add(features.normal, FixedPoint::new(NORMAL_SHIFT));
+        }
+        if !l.is_finite() {
+            return None;
+        }
+        Some(self.sum[i].add(l, fixed) | clamped)
+    }
+}
+
 /// Accumulated radiance per pixel, row-major from the top-left: the sums of samples
 /// `start..samples` of every pixel.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -199,6 +292,8 @@ pub struct Film {
     pub start: u32,
     /// Samples are rounded to multiples of 2⁻shift ([`shift_for`] of the scene).
     pub shift: i32,
+    /// The feature buffers, if the film collects them ([`Film::with_features`]).
+    pub features: Option<Features>,
 }
 
 impl Film {
@@ -211,12 +306,48 @@ impl Film {
             samples: 0,
             start: 0,
             shift: DEFAULT_SHIFT,
+            features: None,
+        }
+    }
+
+    /// An empty film that also collects the feature buffers ([`Features`]).
+    pub fn with_features(width: u32, height: u32) -> Self {
+        let mut film = Self::new(width, height);
+        film.features = Some(Features::new(film.sum.len()));
+        film
+    }
+
+    /// The film's pixels in bands of `rows` rows, for the workers of a pass.
+    pub fn bands(&mut self, rows: usize) -> Vec<FilmBand<'_>> {
+        let n = (self.width as usize * rows).max(1);
+        match &mut self.features {
+            Some(f) => self
+                .sum
+                .chunks_mut(n)
+                .zip(f.albedo.chunks_mut(n).zip(f.normal.chunks_mut(n)))
+                .map(|(sum, (a, b))| FilmBand {
+                    sum,
+                    features: Some((a, b)),
+                })
+                .collect(),
+            None => self
+                .sum
+                .chunks_mut(n)
+                .map(|sum| FilmBand {
+                    sum,
+                    features: None,
+                })
+                .collect(),
         }
     }
 
     /// Clears the sums, keeping the size and the shift; the film then starts at sample `start`.
     pub fn clear(&mut self, start: u32) {
         self.sum.fill(Pixel::ZERO);
+        if let Some(f) = &mut self.features {
+            f.albedo.fill(Pixel::ZERO);
+            f.normal.fill(Pixel::ZERO);
+        }
         self.start = start;
         self.samples = start;
     }

@@ -15,6 +15,7 @@ pub mod ecs;
 pub mod farm;
 pub mod film;
 pub mod geometry;
+pub mod layers;
 pub mod lights;
 pub mod metrics;
 pub mod output_file;

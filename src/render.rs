@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use crate::camera::Camera;
 use crate::cpu::{Isa, Kernel, Lanes, Sse};
-use crate::film::{Film, FixedPoint, Pixel};
+use crate::film::{FeatureSample, Film, FilmBand, FixedPoint, Pixel};
 use crate::geometry::layout::{DefaultLayout, Layout, SphereStore, TriangleStore};
 use crate::geometry::packed::{Geometry, Hit, HitKind, LayoutKind, Surface};
 use crate::geometry::ray::{Ray, gamma, spawn_origin};
@@ -156,10 +156,15 @@ pub fn trace_path<L: Layout, S: Sampler>(
     sampler: &mut S,
     stats: &mut TraceStats,
 ) -> Vec3 {
-    trace_path_with(Sse, view, ray, sampler, stats)
+    trace_path_with(Sse, view, ray, sampler, stats).0
 }
 
-/// [`trace_path`] with the BVHs' box tests as wide as `lanes`.
+/// [`trace_path`] with the BVHs' box tests as wide as `lanes`, and the path's features for the
+/// denoiser: the albedo and the shading normal (on the side the path arrived from) of the first
+/// hit that is not a perfect mirror or glass ([`Material::is_specular`]), the albedo tinted by
+/// the specular bounces before it; the background as albedo (and a zero normal) if the path
+/// leaves the scene first; zero if it ends first. They use no random numbers, so the radiance is
+/// the same whether they are collected or not.
 #[inline(always)]
 fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     lanes: W,
@@ -167,7 +172,7 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     mut ray: Ray,
     sampler: &mut S,
     stats: &mut TraceStats,
-) -> Vec3 {
+) -> (Vec3, FeatureSample) {
     let mut radiance = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
     // The product of the refractions' radiance scales in `throughput`.
@@ -175,14 +180,26 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     // Point and BSDF density of the previous vertex, if it was one that sampled lights.
     let mut previous: Option<(Vec3, f32)> = None;
     let sample_lights = view.method != Method::Naive && !view.lights.is_empty();
+    let mut features: Option<FeatureSample> = None;
     for depth in 0..view.max_depth {
         stats.rays += 1;
         let Some(hit) = view.geometry.intersect_with(lanes, &ray, f32::INFINITY) else {
             radiance += throughput * view.background;
+            features.get_or_insert(FeatureSample {
+                albedo: throughput / eta_scale * view.background,
+                normal: Vec3::ZERO,
+            });
             break;
         };
         let s = view.geometry.surface(&ray, &hit);
         let material = &view.materials[view.owner_material[s.owner as usize] as usize];
+        if features.is_none() && (!material.is_specular() || depth + 1 == view.max_depth) {
+            let n = shading_normal(&s, material);
+            features = Some(FeatureSample {
+                albedo: throughput / eta_scale * material.feature_albedo(ray.direction, s.n, s.uv),
+                normal: if ray.direction.dot(n) < 0.0 { n } else { -n },
+            });
+        }
         if material.is_emissive() {
             let emitted = material.emitted(ray.direction, s.n, s.uv);
             let weight = match previous {
@@ -249,7 +266,7 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         }
         ray = spawn(s.p, s.n, err, scatter.direction);
     }
-    radiance
+    (radiance, features.unwrap_or_default())
 }
 
 /// The normal a material shades with: the interpolated vertex normal of a smooth mesh, except
@@ -459,14 +476,15 @@ fn render_pass_with<L: Layout, S: PixelSampler>(
     let isa = Isa::selected();
     let fixed = film.fixed();
     let stats = film
-        .sum
-        .par_chunks_mut(width as usize * BAND_ROWS)
+        .bands(BAND_ROWS)
+        .into_par_iter()
         .enumerate()
         .map(|(band, pixels)| {
             if cancel.load(Ordering::Relaxed) {
                 return TraceStats::default();
             }
             let first = band * BAND_ROWS * width as usize;
+            let rows = (pixels.sum.len() / width as usize) as u64;
             let stats = isa.run(Band::<L, S> {
                 view,
                 pixels,
@@ -477,7 +495,7 @@ fn render_pass_with<L: Layout, S: PixelSampler>(
                 fixed,
                 sampler: PhantomData,
             });
-            progress((pixels.len() / width as usize) as u64);
+            progress(rows);
             stats
         })
         .reduce(TraceStats::default, |a, b| a + b);
@@ -496,7 +514,7 @@ fn render_pass_with<L: Layout, S: PixelSampler>(
 /// their sums: the work of a pass that [`Isa::run`] compiles once per instruction set.
 struct Band<'a, L: Layout, S> {
     view: &'a SceneView<'a, L>,
-    pixels: &'a mut [Pixel],
+    pixels: FilmBand<'a>,
     first: usize,
     size: (u32, u32),
     seed: u64,
@@ -509,10 +527,10 @@ impl<L: Layout, S: PixelSampler> Kernel for Band<'_, L, S> {
     type Output = TraceStats;
 
     #[inline(always)]
-    fn run<W: Lanes>(self, lanes: W) -> TraceStats {
+    fn run<W: Lanes>(mut self, lanes: W) -> TraceStats {
         let (width, height) = self.size;
         let mut stats = TraceStats::default();
-        for (offset, sum) in self.pixels.iter_mut().enumerate() {
+        for offset in 0..self.pixels.sum.len() {
             let index = self.first + offset;
             let (x, y) = (
                 (index % width as usize) as f32,
@@ -523,11 +541,11 @@ impl<L: Layout, S: PixelSampler> Kernel for Band<'_, L, S> {
                 let mut sampler = pixel.start_sample(sample);
                 let j = sampler.next_2d();
                 let ray = self.view.camera.ray(x + j.x, y + j.y, width, height);
-                let l = trace_path_with(lanes, self.view, ray, &mut sampler, &mut stats);
-                if !l.is_finite() {
-                    stats.nonfinite += 1;
-                } else if sum.add(l, self.fixed) {
-                    stats.clamped += 1;
+                let (l, features) =
+                    trace_path_with(lanes, self.view, ray, &mut sampler, &mut stats);
+                match self.pixels.add(offset, l, &features, self.fixed) {
+                    None => stats.nonfinite += 1,
+                    Some(clamped) => stats.clamped += u64::from(clamped),
                 }
             }
         }
@@ -550,15 +568,15 @@ pub fn render_preview<L: Layout>(
     let block = block.max(1);
     let fixed = film.fixed();
     let stats = film
-        .sum
-        .par_chunks_mut(width * block)
+        .bands(block)
+        .into_par_iter()
         .enumerate()
-        .map(|(band, rows)| {
+        .map(|(band, mut rows)| {
             let mut stats = TraceStats::default();
             if cancel.load(Ordering::Relaxed) {
                 return stats;
             }
-            let lines = rows.len() / width;
+            let lines = rows.sum.len() / width;
             let cy = band * block + lines / 2;
             for bx in (0..width).step_by(block) {
                 let cols = block.min(width - bx);
@@ -568,17 +586,17 @@ pub fn render_preview<L: Layout>(
                 let ray =
                     view.camera
                         .ray(cx as f32 + jx, cy as f32 + jy, width as u32, height as u32);
-                let l = trace_path(view, ray, &mut rng, &mut stats);
-                let value = if l.is_finite() {
-                    let (value, clamped) = fixed.pixel(l);
-                    stats.clamped += u64::from(clamped);
-                    value
-                } else {
-                    stats.nonfinite += 1;
-                    Pixel::ZERO
-                };
-                for line in 0..lines {
-                    rows[line * width + bx..line * width + bx + cols].fill(value);
+                let (l, features) = trace_path_with(Sse, view, ray, &mut rng, &mut stats);
+                // The block's centre pixel gets the sample; the rest of the block copies it.
+                let centre = (lines / 2) * width + cx;
+                match rows.add(centre, l, &features, fixed) {
+                    None => stats.nonfinite += 1,
+                    Some(clamped) => stats.clamped += u64::from(clamped),
+                }
+                fill_block(&mut rows.sum, centre, width, bx..bx + cols, lines);
+                if let Some((albedo, normal)) = &mut rows.features {
+                    fill_block(albedo, centre, width, bx..bx + cols, lines);
+                    fill_block(normal, centre, width, bx..bx + cols, lines);
                 }
             }
             stats
@@ -589,6 +607,15 @@ pub fn render_preview<L: Layout>(
     }
     film.samples = 1;
     Ok(stats)
+}
+
+/// Copies pixel `from` of a band of `lines` rows of `width` pixels to the columns `cols` of
+/// every row.
+fn fill_block(rows: &mut [Pixel], from: usize, width: usize, cols: Range<usize>, lines: usize) {
+    let value = rows[from];
+    for line in 0..lines {
+        rows[line * width + cols.start..line * width + cols.end].fill(value);
+    }
 }
 
 /// Mean of a film's pixels, a convenience for tests and reports.

@@ -184,14 +184,23 @@ pub struct Accumulation {
     pub preview: Preview,
     /// First sample index a reset film starts at (0 but for a render of a sample range).
     pub first_sample: u32,
+    /// Whether the film collects the feature buffers (albedo and normal) for a denoiser.
+    pub features: bool,
 }
 
 impl Accumulation {
     /// Clears the film for a `width` × `height` image whose samples are rounded to multiples of
     /// 2⁻`shift` ([`crate::film::shift_for`]), reusing its memory when the size holds.
     pub fn reset(&mut self, width: u32, height: u32, shift: i32) {
-        if self.film.width != width || self.film.height != height {
-            self.film = Film::new(width, height);
+        if self.film.width != width
+            || self.film.height != height
+            || self.film.features.is_some() != self.features
+        {
+            self.film = if self.features {
+                Film::with_features(width, height)
+            } else {
+                Film::new(width, height)
+            };
         }
         self.film.clear(self.first_sample);
         self.film.shift = shift;

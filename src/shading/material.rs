@@ -189,6 +189,31 @@ impl Material {
         }
     }
 
+    /// Whether the feature buffers (albedo and normal, for a denoiser) look through this
+    /// surface to the next hit: perfect mirrors and smooth glass, whose look is that of what they
+    /// reflect or refract.
+    pub fn is_specular(&self) -> bool {
+        match self {
+            Self::Dielectric { .. } => true,
+            Self::Metal { roughness, .. } => *roughness == 0.0,
+            _ => false,
+        }
+    }
+
+    /// The colour the albedo feature buffer records for a ray along `d` hitting the surface
+    /// (geometric normal `n`): the reflectance of a reflector (F0 of a glossy one), white for
+    /// glass, the emitted radiance of an emitter.
+    #[inline]
+    pub fn feature_albedo(&self, d: Vec3, n: Vec3, uv: Vec2) -> Vec3 {
+        match self {
+            Self::Diffuse { albedo } | Self::Metal { albedo, .. } | Self::Glossy { albedo, .. } => {
+                albedo.eval(uv)
+            }
+            Self::Dielectric { .. } => Vec3::ONE,
+            Self::Light { .. } => self.emitted(d, n, uv),
+        }
+    }
+
     /// The largest radiance the material emits in any channel, anywhere (0 for a non-emitter).
     pub fn max_emission(&self) -> f32 {
         match self {
