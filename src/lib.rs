@@ -11,6 +11,7 @@ pub mod bench;
 pub mod camera;
 pub mod cli;
 pub mod cpu;
+pub mod denoise;
 pub mod ecs;
 pub mod farm;
 pub mod film;

@@ -1,0 +1,400 @@
+//! Denoising with Intel Open Image Denoise (OIDN) 2.x, loaded at run time.
+//!
+//! rondo does not link OIDN: the default build stays pure Rust, and the denoiser is available
+//! when the library is found at run time. `scripts/fetch-oidn.sh` fetches Intel's prebuilt CPU
+//! libraries (from the pinned, checksummed PyPI wheel `pyoidn`) into `.oidn/lib` in the
+//! repository. [`Denoiser::load`] looks, in order:
+//!
+//! 1. in the directory named by the environment variable `RONDO_OIDN_DIR`, if it is set (and
+//!    then only there: an explicit choice is never silently replaced by another copy);
+//! 2. in `.oidn/lib` beside the running executable and in each of its ancestors, so that
+//!    `target/release/rondo` (and the test binaries) find `<repository>/.oidn/lib`;
+//! 3. with the system loader's search for `libOpenImageDenoise.so.2`.
+//!
+//! The filter is OIDN's `RT` (ray-traced images) on HDR colour, optionally guided by the first
+//! hit's albedo and shading normal, on the CPU device. The raw image is never changed: the
+//! denoised image is a new buffer.
+
+mod oidn;
+
+use std::ffi::OsStr;
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::sync::{Mutex, OnceLock};
+
+use crate::scene::format::MAX_PIXELS;
+
+/// The environment variable naming a directory that holds `libOpenImageDenoise.so.2`.
+pub const DIR_VARIABLE: &str = "RONDO_OIDN_DIR";
+
+/// How to get the library, for error messages.
+const HOW_TO_GET: &str = "run scripts/fetch-oidn.sh in the rondo repository (it fetches the \
+    library into .oidn/lib), or set RONDO_OIDN_DIR to a directory holding libOpenImageDenoise.so.2";
+
+/// OIDN's speed–quality trade-off (the filter's `quality` parameter).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Quality {
+    /// The fastest, for interactive previews.
+    Fast,
+    /// Between the two, for interactive rendering.
+    Balanced,
+    /// The best, for final frames (OIDN's default).
+    #[default]
+    High,
+}
+
+impl Quality {
+    /// Every quality, fastest first.
+    pub const ALL: [Quality; 3] = [Quality::Fast, Quality::Balanced, Quality::High];
+
+    /// The lowercase name (`fast`, `balanced`, `high`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Quality::Fast => "fast",
+            Quality::Balanced => "balanced",
+            Quality::High => "high",
+        }
+    }
+
+    /// The value of OIDN's `OIDNQuality` enum.
+    fn oidn_value(self) -> i32 {
+        match self {
+            Quality::Fast => 4,
+            Quality::Balanced => 5,
+            Quality::High => 6,
+        }
+    }
+}
+
+impl fmt::Display for Quality {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The images to denoise: interleaved RGB `f32`, row by row, `width * height * 3` values each.
+///
+/// Values are made safe for OIDN before the call, on a copy: NaN and infinities become 0 in
+/// every image, colour is clamped to at least 0, albedo to [0, 1] and normals to [-1, 1] (the
+/// ranges OIDN's networks were trained on; a NaN would spread over the whole image).
+#[derive(Debug, Clone, Copy)]
+pub struct DenoiseInput<'a> {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// The (HDR, linear) colour.
+    pub color: &'a [f32],
+    /// The albedo of the first non-specular hit, if available.
+    pub albedo: Option<&'a [f32]>,
+    /// The shading normal of the first non-specular hit, in any consistent space; OIDN uses it
+    /// only together with `albedo`.
+    pub normal: Option<&'a [f32]>,
+}
+
+/// Why denoising failed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum DenoiseError {
+    /// The library was not found, could not be loaded, or its CPU device could not be created.
+    /// The message says where it looked and how to get the library.
+    #[error("the denoiser (Open Image Denoise) is not available: {0}")]
+    Unavailable(String),
+    /// OIDN reported an error while denoising.
+    #[error("Open Image Denoise failed: {0}")]
+    Oidn(String),
+    /// The cancel flag was set while denoising.
+    #[error("denoising was cancelled")]
+    Cancelled,
+    /// The input does not describe a valid image.
+    #[error("invalid input to the denoiser: {0}")]
+    BadInput(String),
+}
+
+/// A loaded OIDN library with a committed CPU device. `Send + Sync`: calls from several threads
+/// run one after another (OIDN's CPU device uses all cores for one image anyway).
+pub struct Denoiser {
+    device: Mutex<oidn::Device>,
+    location: String,
+    version: i32,
+}
+
+impl fmt::Debug for Denoiser {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Denoiser")
+            .field("version", &self.version())
+            .field("location", &self.location)
+            .finish()
+    }
+}
+
+/// One place the library is looked for.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Candidate {
+    /// A directory that may hold `libOpenImageDenoise.so.2`.
+    Dir(PathBuf),
+    /// The system loader's search.
+    System,
+}
+
+/// Where [`Denoiser::load`] looks, in order, given the value of [`DIR_VARIABLE`] and the path
+/// of the running executable (see the module documentation).
+fn search_path(dir_variable: Option<&OsStr>, executable: Option<&Path>) -> Vec<Candidate> {
+    if let Some(dir) = dir_variable.filter(|d| !d.is_empty()) {
+        return vec![Candidate::Dir(PathBuf::from(dir))];
+    }
+    let mut candidates: Vec<Candidate> = executable
+        .and_then(Path::parent)
+        .into_iter()
+        .flat_map(Path::ancestors)
+        .map(|dir| Candidate::Dir(dir.join(".oidn").join("lib")))
+        .collect();
+    candidates.push(Candidate::System);
+    candidates
+}
+
+impl Denoiser {
+    /// The process's denoiser, loaded by the first call (see [`Denoiser::load`]); later calls
+    /// return the same denoiser, or the same error.
+    pub fn shared() -> Result<&'static Denoiser, DenoiseError> {
+        static SHARED: OnceLock<Result<Denoiser, DenoiseError>> = OnceLock::new();
+        SHARED
+            .get_or_init(Denoiser::load)
+            .as_ref()
+            .map_err(Clone::clone)
+    }
+
+    /// Loads the library from the first place it is found (see the module documentation) and
+    /// creates its CPU device.
+    pub fn load() -> Result<Denoiser, DenoiseError> {
+        let variable = std::env::var_os(DIR_VARIABLE);
+        let executable = std::env::current_exe().ok();
+        Denoiser::load_first(&search_path(variable.as_deref(), executable.as_deref()))
+    }
+
+    /// Loads the library from `dir` only, which holds `libOpenImageDenoise.so.2` (and, for the
+    /// wheel's libraries, the core, the CPU device module and TBB beside it).
+    pub fn load_from(dir: &Path) -> Result<Denoiser, DenoiseError> {
+        Denoiser::load_first(&[Candidate::Dir(dir.to_path_buf())])
+    }
+
+    /// Loads from the first candidate that has the library; a library that is found but fails
+    /// to load ends the search with its error.
+    fn load_first(candidates: &[Candidate]) -> Result<Denoiser, DenoiseError> {
+        let mut looked = Vec::new();
+        for candidate in candidates {
+            let (dir, location) = match candidate {
+                Candidate::Dir(dir) => {
+                    let file = dir.join(oidn::LIBRARY_NAME);
+                    if !file.is_file() {
+                        looked.push(dir.display().to_string());
+                        continue;
+                    }
+                    (Some(dir.as_path()), file.display().to_string())
+                }
+                Candidate::System => (None, oidn::LIBRARY_NAME.to_string()),
+            };
+            return match oidn::Device::new(dir) {
+                Ok(device) => Ok(Denoiser {
+                    version: device.version(),
+                    device: Mutex::new(device),
+                    location,
+                }),
+                Err(_) if dir.is_none() => {
+                    looked.push(format!("the system library path ({})", oidn::LIBRARY_NAME));
+                    break;
+                }
+                Err(e) => Err(DenoiseError::Unavailable(format!(
+                    "{location} could not be loaded: {e}"
+                ))),
+            };
+        }
+        Err(DenoiseError::Unavailable(format!(
+            "{} not found in {}; {HOW_TO_GET}",
+            oidn::LIBRARY_NAME,
+            looked.join(", ")
+        )))
+    }
+
+    /// The OIDN version, as `major.minor.patch`.
+    pub fn version(&self) -> String {
+        let v = self.version;
+        format!("{}.{}.{}", v / 10000, v / 100 % 100, v % 100)
+    }
+
+    /// The library file loaded (or its soname, when found by the system loader).
+    pub fn location(&self) -> &str {
+        &self.location
+    }
+
+    /// Denoises `input` with OIDN's `RT` filter and returns the denoised colour, in the layout
+    /// of `input.color`. `cancel` is polled while OIDN runs; once it is true, the call returns
+    /// [`DenoiseError::Cancelled`] as soon as OIDN stops. The input is checked first
+    /// ([`DenoiseError::BadInput`]) and sanitised (see [`DenoiseInput`]). Calls from several
+    /// threads wait for each other.
+    pub fn denoise(
+        &self,
+        input: &DenoiseInput,
+        quality: Quality,
+        cancel: &AtomicBool,
+    ) -> Result<Vec<f32>, DenoiseError> {
+        let (width, height) = validate(input)?;
+        let color = sanitized(input.color, 0.0, f32::MAX);
+        let albedo = input.albedo.map(|a| sanitized(a, 0.0, 1.0));
+        let normal = input.normal.map(|n| sanitized(n, -1.0, 1.0));
+        let images = oidn::Images {
+            width,
+            height,
+            color: &color,
+            albedo: albedo.as_deref(),
+            normal: normal.as_deref(),
+        };
+        let mut device = self
+            .device
+            .lock()
+            .map_err(|_| DenoiseError::Oidn("an earlier call panicked".into()))?;
+        device
+            .run(&images, quality.oidn_value(), cancel)
+            .map_err(|e| match e {
+                oidn::RunError::Cancelled => DenoiseError::Cancelled,
+                oidn::RunError::Oidn(message) => DenoiseError::Oidn(message),
+            })
+    }
+}
+
+/// Checks the sizes: width and height at least 1, at most [`MAX_PIXELS`] pixels, every image
+/// `width * height * 3` values, normals only with albedo. Returns the width and height.
+fn validate(input: &DenoiseInput) -> Result<(usize, usize), DenoiseError> {
+    let bad = |m: String| Err(DenoiseError::BadInput(m));
+    let (w, h) = (input.width, input.height);
+    let pixels = u64::from(w) * u64::from(h);
+    if pixels == 0 {
+        return bad(format!("the image is empty ({w}×{h})"));
+    }
+    if pixels > MAX_PIXELS {
+        return bad(format!(
+            "{w}×{h} = {pixels} pixels is more than the {MAX_PIXELS} allowed"
+        ));
+    }
+    let expected = pixels * 3;
+    let images = [
+        ("colour", Some(input.color)),
+        ("albedo", input.albedo),
+        ("normal", input.normal),
+    ];
+    for (name, image) in images {
+        if let Some(image) = image
+            && image.len() as u64 != expected
+        {
+            return bad(format!(
+                "the {name} image has {} values; {w}×{h} RGB needs {expected}",
+                image.len()
+            ));
+        }
+    }
+    if input.normal.is_some() && input.albedo.is_none() {
+        return bad(
+            "a normal image needs an albedo image too (OIDN uses normals only with \
+            albedo)"
+                .into(),
+        );
+    }
+    // Both fit: pixels ≤ MAX_PIXELS < 2^32.
+    Ok((w as usize, h as usize))
+}
+
+/// A copy of `values` with NaN and infinities replaced by 0 and the rest clamped to [lo, hi].
+fn sanitized(values: &[f32], lo: f32, hi: f32) -> Vec<f32> {
+    values
+        .iter()
+        .map(|&v| if v.is_finite() { v.clamp(lo, hi) } else { 0.0 })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn input(width: u32, height: u32, len: usize) -> (u32, u32, Vec<f32>) {
+        (width, height, vec![0.5; len])
+    }
+
+    #[test]
+    fn validate_accepts_matching_sizes_and_rejects_the_rest() {
+        let (w, h, good) = input(4, 3, 36);
+        let short = vec![0.5; 35];
+        let ok = DenoiseInput {
+            width: w,
+            height: h,
+            color: &good,
+            albedo: Some(&good),
+            normal: Some(&good),
+        };
+        assert_eq!(validate(&ok), Ok((4, 3)));
+        let cases = [
+            DenoiseInput { width: 0, ..ok },
+            DenoiseInput { height: 0, ..ok },
+            DenoiseInput {
+                color: &short,
+                ..ok
+            },
+            DenoiseInput {
+                albedo: Some(&short),
+                ..ok
+            },
+            DenoiseInput {
+                normal: Some(&short),
+                ..ok
+            },
+            DenoiseInput { albedo: None, ..ok },
+            DenoiseInput {
+                width: 1 << 16,
+                height: 1 << 16,
+                ..ok
+            },
+        ];
+        for case in cases {
+            assert!(
+                matches!(validate(&case), Err(DenoiseError::BadInput(_))),
+                "{case:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn sanitized_replaces_non_finite_values_and_clamps() {
+        let values = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -0.5, 0.25, 2.0];
+        assert_eq!(
+            sanitized(&values, 0.0, 1.0),
+            [0.0, 0.0, 0.0, 0.0, 0.25, 1.0]
+        );
+        assert_eq!(sanitized(&values, -1.0, 1.0)[3], -0.5);
+    }
+
+    #[test]
+    fn search_path_is_the_variable_alone_when_set() {
+        let exe = Path::new("/repo/target/release/rondo");
+        assert_eq!(
+            search_path(Some(OsStr::new("/opt/oidn")), Some(exe)),
+            [Candidate::Dir(PathBuf::from("/opt/oidn"))]
+        );
+    }
+
+    #[test]
+    fn search_path_walks_up_from_the_executable_then_asks_the_system() {
+        let exe = Path::new("/repo/target/release/rondo");
+        let expected: Vec<Candidate> = [
+            "/repo/target/release/.oidn/lib",
+            "/repo/target/.oidn/lib",
+            "/repo/.oidn/lib",
+            "/.oidn/lib",
+        ]
+        .into_iter()
+        .map(|d| Candidate::Dir(PathBuf::from(d)))
+        .chain([Candidate::System])
+        .collect();
+        assert_eq!(search_path(None, Some(exe)), expected);
+        assert_eq!(search_path(Some(OsStr::new("")), Some(exe)), expected);
+        assert_eq!(search_path(None, None), [Candidate::System]);
+    }
+}
