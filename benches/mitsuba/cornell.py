@@ -25,7 +25,6 @@ the mean of the left and right image columns before it measures anything.
 
 import argparse
 import csv
-import math
 import os
 import re
 import resource
@@ -36,43 +35,9 @@ import time
 
 import numpy as np
 
-
-def rot_y_then_translate(p, degrees, t):
-    """rondo's Transform(rotate: (0, degrees, 0), translate: t) applied to point p."""
-    a = math.radians(degrees)
-    c, s = math.cos(a), math.sin(a)
-    x, y, z = p
-    return (c * x + s * z + t[0], y + t[1], -s * x + c * z + t[2])
-
-
-def box_quads(lo, hi, degrees, t):
-    """The six faces of an axis-aligned box as quads with outward normals, transformed."""
-    (x0, y0, z0), (x1, y1, z1) = lo, hi
-    corner = lambda i, j, k: rot_y_then_translate(
-        (x1 if i else x0, y1 if j else y0, z1 if k else z0), degrees, t)
-    faces = [
-        [(0, 0, 0), (0, 0, 1), (0, 1, 1), (0, 1, 0)],  # -x
-        [(1, 0, 0), (1, 1, 0), (1, 1, 1), (1, 0, 1)],  # +x
-        [(0, 0, 0), (1, 0, 0), (1, 0, 1), (0, 0, 1)],  # -y
-        [(0, 1, 0), (0, 1, 1), (1, 1, 1), (1, 1, 0)],  # +y
-        [(0, 0, 0), (0, 1, 0), (1, 1, 0), (1, 0, 0)],  # -z
-        [(0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)],  # +z
-    ]
-    return [[corner(*v) for v in f] for f in faces]
-
-
-# (name, material, quads) exactly as in scenes/cornell.ron.
-QUADS = [
-    ("left", "red", [[(555, 0, 0), (555, 0, 555), (555, 555, 555), (555, 555, 0)]]),
-    ("right", "green", [[(0, 0, 0), (0, 555, 0), (0, 555, 555), (0, 0, 555)]]),
-    ("lamp", "light", [[(343, 554, 332), (213, 554, 332), (213, 554, 227), (343, 554, 227)]]),
-    ("floor", "white", [[(0, 0, 0), (0, 0, 555), (555, 0, 555), (555, 0, 0)]]),
-    ("ceiling", "white", [[(555, 555, 555), (0, 555, 555), (0, 555, 0), (555, 555, 0)]]),
-    ("back", "white", [[(0, 0, 555), (0, 555, 555), (555, 555, 555), (555, 0, 555)]]),
-    ("tall", "white", box_quads((0, 0, 0), (165, 330, 165), 15, (265, 0, 295))),
-    ("short", "white", box_quads((0, 0, 0), (165, 165, 165), -18, (130, 0, 65))),
-]
-ALBEDO = {"red": (0.65, 0.05, 0.05), "white": (0.73, 0.73, 0.73), "green": (0.12, 0.45, 0.15)}
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
+from cornell_geometry import QUADS, ALBEDO  # noqa: E402 - the shared scene data
+from image_metrics import metrics  # noqa: E402 - the shared error metrics
 
 
 def write_obj(path, quads):
@@ -115,18 +80,6 @@ def scene_dict(mi, tmp, size, max_depth, sampler="independent"):
         },
         **shapes,
     }
-
-
-def metrics(a, r):
-    """RMSE, relative MSE, MAE over all pixels, and the lamp-out clamped RMSE."""
-    a, r = a.astype(np.float64), r.astype(np.float64)
-    d = a - r
-    keep = np.all(r <= 1.0, axis=-1)
-    dc = (np.clip(a, 0, 1) - np.clip(r, 0, 1))[keep]
-    return (math.sqrt(np.mean(d * d)),
-            float(np.mean(d * d / (r ** 2 + 0.01))),
-            float(np.mean(np.abs(d))),
-            math.sqrt(np.mean(dc * dc)))
 
 
 def read_exr(mi, path):
