@@ -12,6 +12,7 @@ pub mod camera;
 pub mod cli;
 pub mod cpu;
 pub mod denoise;
+pub mod denoised;
 pub mod ecs;
 pub mod farm;
 pub mod film;

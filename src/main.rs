@@ -44,6 +44,10 @@ enum Command {
         /// last one, up to --spp; the output holds them all.
         #[arg(long, value_name = "PATH")]
         resume: Option<PathBuf>,
+        /// Write these feature buffers (albedo, normal; comma-separated) as layers of the .exr
+        /// output, beside the colour.
+        #[arg(long, value_name = "LIST", value_delimiter = ',')]
+        aov: Vec<rondo::layers::Aov>,
         #[command(flatten)]
         options: RenderArgs,
     },
@@ -281,6 +285,7 @@ fn run(cli: Cli) -> Result<()> {
             output,
             samples,
             resume,
+            aov,
             options,
         } => {
             let part = match (samples, resume) {
@@ -288,7 +293,7 @@ fn run(cli: Cli) -> Result<()> {
                 (None, Some(path)) => Some(rondo::farm::Samples::Resume(path)),
                 (None, None) => None,
             };
-            render::run(&scene, &output, &options, part)
+            render::run(&scene, &output, &options, &aov, part)
         }
         Command::Merge {
             inputs,

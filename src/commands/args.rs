@@ -42,6 +42,13 @@ pub struct RenderArgs {
     /// Geometry layout: soa, aos or soa-simd. Images are bit-identical; only speed differs.
     #[arg(long, default_value_t = LayoutKind::default())]
     pub layout: LayoutKind,
+    /// Denoise the image written (Open Image Denoise, guided by albedo and normal; see the
+    /// README): an .exr keeps the raw colour as the layer `raw`. Overrides the scene's `denoise`.
+    #[arg(long, conflicts_with = "no_denoise")]
+    pub denoise: bool,
+    /// Denoise nothing, not even what the viewer shows (overrides the scene's `denoise`).
+    #[arg(long)]
+    pub no_denoise: bool,
 }
 
 impl RenderArgs {
@@ -55,6 +62,15 @@ impl RenderArgs {
             seed: self.seed,
             method: self.method,
             sampler: self.sampler,
+        }
+    }
+
+    /// `--denoise` / `--no-denoise`, if given: the scene's `denoise` setting overridden.
+    pub fn denoise(&self) -> Option<bool> {
+        match (self.denoise, self.no_denoise) {
+            (true, _) => Some(true),
+            (_, true) => Some(false),
+            _ => None,
         }
     }
 

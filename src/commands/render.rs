@@ -1,7 +1,7 @@
 //! `rondo render`: one image, a sample range or a resumed partial, and its summary line.
 
 use std::path::Path;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -9,14 +9,30 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use super::args::RenderArgs;
 use rondo::Renderer;
 use rondo::cli::check_output_file;
+use rondo::denoise::{Denoiser, Quality};
+use rondo::denoised::FilmImages;
+use rondo::film::OutputKind;
+use rondo::layers::{Aov, Layer, write_layers};
 
 pub fn run(
     scene: &Path,
     output: &Path,
     options: &RenderArgs,
+    aov: &[Aov],
     part: Option<rondo::farm::Samples>,
 ) -> Result<()> {
     check_output_file(output)?;
+    if !aov.is_empty() && OutputKind::from_path(output) != Some(OutputKind::Exr) {
+        bail!(
+            "{}: --aov writes layers, which only an .exr holds",
+            output.display()
+        );
+    }
+    if part.is_some() && (options.denoise || !aov.is_empty()) {
+        bail!(
+            "--denoise and --aov make a finished image; a partial (--samples, --resume) holds             the raw sums and always the feature buffers: denoise the merged image instead             (`rondo merge … -o x.png --denoise`)"
+        );
+    }
     let mut r = options.renderer()?;
     let part = match &part {
         Some(p) => Some(rondo::farm::prepare(
@@ -32,7 +48,17 @@ pub fn run(
         Some(p) => p.settings,
         None => r.load(scene)?.settings,
     };
-    if part.is_none() {
+    let denoise = part.is_none() && options.denoise().or(s.denoise).unwrap_or(false);
+    // The library is loaded before the work starts: a render that cannot be denoised is refused.
+    let denoiser = if denoise {
+        Some(Denoiser::shared()?)
+    } else {
+        None
+    };
+    let layered = denoise || !aov.is_empty();
+    if layered {
+        r.set_features(true);
+    } else if part.is_none() {
         r.set_output(Some(output), false);
     }
     let bar =
@@ -53,7 +79,55 @@ pub fn run(
         eprintln!("{} holds samples {ranges}", output.display());
     }
     eprintln!("{}", summary(&r, wall));
+    if layered {
+        write_layered(&r, output, denoiser, aov)?;
+    }
     Ok(())
+}
+
+/// Writes the render's colour, denoised if `denoiser` is given (an .exr then keeps the raw
+/// colour as the layer `raw`), and the `aov` layers.
+fn write_layered(
+    r: &Renderer,
+    output: &Path,
+    denoiser: Option<&Denoiser>,
+    aov: &[Aov],
+) -> Result<()> {
+    let images = FilmImages::of(r.film());
+    let denoised = match denoiser {
+        Some(d) => {
+            let start = Instant::now();
+            let quality = Quality::High;
+            let image = images.denoise(d, quality, &r.cancel_flag())?;
+            eprintln!(
+                "denoised in {:.2} s (Open Image Denoise {}, quality {quality}, guided by albedo and normal)",
+                start.elapsed().as_secs_f64(),
+                d.version()
+            );
+            Some(image)
+        }
+        None => None,
+    };
+    let mut layers = Vec::new();
+    if denoised.is_some() {
+        layers.push(Layer {
+            name: "raw",
+            pixels: &images.colour,
+        });
+    }
+    for a in aov {
+        let pixels = match a {
+            Aov::Albedo => images.albedo.as_deref(),
+            Aov::Normal => images.normal.as_deref(),
+        };
+        layers.push(Layer {
+            name: a.name(),
+            pixels: pixels.context("the film collected no feature buffers")?,
+        });
+    }
+    let colour = denoised.as_deref().unwrap_or(&images.colour);
+    write_layers(output, images.width, images.height, colour, &layers, true)
+        .with_context(|| format!("{}: cannot write image", output.display()))
 }
 
 /// The one-line summary printed after a render: the samples per pixel and the rate are those

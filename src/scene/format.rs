@@ -277,8 +277,8 @@ impl std::fmt::Display for Method {
     }
 }
 
-/// `Settings(width, height, spp, max_depth, background, seed, method, sampler)`; every field
-/// optional.
+/// `Settings(width, height, spp, max_depth, background, seed, method, sampler, denoise)`; every
+/// field optional.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Settings", try_from = "RawSettings")]
 pub struct SettingsDesc {
@@ -298,6 +298,10 @@ pub struct SettingsDesc {
     pub method: Method,
     /// Sample generator.
     pub sampler: SamplerKind,
+    /// Denoise the image: `Some(true)` writes a denoised image (`render`, and the image `watch`
+    /// writes), `Some(false)` turns the denoiser off everywhere (also in `watch`'s viewer),
+    /// `None` (absent) denoises what only the viewer shows. The raw sums are never replaced.
+    pub denoise: Option<bool>,
 }
 
 impl Default for SettingsDesc {
@@ -311,6 +315,7 @@ impl Default for SettingsDesc {
             seed: 0,
             method: Method::Mis,
             sampler: SamplerKind::default(),
+            denoise: None,
         }
     }
 }
@@ -326,6 +331,7 @@ struct RawSettings {
     seed: Option<u64>,
     method: Option<Method>,
     sampler: Option<SamplerKind>,
+    denoise: Option<bool>,
 }
 
 impl TryFrom<RawSettings> for SettingsDesc {
@@ -341,6 +347,7 @@ impl TryFrom<RawSettings> for SettingsDesc {
             seed: raw.seed.unwrap_or(d.seed),
             method: raw.method.unwrap_or(d.method),
             sampler: raw.sampler.unwrap_or(d.sampler),
+            denoise: raw.denoise,
         };
         s.validate()?;
         Ok(s)

@@ -84,11 +84,14 @@ use crate::app::Renderer;
 use crate::ecs::resources::{Counters, PassPlan};
 use crate::film::{Film, OutputKind};
 
+mod denoiser;
 mod error;
 mod files;
 mod options;
 mod report;
 
+pub use denoiser::{DenoiseSink, Denoised, DenoisedFrame};
+use denoiser::{DenoiseWorker, WorkerNews};
 pub use error::WatchError;
 pub use files::*;
 use files::{IDLE_POLL, REPORTS_CLOSE};
@@ -275,6 +278,24 @@ pub struct Watch {
     missing: bool,
     /// Whether the user was told that the output is also one of the scene's textures.
     warned_output: bool,
+    /// Where denoised passes are shown (the viewer), if anywhere.
+    denoise_sink: Option<DenoiseSink>,
+    /// What the current scene denoises.
+    denoising: Denoising,
+    /// The denoise thread, started with the first pass to denoise.
+    denoiser: Option<DenoiseWorker>,
+}
+
+/// What a watch denoises, from `--denoise` / `--no-denoise` or the scene's `denoise`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+enum Denoising {
+    /// Nothing.
+    #[default]
+    Off,
+    /// The passes the viewer shows; the output file stays raw.
+    Viewer,
+    /// The viewer's passes and the output file.
+    Output,
 }
 
 impl Watch {
@@ -340,7 +361,16 @@ impl Watch {
             last_error: None,
             missing: false,
             warned_output: false,
+            denoise_sink: None,
+            denoising: Denoising::Off,
+            denoiser: None,
         })
+    }
+
+    /// Shows denoised passes through `sink` (the viewer): from now on every pass is denoised
+    /// on a thread of its own unless the scene or the options turn the denoiser off.
+    pub fn set_denoise_sink(&mut self, sink: DenoiseSink) {
+        self.denoise_sink = Some(sink);
     }
 
     /// A handle that stops [`Watch::run`].
@@ -373,6 +403,7 @@ impl Watch {
             while let Ok(event) = self.events.try_recv() {
                 Self::absorb(event, &mut pending, &mut out);
             }
+            self.denoiser_news(&mut out);
             if self.stop.is_stopped() {
                 break;
             }
@@ -408,6 +439,52 @@ impl Watch {
                 Self::absorb(event, &mut pending, &mut out);
             }
         }
+    }
+
+    /// Reports what the denoise thread finished.
+    fn denoiser_news(&mut self, out: &mut Emitter<'_>) {
+        let Some(worker) = &self.denoiser else {
+            return;
+        };
+        for news in worker.news() {
+            match news {
+                WorkerNews::Denoised(d) => out.emit(Report::Denoised(d), None),
+                WorkerNews::Failed(message) => out.emit(
+                    Report::Warning {
+                        message: format!("{message}; showing the raw image"),
+                    },
+                    None,
+                ),
+            }
+        }
+    }
+
+    /// Hands the pass in the film to the denoise thread, if the scene denoises.
+    fn denoise_pass(&mut self, reload: u64, saved: Instant) {
+        if self.denoising == Denoising::Off {
+            return;
+        }
+        let film = self.renderer.film();
+        let quality = if self.renderer.is_complete() {
+            crate::denoise::Quality::High
+        } else {
+            crate::denoise::Quality::Balanced
+        };
+        let job = denoiser::Job {
+            reload,
+            samples: film.samples,
+            images: crate::denoised::FilmImages::of(film),
+            quality,
+            write: match self.denoising {
+                Denoising::Output => self.options.output.clone(),
+                _ => None,
+            },
+            saved,
+        };
+        let sink = self.denoise_sink.clone();
+        self.denoiser
+            .get_or_insert_with(|| DenoiseWorker::start(sink))
+            .submit(job);
     }
 
     /// Folds one event into the pending changes.
@@ -548,6 +625,17 @@ impl Watch {
             break (info, parse);
         };
         self.last_error = None;
+        self.denoising = match self.options.denoise.or(info.settings.denoise) {
+            Some(false) => Denoising::Off,
+            Some(true) => Denoising::Output,
+            None if self.denoise_sink.is_some() => Denoising::Viewer,
+            None => Denoising::Off,
+        };
+        self.renderer
+            .set_features(self.denoising != Denoising::Off);
+        if let Some(worker) = &self.denoiser {
+            worker.cancel();
+        }
 
         if let Some(old) = self.job.take() {
             out.emit(Report::Rendered(old.report), None);
@@ -613,6 +701,7 @@ impl Watch {
             r.restarts += 1;
             return;
         }
+        let mut denoise = None;
         if counters.passes > passes {
             let film = self.renderer.film();
             let now = OnDisk {
@@ -624,12 +713,12 @@ impl Watch {
                 r.preview = !now.real;
             }
             if now > self.on_disk {
-                // No output file with `--serve` alone: the observer shows the image.
-                let written = self
-                    .options
-                    .output
-                    .as_deref()
-                    .map_or(Ok(()), |o| film.write_live(o));
+                // No output file with `--serve` alone: the observer shows the image. A
+                // denoised output is written by the denoise thread.
+                let written = match self.options.output.as_deref() {
+                    Some(o) if self.denoising != Denoising::Output => film.write_live(o),
+                    _ => Ok(()),
+                };
                 match written {
                     Ok(()) => {
                         let at = Instant::now();
@@ -649,6 +738,9 @@ impl Watch {
                             at,
                         };
                         out.emit(report, Some(film));
+                        if now.real {
+                            denoise = Some((r.number, job.saved));
+                        }
                     }
                     Err(e) => {
                         let output = self.options.output.as_deref().unwrap_or(Path::new(""));
@@ -665,6 +757,9 @@ impl Watch {
             if let Some(job) = self.job.take() {
                 out.emit(Report::Rendered(job.report), None);
             }
+        }
+        if let Some((reload, saved)) = denoise {
+            self.denoise_pass(reload, saved);
         }
     }
 }

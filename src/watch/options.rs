@@ -26,6 +26,10 @@ pub struct WatchOptions {
     pub first_pass: u32,
     /// The quiet window (see [`DEBOUNCE`]).
     pub debounce: Duration,
+    /// `--denoise` (`Some(true)`: the output is denoised too) or `--no-denoise` (`Some(false)`:
+    /// nothing is); `None` follows the scene's `denoise` setting, whose absence denoises what
+    /// the viewer shows only.
+    pub denoise: Option<bool>,
 }
 
 impl WatchOptions {
@@ -40,6 +44,7 @@ impl WatchOptions {
             layout: LayoutKind::default(),
             first_pass: 1,
             debounce: DEBOUNCE,
+            denoise: None,
         }
     }
 }

@@ -262,6 +262,9 @@ pub enum Report {
         /// What.
         message: String,
     },
+    /// A pass was denoised (see [`super::denoiser`]): shown in the viewer, and written if the
+    /// output is denoised.
+    Denoised(super::denoiser::Denoised),
 }
 
 impl Report {
@@ -293,6 +296,19 @@ impl Report {
                 format!("{}: deleted; waiting for it to come back", path.display())
             }
             Self::Warning { message } => format!("warning: {message}"),
+            Self::Denoised(d) => {
+                let wrote = d.wrote.as_ref().map_or(String::new(), |p| {
+                    format!(", wrote {}", p.file_name().unwrap_or_default().to_string_lossy())
+                });
+                format!(
+                    "reload {}: denoised {} spp in {} ({}), {} after the save{wrote}",
+                    d.reload,
+                    d.samples,
+                    human(d.took),
+                    d.quality,
+                    human(d.since_save)
+                )
+            }
         })
     }
 }

@@ -1,0 +1,222 @@
+//! Denoising beside the watch loop: a worker thread denoises the newest pass while the loop
+//! renders the next one. A newer pass (or a new reload) cancels the denoise in flight; only the
+//! newest job waiting is taken. Each denoised image goes to the sink (the viewer), to the output
+//! file when the user asked for a denoised one, and back to the loop as a [`Denoised`] report.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, Receiver, Sender};
+use std::sync::{Arc, Mutex, PoisonError};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+
+use crate::denoise::{DenoiseError, Denoiser, Quality};
+use crate::denoised::FilmImages;
+use crate::layers::{Layer, write_layers};
+
+/// A denoised pass, as the viewer gets it.
+#[derive(Clone, Debug)]
+pub struct DenoisedFrame {
+    /// The reload the pass belongs to.
+    pub reload: u64,
+    /// Samples per pixel of the pass.
+    pub samples: u32,
+    /// The pass's means (colour raw, albedo and normal) and its size.
+    pub images: FilmImages,
+    /// The denoised colour, one value per pixel.
+    pub denoised: Vec<Vec3>,
+    /// The denoiser's quality setting.
+    pub quality: Quality,
+    /// How long the denoiser took.
+    pub took: Duration,
+    /// The save that started the reload.
+    pub saved: Instant,
+}
+
+/// Where denoised frames go besides the output file: called on the worker thread, so it must
+/// return quickly.
+pub type DenoiseSink = Arc<dyn Fn(&DenoisedFrame) + Send + Sync>;
+
+/// What the worker tells the loop.
+#[derive(Clone, Debug, PartialEq)]
+pub enum WorkerNews {
+    /// A pass was denoised (and shown, and written if asked).
+    Denoised(Denoised),
+    /// Denoising failed; the message says why. The raw images are shown meanwhile.
+    Failed(String),
+}
+
+/// A pass that was denoised, for the report line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Denoised {
+    /// The reload.
+    pub reload: u64,
+    /// Samples per pixel of the pass.
+    pub samples: u32,
+    /// The denoiser's quality setting.
+    pub quality: Quality,
+    /// How long the denoiser took.
+    pub took: Duration,
+    /// From the save to the denoised image being ready.
+    pub since_save: Duration,
+    /// The file written, if the output is denoised.
+    pub wrote: Option<PathBuf>,
+}
+
+/// One pass to denoise.
+pub struct Job {
+    /// The reload.
+    pub reload: u64,
+    /// Samples per pixel.
+    pub samples: u32,
+    /// The pass's means.
+    pub images: FilmImages,
+    /// The quality to denoise at.
+    pub quality: Quality,
+    /// Where to write the denoised image (`None`: the output stays raw).
+    pub write: Option<PathBuf>,
+    /// The save that started the reload.
+    pub saved: Instant,
+}
+
+/// The worker thread and its queue.
+pub struct DenoiseWorker {
+    jobs: Option<Sender<(Job, Arc<AtomicBool>)>>,
+    news: Receiver<WorkerNews>,
+    /// The cancel flag of the latest job handed over.
+    current: Arc<Mutex<Arc<AtomicBool>>>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl DenoiseWorker {
+    /// Starts the worker; denoised frames also go to `sink`, if any.
+    pub fn start(sink: Option<DenoiseSink>) -> Self {
+        let (jobs, inbox) = mpsc::channel::<(Job, Arc<AtomicBool>)>();
+        let (tell, news) = mpsc::channel();
+        let thread = std::thread::Builder::new()
+            .name("rondo-denoise".into())
+            .spawn(move || work(&inbox, &tell, sink.as_ref()))
+            .ok();
+        Self {
+            jobs: Some(jobs),
+            news,
+            current: Arc::new(Mutex::new(Arc::new(AtomicBool::new(false)))),
+            thread,
+        }
+    }
+
+    /// Hands a pass over, cancelling the denoise of any older one.
+    pub fn submit(&self, job: Job) {
+        let cancel = Arc::new(AtomicBool::new(false));
+        let old = std::mem::replace(
+            &mut *self.current.lock().unwrap_or_else(PoisonError::into_inner),
+            cancel.clone(),
+        );
+        old.store(true, Ordering::SeqCst);
+        if let Some(jobs) = &self.jobs {
+            // A worker that has gone (it never panics; only at shutdown) drops the job.
+            let _ = jobs.send((job, cancel));
+        }
+    }
+
+    /// Cancels the denoise in flight, if any (a new reload makes it stale).
+    pub fn cancel(&self) {
+        self.current
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .store(true, Ordering::SeqCst);
+    }
+
+    /// What the worker has finished since the last call.
+    pub fn news(&self) -> Vec<WorkerNews> {
+        self.news.try_iter().collect()
+    }
+}
+
+impl Drop for DenoiseWorker {
+    fn drop(&mut self) {
+        self.cancel();
+        self.jobs = None;
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+/// The worker's loop: the newest job waiting, denoised unless cancelled.
+fn work(
+    inbox: &Receiver<(Job, Arc<AtomicBool>)>,
+    tell: &Sender<WorkerNews>,
+    sink: Option<&DenoiseSink>,
+) {
+    let mut failed = false;
+    while let Ok(mut next) = inbox.recv() {
+        // Only the newest pass is worth denoising.
+        while let Ok(newer) = inbox.try_recv() {
+            next = newer;
+        }
+        let (job, cancel) = next;
+        if cancel.load(Ordering::SeqCst) {
+            continue;
+        }
+        let denoiser = match Denoiser::shared() {
+            Ok(d) => d,
+            Err(e) => {
+                if !std::mem::replace(&mut failed, true) {
+                    let _ = tell.send(WorkerNews::Failed(e.to_string()));
+                }
+                continue;
+            }
+        };
+        let start = Instant::now();
+        let denoised = match job.images.denoise(denoiser, job.quality, &cancel) {
+            Ok(image) => image,
+            Err(DenoiseError::Cancelled) => continue,
+            Err(e) => {
+                let _ = tell.send(WorkerNews::Failed(e.to_string()));
+                continue;
+            }
+        };
+        let took = start.elapsed();
+        if cancel.load(Ordering::SeqCst) {
+            continue;
+        }
+        let frame = DenoisedFrame {
+            reload: job.reload,
+            samples: job.samples,
+            images: job.images,
+            denoised,
+            quality: job.quality,
+            took,
+            saved: job.saved,
+        };
+        let mut wrote = None;
+        if let Some(path) = &job.write {
+            let raw = [Layer {
+                name: "raw",
+                pixels: &frame.images.colour,
+            }];
+            let (w, h) = (frame.images.width, frame.images.height);
+            match write_layers(path, w, h, &frame.denoised, &raw, false) {
+                Ok(()) => wrote = Some(path.clone()),
+                Err(e) => {
+                    let message = format!("{}: cannot write image: {e}", path.display());
+                    let _ = tell.send(WorkerNews::Failed(message));
+                }
+            }
+        }
+        if let Some(sink) = sink {
+            sink(&frame);
+        }
+        let _ = tell.send(WorkerNews::Denoised(Denoised {
+            reload: frame.reload,
+            samples: frame.samples,
+            quality: frame.quality,
+            took,
+            since_save: frame.saved.elapsed(),
+            wrote,
+        }));
+    }
+}
