@@ -10,11 +10,11 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crate::app::{Overrides, Renderer};
-use crate::film::{DEFAULT_SHIFT, OutputKind, Pixel};
+use crate::film::{DEFAULT_SHIFT, OutputKind};
 use crate::geometry::packed::LayoutKind;
 use crate::partial::{
-    PartialError, PartialMeta, Tracing, image_hash, image_settings, normalize, read_partial,
-    setting_difference, write_output,
+    FORMAT_2, PartialError, PartialMeta, Sums, Tracing, image_hash, image_settings, normalize,
+    read_partial, setting_difference, write_output,
 };
 use crate::scene::error::SceneError;
 use crate::scene::format::SettingsDesc;
@@ -50,18 +50,19 @@ pub struct PartRender {
     output: PathBuf,
     meta: PartialMeta,
     /// The resumed partial and its sums, read before anything was rendered.
-    resume: Option<(PathBuf, Vec<Pixel>)>,
+    resume: Option<(PathBuf, Sums)>,
     /// The settings, overrides applied (spp = one past the last sample rendered).
     pub settings: SettingsDesc,
 }
 
 /// Loads `scene` into `r` with `overrides` for a render of `samples` into `output`, checking
 /// the request: a range needs a `.exr` output and no spp override (the range's end is the spp);
-/// a resume needs a partial of the same scene, settings (sampler, method, … and `r`'s
-/// [`Tracing`]), seed and resolution, and an spp beyond its last sample. The resumed partial is
-/// read whole and checked first, before the scene is loaded: a corrupt one is refused before
-/// any work, and its sums are held (one more image in memory, 48 bytes a pixel) until
-/// [`PartRender::finish`].
+/// a resume needs a partial with the feature buffers (not a [`FORMAT_2`] one) of the same
+/// scene, settings (sampler, method, … and `r`'s [`Tracing`]), seed and resolution, and an spp
+/// beyond its last sample. The resumed partial is read whole and checked first, before the scene
+/// is loaded: a corrupt one is refused before any work, and its sums are held (one more image
+/// and its feature buffers in memory, 144 bytes a pixel) until [`PartRender::finish`]. `r` is
+/// set to collect the feature buffers, which every partial carries.
 pub fn prepare(
     r: &mut Renderer,
     mut overrides: Overrides,
@@ -78,6 +79,7 @@ pub fn prepare(
         roulette: r.roulette(),
         instancing: r.instancing(),
     };
+    r.set_features(true);
     match samples {
         Samples::Range(range) => {
             if overrides.spp.is_some() {
@@ -108,13 +110,20 @@ pub fn prepare(
                     scene: scene_name,
                     shift: DEFAULT_SHIFT,
                     settings,
+                    features: true,
                 },
                 resume: None,
                 settings: s,
             })
         }
         Samples::Resume(base) => {
-            let (held, base_sum) = read_partial(base)?;
+            let (held, base_sums) = read_partial(base)?;
+            if !held.features {
+                return Err(fail(format!(
+                    "{}: a {FORMAT_2} partial, without the feature buffers (albedo, normal) this rondo continues too: render it again, or merge it with partials of its format",
+                    base.display()
+                )));
+            }
             r.set_overrides(overrides);
             let info = r.load(scene)?;
             let s = info.settings;
@@ -167,7 +176,7 @@ pub fn prepare(
                     scene: scene_name,
                     ..held
                 },
-                resume: Some((base.clone(), base_sum)),
+                resume: Some((base.clone(), base_sums)),
                 settings: s,
             })
         }
@@ -180,8 +189,9 @@ impl PartRender {
         &self.meta.ranges
     }
 
-    /// After `r` rendered to completion: adds the resumed partial's sums, if any, and writes the
-    /// output (a partial for `.exr`, an 8-bit image for `.png`), atomically.
+    /// After `r` rendered to completion: adds the resumed partial's sums (colour and feature
+    /// buffers), if any, and writes the output (a partial with the feature buffers for `.exr`,
+    /// an 8-bit image for `.png`), atomically.
     pub fn finish(mut self, r: &mut Renderer) -> Result<(), FarmError> {
         let film = r.film_mut();
         if let Some((base, _)) = &self.resume
@@ -195,12 +205,21 @@ impl PartRender {
             )));
         }
         self.meta.shift = film.shift;
-        if let Some((_, base_sum)) = &self.resume {
-            for (pixel, held) in film.sum.iter_mut().zip(base_sum) {
+        let Some(features) = &mut film.features else {
+            return Err(fail(format!(
+                "{}: the render collected no feature buffers to write",
+                self.output.display()
+            )));
+        };
+        if let Some((_, base)) = &self.resume {
+            for (pixel, held) in film.sum.iter_mut().zip(&base.colour) {
                 pixel.merge(held);
             }
+            if let Some(held) = &base.features {
+                features.merge(held);
+            }
         }
-        write_output(&self.output, &self.meta, &film.sum)
+        write_output(&self.output, &self.meta, &film.sum, film.features.as_ref())
             .map_err(|e| fail(format!("{}: cannot write: {e}", self.output.display())))
     }
 }

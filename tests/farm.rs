@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use rondo::farm::{Samples, prepare, task_range};
-use rondo::film::{Pixel, write_atomically};
-use rondo::partial::{PartialMeta, merge, plan_merge, read_meta, read_partial, write_output};
+use rondo::film::{Features, Pixel, write_atomically};
+use rondo::partial::{PartialMeta, Sums, merge, plan_merge, read_meta, read_partial, write_output};
 use rondo::scene::format::{MAX_SPP, Method};
 use rondo::shading::sampler::SamplerKind;
 use rondo::{Overrides, PassPlan, Renderer};
@@ -88,10 +88,21 @@ fn render_part_with(
     out
 }
 
-fn merge_files(paths: &[PathBuf]) -> Vec<Pixel> {
+/// The merged sums of `paths` (every sample of `0..SPP` held).
+fn merge_sums(paths: &[PathBuf]) -> Sums {
     let plan = plan_merge(paths, Some(SPP)).unwrap_or_else(|e| panic!("{e}"));
     assert!(plan.missing.is_empty(), "{:?}", plan.missing);
     merge(paths, &plan).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The merged colour sums of `paths`.
+fn merge_files(paths: &[PathBuf]) -> Vec<Pixel> {
+    merge_sums(paths).colour
+}
+
+/// Writes `sums` as `write_output` does.
+fn write_sums(path: &Path, meta: &PartialMeta, sums: &Sums) {
+    write_output(path, meta, &sums.colour, sums.features.as_ref()).expect("write");
 }
 
 #[test]
@@ -130,8 +141,8 @@ fn merges_equal_the_single_render_bit_for_bit_for_any_split_and_order() {
             let merged_exr = dir.join(format!("m{k}-{order}.exr"));
             let merged_png = dir.join(format!("m{k}-{order}.png"));
             let merged = merge(&parts, &plan).expect("merge");
-            write_output(&merged_exr, &plan.meta, &merged).expect("write");
-            write_output(&merged_png, &plan.meta, &merged).expect("write");
+            write_sums(&merged_exr, &plan.meta, &merged);
+            write_sums(&merged_png, &plan.meta, &merged);
             assert!(
                 decode_exr(&merged_exr) == exr,
                 "split {cuts:?}: EXR pixels differ"
@@ -150,7 +161,7 @@ fn merges_equal_the_single_render_bit_for_bit_for_any_split_and_order() {
     ];
     let ab = dir.join("ab.exr");
     let plan = plan_merge(&halves[..2], None).expect("plan");
-    write_output(&ab, &plan.meta, &merge(&halves[..2], &plan).expect("merge")).expect("write");
+    write_sums(&ab, &plan.meta, &merge(&halves[..2], &plan).expect("merge"));
     assert_eq!(read_meta(&ab).expect("meta").ranges, vec![0..11]);
     assert_eq!(merge_files(&[halves[2].clone(), ab]), sum);
     assert_eq!(single(&dir, 1).0, sum, "one thread or two");
@@ -453,7 +464,7 @@ fn partials_in_another_fixed_point_scale_do_not_merge() {
         shift: meta.shift - 1,
         ..meta.clone()
     };
-    write_output(&shifted, &moved, &sum).expect("write");
+    write_sums(&shifted, &moved, &sum);
     assert_eq!(read_meta(&shifted).expect("meta").shift, meta.shift - 1);
     let e = plan_merge(&[a, shifted], None)
         .expect_err("sums in other units must not add up")
@@ -464,9 +475,12 @@ fn partials_in_another_fixed_point_scale_do_not_merge() {
     );
 }
 
-/// The attributes of a single-part EXR's header, each with the byte range of its value, and
-/// where the offset table starts (after the header's closing null byte).
-fn exr_header(bytes: &[u8]) -> (Vec<(String, Range<usize>)>, usize) {
+/// An EXR header's attributes, each with the byte range of its value.
+type Attributes = Vec<(String, Range<usize>)>;
+
+/// The headers of an EXR file (one, or one per part of a multi-part file), and where the offset
+/// tables start (after the headers' closing null byte).
+fn exr_headers(bytes: &[u8]) -> (Vec<Attributes>, usize) {
     fn text(bytes: &[u8], at: &mut usize) -> String {
         let len = bytes[*at..]
             .iter()
@@ -476,46 +490,80 @@ fn exr_header(bytes: &[u8]) -> (Vec<(String, Range<usize>)>, usize) {
         *at += len + 1;
         s
     }
-    // The magic number and the version field come first.
+    // The magic number and the version field (bit 12: multi-part) come first.
+    let version = u32::from_le_bytes(bytes[4..8].try_into().expect("4 bytes"));
+    let multipart = version & 0x1000 != 0;
     let mut at = 8;
-    let mut attributes = Vec::new();
-    while bytes[at] != 0 {
-        let name = text(bytes, &mut at);
-        let _kind = text(bytes, &mut at);
-        let size = i32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"));
-        at += 4;
-        let size = usize::try_from(size).expect("attribute size");
-        attributes.push((name, at..at + size));
-        at += size;
+    let mut headers = Vec::new();
+    loop {
+        let mut attributes = Vec::new();
+        while bytes[at] != 0 {
+            let name = text(bytes, &mut at);
+            let _kind = text(bytes, &mut at);
+            let size = i32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"));
+            at += 4;
+            let size = usize::try_from(size).expect("attribute size");
+            attributes.push((name, at..at + size));
+            at += size;
+        }
+        at += 1;
+        headers.push(attributes);
+        // A multi-part file's headers end with an empty one.
+        if !multipart || bytes[at] == 0 {
+            break;
+        }
     }
-    (attributes, at + 1)
+    (headers, at + usize::from(multipart))
 }
 
-/// A copy of the partial `from` at `to` whose data window says `width` × `height` (and whose
-/// chunk count agrees, as a reader checks).
+/// The byte range of attribute `name`'s value in a header of [`exr_headers`].
+fn attribute(header: &[(String, Range<usize>)], name: &str) -> Range<usize> {
+    let (_, range) = header
+        .iter()
+        .find(|(n, _)| n == name)
+        .unwrap_or_else(|| panic!("no {name}"));
+    range.clone()
+}
+
+/// Per part of a multi-part file, where each of its chunks starts (the offset tables).
+fn chunk_offsets(bytes: &[u8]) -> Vec<Vec<usize>> {
+    let (headers, mut at) = exr_headers(bytes);
+    headers
+        .iter()
+        .map(|h| {
+            let count = attribute(h, "chunkCount");
+            let count = i32::from_le_bytes(bytes[count].try_into().expect("4 bytes"));
+            (0..count)
+                .map(|_| {
+                    let o = u64::from_le_bytes(bytes[at..at + 8].try_into().expect("8 bytes"));
+                    at += 8;
+                    usize::try_from(o).expect("offset")
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// A copy of the partial `from` at `to` whose layers' data windows say `width` × `height` (and
+/// whose chunk counts agree, as a reader checks).
 fn with_data_window(from: &Path, to: &Path, width: i32, height: i32) {
     let mut bytes = std::fs::read(from).expect("read");
-    let (attributes, _) = exr_header(&bytes);
-    let value = |name: &str| {
-        let (_, range) = attributes
-            .iter()
-            .find(|(n, _)| n == name)
-            .unwrap_or_else(|| panic!("no {name}"));
-        range.clone()
-    };
+    let (headers, _) = exr_headers(&bytes);
     let int = |bytes: &[u8], at: usize| {
         i32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"))
     };
-    // box2i: x min, y min, x max, y max.
-    let window = value("dataWindow");
-    bytes[window.start + 8..window.start + 12].copy_from_slice(&(width - 1).to_le_bytes());
-    bytes[window.start + 12..window.start + 16].copy_from_slice(&(height - 1).to_le_bytes());
-    // tiledesc: tile width, tile height, level mode; one chunk per tile.
-    let tiles = value("tiles");
-    let (tile_w, tile_h) = (int(&bytes, tiles.start), int(&bytes, tiles.start + 4));
-    let chunks = ((width + tile_w - 1) / tile_w) * ((height + tile_h - 1) / tile_h);
-    let count = value("chunkCount");
-    bytes[count].copy_from_slice(&chunks.to_le_bytes());
+    for header in &headers {
+        // box2i: x min, y min, x max, y max.
+        let window = attribute(header, "dataWindow");
+        bytes[window.start + 8..window.start + 12].copy_from_slice(&(width - 1).to_le_bytes());
+        bytes[window.start + 12..window.start + 16].copy_from_slice(&(height - 1).to_le_bytes());
+        // tiledesc: tile width, tile height, level mode; one chunk per tile.
+        let tiles = attribute(header, "tiles");
+        let (tile_w, tile_h) = (int(&bytes, tiles.start), int(&bytes, tiles.start + 4));
+        let chunks = ((width + tile_w - 1) / tile_w) * ((height + tile_h - 1) / tile_h);
+        let count = attribute(header, "chunkCount");
+        bytes[count].copy_from_slice(&chunks.to_le_bytes());
+    }
     std::fs::write(to, bytes).expect("write");
 }
 
@@ -528,7 +576,7 @@ fn a_partial_is_checked_before_anything_is_allocated_for_it() {
     let (meta, sum) = read_partial(&good).expect("read");
     let crafted = |name: &str, meta: PartialMeta| {
         let path = dir.join(name);
-        write_output(&path, &meta, &sum).expect("write");
+        write_sums(&path, &meta, &sum);
         path
     };
     let refused = |path: &Path, reason: &str| {
@@ -608,15 +656,19 @@ fn a_partial_is_checked_before_anything_is_allocated_for_it() {
     };
     let tiles = render_part(&dir, "tiles.exr", 0..1, two_tiles, 2);
     let mut bytes = std::fs::read(&tiles).expect("read");
-    let (_, table) = exr_header(&bytes);
-    let second = u64::from_le_bytes(bytes[table + 8..table + 16].try_into().expect("8 bytes"));
-    let second = usize::try_from(second).expect("offset");
+    // A chunk of a multi-part file starts with its part's index, then its tile's x and y.
+    let second = chunk_offsets(&bytes)[0][1];
     assert_eq!(
         bytes[second..second + 4],
+        0i32.to_le_bytes(),
+        "the colour's"
+    );
+    assert_eq!(
+        bytes[second + 4..second + 8],
         1i32.to_le_bytes(),
         "tile 1 is at x 1"
     );
-    bytes[second..second + 4].copy_from_slice(&0i32.to_le_bytes());
+    bytes[second + 4..second + 8].copy_from_slice(&0i32.to_le_bytes());
     let twice = dir.join("twice.exr");
     std::fs::write(&twice, bytes).expect("write");
     let plan = plan_merge(std::slice::from_ref(&twice), None).expect("the header is fine");
@@ -718,6 +770,10 @@ fn a_slurm_task_renders_with_every_override() {
     };
     let library = render_part(&dir, "library.exr", 4..8, overrides, 2);
     let library = read_partial(&library).expect("library's partial");
+    assert!(
+        task.0.features,
+        "a farm task's partial carries the feature buffers"
+    );
     assert_eq!(task.0, library.0, "metadata");
     assert!(task.1 == library.1, "sums differ");
 }
@@ -787,4 +843,327 @@ fn the_report_prints_commands_a_shell_runs_as_written() {
         format!("--array=0,1\n{script_text}\n")
     );
     assert!(!dir.join("pwned").exists(), "{all} ran a command");
+}
+
+/// Issue 21, item 1: the full render of every sample with the feature buffers collected: its
+/// colour sums and its albedo and normal sums.
+fn single_with_features() -> (Vec<Pixel>, Features) {
+    let mut r = Renderer::new(Some(2), PassPlan::Single).expect("pool");
+    r.set_features(true);
+    r.set_overrides(Overrides {
+        spp: Some(SPP),
+        ..small()
+    });
+    r.load(&cornell()).unwrap_or_else(|e| panic!("{e}"));
+    r.render_to_completion();
+    let film = r.film();
+    let features = film.features.clone().expect("features were collected");
+    // Not a vacuous comparison: the Cornell box has albedo and normals in most pixels (all but
+    // the open front's), and they differ between pixels.
+    for (name, buffer) in [("albedo", &features.albedo), ("normal", &features.normal)] {
+        let set = buffer.iter().filter(|p| **p != Pixel::ZERO).count();
+        assert!(set * 2 > buffer.len(), "{name}: {set} pixels");
+        assert!(buffer.iter().any(|p| *p != buffer[0]), "{name}");
+    }
+    (film.sum.clone(), features)
+}
+
+/// Issue 21, item 1: every partial carries the albedo and normal sums; merged, in any split and
+/// order, they equal those of one render of every sample, bit for bit, and so does a merge of
+/// merges (a merged `.exr` carries them too).
+#[test]
+fn partials_carry_the_feature_buffers_which_merge_bit_for_bit() {
+    let dir = common::temp_dir("farm-features");
+    let (colour, features) = single_with_features();
+    for (k, cuts) in [&[0, 16][..], &[0, 1, 16], &[0, 5, 9, 16]]
+        .iter()
+        .enumerate()
+    {
+        let mut parts: Vec<PathBuf> = cuts
+            .windows(2)
+            .enumerate()
+            .map(|(i, w)| {
+                render_part(
+                    &dir,
+                    &format!("f{k}-{i}.exr"),
+                    w[0]..w[1],
+                    small(),
+                    1 + i % 2,
+                )
+            })
+            .collect();
+        assert!(read_meta(&parts[0]).expect("meta").features);
+        for _ in 0..2 {
+            let merged = merge_sums(&parts);
+            assert!(merged.colour == colour, "split {cuts:?}: colour");
+            assert!(
+                merged.features.as_ref() == Some(&features),
+                "split {cuts:?}: feature buffers"
+            );
+            parts.reverse();
+        }
+    }
+    let thirds = [
+        render_part(&dir, "a.exr", 0..6, small(), 2),
+        render_part(&dir, "b.exr", 6..11, small(), 2),
+        render_part(&dir, "c.exr", 11..16, small(), 1),
+    ];
+    let ab = dir.join("ab.exr");
+    let plan = plan_merge(&thirds[..2], None).expect("plan");
+    assert!(plan.meta.features);
+    write_sums(&ab, &plan.meta, &merge(&thirds[..2], &plan).expect("merge"));
+    assert!(read_meta(&ab).expect("meta").features);
+    let merged = merge_sums(&[thirds[2].clone(), ab]);
+    assert!(merged.colour == colour && merged.features.as_ref() == Some(&features));
+    // The command line's merge writes them too.
+    let out = dir.join("merged.exr");
+    let ran = Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .arg("merge")
+        .args(&thirds)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .expect("run rondo");
+    assert!(
+        ran.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ran.stderr)
+    );
+    let (meta, sums) = read_partial(&out).expect("read");
+    assert!(meta.features && sums.features.as_ref() == Some(&features));
+}
+
+/// Issue 21, item 1: a resume continues a partial's feature buffers, bit for bit.
+#[test]
+fn a_resume_continues_the_feature_buffers() {
+    let dir = common::temp_dir("farm-features-resume");
+    let (colour, features) = single_with_features();
+    let first = render_part(&dir, "first.exr", 0..5, small(), 2);
+    let more = dir.join("more.exr");
+    let mut r = Renderer::new(Some(1), PassPlan::Single).expect("pool");
+    let o = Overrides {
+        spp: Some(SPP),
+        ..small()
+    };
+    let part = prepare(&mut r, o, &cornell(), &more, &Samples::Resume(first)).expect("prepare");
+    r.render_to_completion();
+    part.finish(&mut r).expect("finish");
+    let (meta, sums) = read_partial(&more).expect("read");
+    assert_eq!(meta.ranges, vec![0..SPP]);
+    assert!(sums.colour == colour, "colour");
+    assert!(sums.features.as_ref() == Some(&features), "feature buffers");
+}
+
+/// A `rondo-partial-2` file as rondo wrote it before the feature buffers, made here with the
+/// exr crate from the format's description: one unnamed layer of the colour's means and sum
+/// words (96-bit two's complement, least significant word first), with the metadata.
+fn write_v2(path: &Path, meta: &PartialMeta, sum: &[Pixel]) {
+    use exr::prelude::*;
+    let (w, h) = (meta.width as usize, meta.height as usize);
+    let scale = 2f64.powi(-meta.shift) / meta.count() as f64;
+    let words = |v: i128| [v as u32, (v >> 32) as u32, (v >> 64) as u32];
+    let channels = SpecificChannels::build()
+        .with_channel("R")
+        .with_channel("G")
+        .with_channel("B")
+        .with_channel("sum.R.0")
+        .with_channel("sum.R.1")
+        .with_channel("sum.R.2")
+        .with_channel("sum.G.0")
+        .with_channel("sum.G.1")
+        .with_channel("sum.G.2")
+        .with_channel("sum.B.0")
+        .with_channel("sum.B.1")
+        .with_channel("sum.B.2")
+        .with_pixel_fn(|p: Vec2<usize>| {
+            let s = sum[p.y() * w + p.x()].0;
+            let m = s.map(|c| (c as f64 * scale) as f32);
+            let [r, g, b] = s.map(words);
+            (
+                m[0], m[1], m[2], r[0], r[1], r[2], g[0], g[1], g[2], b[0], b[1], b[2],
+            )
+        });
+    let mut attributes = LayerAttributes::default();
+    let ranges: Vec<String> = meta
+        .ranges
+        .iter()
+        .map(|r| format!("{}..{}", r.start, r.end))
+        .collect();
+    for (key, value) in [
+        ("rondo.format", "rondo-partial-2".to_string()),
+        ("rondo.samples", ranges.join(",")),
+        ("rondo.seed", meta.seed.to_string()),
+        ("rondo.hash", format!("{:016x}", meta.hash)),
+        ("rondo.fraction_bits", meta.shift.to_string()),
+        ("rondo.settings", meta.settings.clone()),
+        ("rondo.scene", meta.scene.clone()),
+    ] {
+        attributes.other.insert(
+            Text::from(key),
+            exr::meta::attribute::AttributeValue::Text(Text::from(value.as_str())),
+        );
+    }
+    let layer = Layer::new((w, h), attributes, Encoding::FAST_LOSSLESS, channels);
+    Image::from_layer(layer)
+        .write()
+        .to_file(path)
+        .expect("write v2");
+}
+
+/// Issue 21, item 1: partials of the format before the feature buffers (`rondo-partial-2`)
+/// still read and merge (into a partial of their format); mixed with partials that carry the
+/// buffers they are refused, naming both files, and so is a resume of one.
+#[test]
+fn partials_without_feature_buffers_still_merge_but_not_with_those_that_have_them() {
+    let dir = common::temp_dir("farm-v2");
+    let (sum, exr, _) = single(&dir, 2);
+    let [a, b] = [("a", 0..7), ("b", 7..SPP)].map(|(name, range)| {
+        let v3 = render_part(&dir, &format!("{name}3.exr"), range, small(), 2);
+        let (meta, sums) = read_partial(&v3).expect("read");
+        let v2 = dir.join(format!("{name}2.exr"));
+        write_v2(&v2, &meta, &sums.colour);
+        (v2, v3)
+    });
+    let meta = read_meta(&a.0).expect("a v2 partial reads");
+    assert!(!meta.features);
+    let merged = merge_sums(&[a.0.clone(), b.0.clone()]);
+    assert!(merged.colour == sum && merged.features.is_none());
+    // The command line: the merged image is a partial of their format, with the same pixels.
+    let out = dir.join("merged.exr");
+    let ran = Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .arg("merge")
+        .args([&a.0, &b.0])
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .expect("run rondo");
+    assert!(
+        ran.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ran.stderr)
+    );
+    let bytes = std::fs::read(&out).expect("read");
+    let (headers, _) = exr_headers(&bytes);
+    assert_eq!(headers.len(), 1, "one layer");
+    assert!(bytes[attribute(&headers[0], "rondo.format")].starts_with(b"rondo-partial-2"));
+    let (meta, sums) = read_partial(&out).expect("read");
+    assert!(!meta.features && sums.colour == sum);
+    assert!(decode_exr(&out) == exr);
+    // A mix of formats: refused with the reason, naming both files.
+    let e = plan_merge(&[a.1.clone(), b.0.clone()], None)
+        .expect_err("a mix of formats")
+        .0;
+    assert!(
+        e.contains("b2.exr") && e.contains("a3.exr") && e.contains("rondo-partial-2"),
+        "{e}"
+    );
+    // A resume of one: refused with the reason before rendering.
+    let mut r = Renderer::new(Some(2), PassPlan::Single).expect("pool");
+    let o = Overrides {
+        spp: Some(SPP),
+        ..small()
+    };
+    let e = prepare(
+        &mut r,
+        o,
+        &cornell(),
+        &dir.join("more.exr"),
+        &Samples::Resume(a.0),
+    )
+    .expect_err("a v2 resume")
+    .to_string();
+    assert!(e.contains("a2.exr") && e.contains("rondo-partial-2"), "{e}");
+}
+
+/// Issue 21, item 1: a partial whose albedo layer is truncated or malformed is refused, naming
+/// the file (and the layer, where the reader can tell), by a merge and by a resume.
+#[test]
+fn a_partial_with_a_broken_albedo_layer_is_refused_naming_the_file() {
+    let dir = common::temp_dir("farm-broken-albedo");
+    let two_tiles = Overrides {
+        width: Some(128),
+        height: Some(8),
+        ..Default::default()
+    };
+    let good = render_part(&dir, "good.exr", 0..1, two_tiles, 2);
+    let bytes = std::fs::read(&good).expect("read");
+    let offsets = chunk_offsets(&bytes);
+    assert_eq!(offsets.iter().map(Vec::len).collect::<Vec<_>>(), [2, 2, 2]);
+    let (headers, _) = exr_headers(&bytes);
+    let variant = |name: &str, edit: &dyn Fn(&mut Vec<u8>)| {
+        let mut b = bytes.clone();
+        edit(&mut b);
+        let path = dir.join(name);
+        std::fs::write(&path, b).expect("write");
+        path
+    };
+    let refused = |path: &Path, reason: &str| {
+        // Refused from the header by the plan, or while the sums are read by the merge.
+        let paths = [path.to_path_buf()];
+        let e = match plan_merge(&paths, None) {
+            Err(e) => e.0,
+            Ok(plan) => merge(&paths, &plan).expect_err("must refuse").0,
+        };
+        assert!(
+            e.contains(path.to_str().expect("UTF-8")) && e.contains(reason),
+            "{e}"
+        );
+        let mut r = Renderer::new(Some(1), PassPlan::Single).expect("pool");
+        let o = Overrides {
+            spp: Some(2),
+            ..two_tiles
+        };
+        let e = prepare(
+            &mut r,
+            o,
+            &cornell(),
+            &dir.join("more.exr"),
+            &Samples::Resume(path.to_path_buf()),
+        )
+        .expect_err("a broken resume base")
+        .to_string();
+        assert!(
+            e.contains(path.to_str().expect("UTF-8")) && e.contains(reason),
+            "{e}"
+        );
+    };
+    // Cut inside the albedo's first tile.
+    let cut = offsets[1].iter().min().expect("a tile") + 30;
+    let truncated = variant("truncated.exr", &|b| b.truncate(cut));
+    read_meta(&truncated).expect("the header alone is fine");
+    refused(&truncated, "cannot decode");
+    // The albedo's second tile says it is the first: one tile twice, one missing.
+    let second = offsets[1][1];
+    assert_eq!(
+        bytes[second..second + 4],
+        1i32.to_le_bytes(),
+        "the albedo's"
+    );
+    let twice = variant("twice.exr", &|b| {
+        b[second + 4..second + 8].copy_from_slice(&0i32.to_le_bytes())
+    });
+    refused(&twice, "of layer albedo appears twice");
+    // A sum word renamed in the albedo's channel list.
+    let channels = attribute(&headers[1], "channels");
+    let word = channels.start
+        + bytes[channels.clone()]
+            .windows(7)
+            .position(|w| w == b"sum.G.2")
+            .expect("sum.G.2");
+    let renamed = variant("renamed.exr", &|b| b[word + 6] = b'7');
+    refused(
+        &renamed,
+        "layer albedo: a partial has no channel \"sum.G.7\"",
+    );
+    // The albedo in another fixed point than the colour's.
+    let bits = attribute(&headers[1], "rondo.fraction_bits");
+    let shifted = variant("bits.exr", &|b| {
+        let last = bits.end - 2;
+        b[last] = if b[last] == b'0' { b'1' } else { b'0' };
+    });
+    refused(&shifted, "layer albedo: rondo.fraction_bits");
+    // The second layer is not the albedo.
+    let name = attribute(&headers[1], "name");
+    let other = variant("name.exr", &|b| b[name.start] = b'x');
+    refused(&other, "expected the layer \"albedo\"");
 }

@@ -20,15 +20,20 @@ pub fn run(inputs: &[PathBuf], output: &Path, spp: Option<u32>, allow_gaps: bool
         eprintln!("warning: missing samples {missing}; the image averages the samples present");
     }
     let start = std::time::Instant::now();
-    let sum = rondo::partial::merge(inputs, &plan)?;
-    rondo::partial::write_output(output, &plan.meta, &sum)
+    let sums = rondo::partial::merge(inputs, &plan)?;
+    rondo::partial::write_output(output, &plan.meta, &sums.colour, sums.features.as_ref())
         .with_context(|| format!("{}: cannot write", output.display()))?;
     eprintln!(
-        "merged {} partials ({}x{}, samples {}) into {} in {:.2} s",
+        "merged {} partials ({}x{}, samples {}, {}) into {} in {:.2} s",
         inputs.len(),
         plan.meta.width,
         plan.meta.height,
         rondo::partial::format_ranges(&plan.meta.ranges),
+        if plan.meta.features {
+            "with the albedo and normal buffers"
+        } else {
+            "without feature buffers (rondo-partial-2)"
+        },
         output.display(),
         start.elapsed().as_secs_f64()
     );
