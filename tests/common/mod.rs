@@ -188,3 +188,19 @@ pub fn uv_sphere_obj(nu: usize, nv: usize, smooth: bool) -> String {
     }
     obj
 }
+
+/// The shared denoiser, or `None` when the Open Image Denoise library is not available (the
+/// caller skips its test, saying why), unless `RONDO_REQUIRE_OIDN=1` (as in CI, after
+/// `scripts/fetch-oidn.sh`): then a missing library fails the test.
+pub fn denoiser() -> Option<&'static rondo::denoise::Denoiser> {
+    match rondo::denoise::Denoiser::shared() {
+        Ok(d) => Some(d),
+        Err(e) if std::env::var("RONDO_REQUIRE_OIDN").is_ok_and(|v| v == "1") => {
+            panic!("RONDO_REQUIRE_OIDN=1 but {e}")
+        }
+        Err(e) => {
+            eprintln!("skipped: {e}");
+            None
+        }
+    }
+}
