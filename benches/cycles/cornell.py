@@ -33,7 +33,10 @@ The scene is benches/common/cornell_geometry.py, the very data the Mitsuba scrip
 Timing: `seconds` is the wall time of the render call (bpy.ops.render.render: Cycles' scene
 sync and BVH build, the path tracing, and the denoiser when on); building the scene in Blender
 and writing the EXR are left out. Each configuration renders `--repeats` times in a row with
-the same seed (identical images); `seconds` is the fastest, `first_seconds` the first.
+the same seed (identical images); `seconds` is the fastest, `cpu_seconds` its user + system
+CPU time (all of Cycles' threads; less inflated than the wall time when other processes share
+the cores), `first_seconds` the first wall time. For rondo, `seconds` is the render time it
+logs (scene loading and the EXR write left out), `cpu_seconds` its whole process's.
 `process_seconds` (with --process-wall) is the wall time of a fresh Python process that
 imports bpy, builds the scene, renders once and writes the EXR: what a user waits for from
 the command line.
@@ -45,6 +48,7 @@ import json
 import math
 import os
 import re
+import resource
 import subprocess
 import sys
 import tempfile
@@ -189,18 +193,27 @@ def build_scene(bpy, mathutils, size, max_bounces, threads):
     return scene
 
 
+def cpu_seconds(who):
+    """User + system CPU time of this process (Cycles' threads) or of its waited-for children."""
+    r = resource.getrusage(who)
+    return r.ru_utime + r.ru_stime
+
+
 def render(bpy, scene, spp, seed, denoise, out):
-    """Renders once; returns the wall seconds of the render call. Writes the EXR to `out`."""
+    """Renders once; returns the wall and CPU seconds of the render call. Writes the EXR to
+    `out`."""
     c = scene.cycles
     c.samples = spp
     c.seed = seed
     c.use_denoising = denoise
     scene.view_layers[0].cycles.use_denoising = denoise
+    cpu = cpu_seconds(resource.RUSAGE_SELF)
     t = time.perf_counter()
     bpy.ops.render.render(write_still=False)
     dt = time.perf_counter() - t
+    cpu = cpu_seconds(resource.RUSAGE_SELF) - cpu
     bpy.data.images["Render Result"].save_render(out, scene=scene)
-    return dt
+    return dt, cpu
 
 
 def read_exr(bpy, path):
@@ -227,20 +240,22 @@ def red_on_left(img):
 
 
 def rondo_render(rondo, scene_path, spp, seed, out, size, max_depth):
-    """rondo, method mis and its default sampler; returns its own render time (from its log)
-    and the process wall time."""
+    """rondo, method mis and its default sampler; returns its own render time (from its log),
+    the process wall time and the process CPU time."""
     cmd = [rondo, "render", scene_path, "-o", out, "--spp", str(spp), "--seed", str(seed),
            "--width", str(size), "--height", str(size), "--max-depth", str(max_depth),
            "--method", "mis"]
+    cpu = cpu_seconds(resource.RUSAGE_CHILDREN)
     t = time.perf_counter()
     p = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.perf_counter() - t
+    cpu = cpu_seconds(resource.RUSAGE_CHILDREN) - cpu
     if p.returncode != 0:
         sys.exit("rondo failed: %s\n%s" % (" ".join(cmd), p.stderr))
     m = re.search(r"spp, ([0-9.]+) s,", p.stderr)
     if not m:
         sys.exit("cannot read rondo's time from: %s" % p.stderr)
-    return float(m.group(1)), wall
+    return float(m.group(1)), wall, cpu
 
 
 def child_main(args, bpy, mathutils):
@@ -248,14 +263,16 @@ def child_main(args, bpy, mathutils):
     time as JSON on the last line."""
     spp, mode = args.child.split(":")
     scene = build_scene(bpy, mathutils, args.size, args.max_depth - 2, args.threads)
-    dt = render(bpy, scene, int(spp), args.seed, mode == "denoised", args.child_out)
-    print(json.dumps({"render_seconds": dt}))
+    dt, cpu = render(bpy, scene, int(spp), args.seed, mode == "denoised", args.child_out)
+    print(json.dumps({"render_seconds": dt, "render_cpu_seconds": cpu}))
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--reference", default="bench/mitsuba/reference.exr",
                     help="converged reference .exr (size x size)")
+    ap.add_argument("--also-reference", action="append", metavar="PATH",
+                    help="a further reference (repeatable): its lamp-out RMSE in extra columns")
     ap.add_argument("--spp-list", default="4,16,64")
     ap.add_argument("--modes", default="raw,denoised", help="raw, denoised or both")
     ap.add_argument("--size", type=int, default=512)
@@ -264,8 +281,11 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--seed", type=int, default=21,
                     help="Cycles' seed (the Mitsuba reference used 10000 and up)")
+    ap.add_argument("--seeds", type=int, default=1,
+                    help="render every configuration with this many seeds (--seed, --seed + 1, "
+                         "...): the error of a denoised 4-spp image varies by seed")
     ap.add_argument("--repeats", type=int, default=2,
-                    help="renders per configuration in this process (same seed)")
+                    help="renders of each configuration's first seed in this process (timing)")
     ap.add_argument("--process-wall", action="store_true",
                     help="also time each configuration as a fresh process (import bpy, build, "
                          "render, write)")
@@ -274,7 +294,7 @@ def main():
     ap.add_argument("--scene", default="scenes/cornell.ron")
     ap.add_argument("--out", default="bench/cycles")
     ap.add_argument("--keep-images", action="store_true",
-                    help="keep every image as OUT/images/<renderer>_<spp>_<mode>.exr")
+                    help="keep every image as OUT/images/<renderer>_<spp>_<mode>_s<seed>.exr")
     ap.add_argument("--bounce-check", action="store_true",
                     help="only print image means at max_bounces depth-3 .. depth-1 against the "
                          "reference's, at the largest spp of --spp-list, then stop")
@@ -333,59 +353,91 @@ def main():
     if np.max(np.abs(lamp - LAMP_RADIANCE)) > 1e-3 * LAMP_RADIANCE:
         sys.exit("the lamp's pixels differ from its radiance: emission units differ")
 
-    rows = []
+    extra = [(path, read_exr(bpy, path)) for path in args.also_reference or []]
+    for path, r in extra:
+        if r.shape != ref.shape:
+            sys.exit("%s: %dx%d, the reference is %dx%d" % (
+                path, r.shape[1], r.shape[0], ref.shape[1], ref.shape[0]))
     git = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
     rondo_rev = git.stdout.strip() if git.returncode == 0 else "?"
+    seeds = [args.seed + i for i in range(max(1, args.seeds))]
+    # One row per render: renderer, spp, mode, seed, wall s, CPU s, process wall s (or None),
+    # RMSE, lamp-out RMSE, then the lamp-out RMSE against each --also-reference.
+    rows = []
 
-    def record(renderer, spp, mode, seconds, first, process, path):
-        m = metrics(read_exr(bpy, path), ref)
-        rows.append((renderer, spp, mode, seconds, first, process, m[0], m[3]))
-        print("%-8s %5d spp %-9s %8.3f s (first %8.3f s, process %s)  rmse %.4e  lamp-out %.4e"
-              % (renderer, spp, mode, seconds, first,
-                 "%.3f s" % process if process is not None else "-", m[0], m[3]), flush=True)
+    def record(renderer, spp, mode, seed, seconds, cpu, process, path):
+        img = read_exr(bpy, path)
+        m = metrics(img, ref)
+        others = [metrics(img, r)[3] for _, r in extra]
+        rows.append((renderer, spp, mode, seed, seconds, cpu, process, m[0], m[3], others))
+        print("%-7s %4d spp %-9s seed %4d %8.3f s cpu %8.3f s process %s  rmse %.4e  "
+              "lamp-out %.4e%s" % (renderer, spp, mode, seed, seconds, cpu,
+                 "%7.3f s" % process if process is not None else "      -",
+                 m[0], m[3], "".join("  (%.4e)" % o for o in others)), flush=True)
         if args.keep_images:
-            os.replace(path, os.path.join(images, "%s_%d_%s.exr" % (renderer, spp, mode)))
+            os.replace(path, os.path.join(images, "%s_%d_%s_s%d.exr" % (renderer, spp, mode, seed)))
 
     for spp in spps:
         for mode in modes:
-            out = os.path.join(tmp, "cycles.exr")
-            times = [render(bpy, scene, spp, args.seed, mode == "denoised", out)
-                     for _ in range(max(1, args.repeats))]
-            process = None
-            if args.process_wall:
-                child_out = os.path.join(tmp, "child.exr")
-                cmd = [sys.executable, os.path.abspath(__file__), "--child", "%d:%s" % (spp, mode),
-                       "--child-out", child_out, "--size", str(args.size),
-                       "--max-depth", str(args.max_depth), "--threads", str(args.threads),
-                       "--seed", str(args.seed)]
-                t = time.perf_counter()
-                p = subprocess.run(cmd, capture_output=True, text=True)
-                process = time.perf_counter() - t
-                if p.returncode != 0:
-                    sys.exit("child render failed: %s\n%s" % (" ".join(cmd), p.stderr[-2000:]))
-            record("cycles", spp, mode, min(times), times[0], process, out)
+            for k, seed in enumerate(seeds):
+                out = os.path.join(tmp, "cycles.exr")
+                # (wall, cpu) of each repeat of the first seed (one render for the others); the
+                # fastest wall is recorded, with its CPU time.
+                times = [render(bpy, scene, spp, seed, mode == "denoised", out)
+                         for _ in range(max(1, args.repeats) if k == 0 else 1)]
+                process = None
+                if args.process_wall and k == 0:
+                    child_out = os.path.join(tmp, "child.exr")
+                    cmd = [sys.executable, os.path.abspath(__file__), "--child",
+                           "%d:%s" % (spp, mode), "--child-out", child_out,
+                           "--size", str(args.size), "--max-depth", str(args.max_depth),
+                           "--threads", str(args.threads), "--seed", str(seed)]
+                    t = time.perf_counter()
+                    p = subprocess.run(cmd, capture_output=True, text=True)
+                    process = time.perf_counter() - t
+                    if p.returncode != 0:
+                        sys.exit("child render failed: %s\n%s" % (" ".join(cmd), p.stderr[-2000:]))
+                best = min(times)
+                record("cycles", spp, mode, seed, best[0], best[1], process, out)
         if args.rondo:
-            out = os.path.join(tmp, "rondo.exr")
-            t, wall = rondo_render(args.rondo, args.scene, spp, 300 + spp, out, args.size,
-                                   args.max_depth)
-            record("rondo", spp, "raw", t, t, wall, out)
+            for seed in seeds:
+                out = os.path.join(tmp, "rondo.exr")
+                t, wall, cpu = rondo_render(args.rondo, args.scene, spp, seed, out, args.size,
+                                            args.max_depth)
+                record("rondo", spp, "raw", seed, t, cpu, wall, out)
 
     path = os.path.join(args.out, "cycles.csv")
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["renderer", "spp", "mode", "seconds", "first_seconds", "process_seconds",
-                    "rmse", "lamp_out_rmse"])
+        w.writerow(["renderer", "spp", "mode", "seed", "seconds", "cpu_seconds",
+                    "process_seconds", "rmse", "lamp_out_rmse"]
+                   + ["lamp_out_rmse_vs_" + os.path.basename(p) for p, _ in extra])
         for r in rows:
-            w.writerow(list(r[:3]) + ["%.4f" % r[3], "%.4f" % r[4],
-                                      "" if r[5] is None else "%.4f" % r[5],
-                                      "%.6g" % r[6], "%.6g" % r[7]])
+            w.writerow(list(r[:4]) + ["%.4f" % r[4], "%.4f" % r[5],
+                                      "" if r[6] is None else "%.4f" % r[6],
+                                      "%.6g" % r[7], "%.6g" % r[8]] + ["%.6g" % o for o in r[9]])
     print()
-    print("Blender %s, rondo %s, reference %s" % (bpy.app.version_string, rondo_rev, args.reference))
-    print("| renderer | spp | mode | wall s (render call) | process s | lamp-out RMSE | RMSE |")
-    print("|---|---:|---|---:|---:|---:|---:|")
+    print("Blender %s, rondo %s (%s), reference %s%s; %d seed(s) from %d: errors are means "
+          "(min-max), times the fastest render" % (
+              bpy.app.version_string, rondo_rev, args.rondo or "not run", args.reference,
+              "".join(", also " + p for p, _ in extra), len(seeds), args.seed))
+    print("| renderer | spp | mode | wall s (render call) | CPU s | process wall s "
+          "| lamp-out RMSE | RMSE |" + "".join(" lamp-out vs %s |" % os.path.basename(p)
+                                               for p, _ in extra))
+    print("|---|---:|---|---:|---:|---:|---:|---:|" + "---:|" * len(extra))
+    groups = {}
     for r in rows:
-        print("| %s | %d | %s | %.2f | %s | %.4f | %.4f |" % (
-            r[0], r[1], r[2], r[3], "%.2f" % r[5] if r[5] is not None else "–", r[7], r[6]))
+        groups.setdefault(r[:3], []).append(r)
+    for (renderer, spp, mode), g in groups.items():
+        fastest = min(g, key=lambda r: r[4])
+        process = [r[6] for r in g if r[6] is not None]
+        spread = lambda xs: ("%.4f" % np.mean(xs)) + (
+            " (%.4f–%.4f)" % (min(xs), max(xs)) if len(xs) > 1 else "")
+        print("| %s | %d | %s | %.2f | %.2f | %s | %s | %s |%s" % (
+            renderer, spp, mode, fastest[4], fastest[5],
+            "%.2f" % min(process) if process else "–", spread([r[8] for r in g]),
+            spread([r[7] for r in g]),
+            "".join(" %s |" % spread([r[9][i] for r in g]) for i in range(len(extra)))))
     print("wrote", path)
 
 
