@@ -132,6 +132,7 @@ impl RenderArgs {
         options.first_pass = first_spp;
         options.layout = self.layout;
         options.overrides = self.overrides();
+        options.denoise = self.denoise();
         Ok(options)
     }
 }

@@ -6,7 +6,8 @@ use rondo::cli::check_output_file;
 use rondo::watch::{Watch, WatchOptions};
 
 /// `rondo watch`: runs until Ctrl-C, one line per reload on stderr; with `serve`, also serves
-/// the live viewer.
+/// the live viewer, which shows each pass denoised too. `--denoise` needs the denoiser: it is
+/// loaded before anything else, so that a missing library is an error, not a warning later.
 pub fn run(
     options: WatchOptions,
     serve: Option<Option<String>>,
@@ -14,6 +15,9 @@ pub fn run(
 ) -> Result<()> {
     if let Some(output) = &options.output {
         check_output_file(output)?;
+    }
+    if options.denoise == Some(true) {
+        rondo::denoise::Denoiser::shared()?;
     }
     let mut watch = Watch::new(options)?;
     // Viewer hook: start the server and feed it every reload, pass and report.
@@ -33,6 +37,9 @@ pub fn run(
             eprintln!("viewer: {}", viewer.url());
             watch.set_observer(feed.observer());
             watch.set_progress(feed.progress_bar());
+            // Without a flag or a scene setting, a missing denoiser is one warning (from the
+            // denoise thread) and the viewer shows the raw images.
+            watch.set_denoise_sink(feed.denoise_sink());
             Some(viewer)
         }
         None => None,

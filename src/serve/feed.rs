@@ -8,15 +8,19 @@
 //!  "changed":"materials","since_save_ms":41.0,"samples_per_s":2.1e6,"trigger":["scene.ron"]}
 //! {"kind":"progress","reload":3,"rows":128,"height":512}
 //! {"kind":"done","reload":3,"spp":64,"full_ms":812.0,"line":"reload 3: materials | …"}
+//! {"kind":"denoised","reload":3,"spp":16,"quality":"balanced","took_ms":210.4,"since_save_ms":380.2}
 //! {"kind":"error","message":"scene.ron:6:40: …","file":"scene.ron","line":6,"col":40,
 //!  "source_line":"        \"red\": Diffuse(albedo: …","reload":2}
 //! ```
 //!
 //! `reload` starts a render of a good save (and clears an error), `pass` says a new image is
 //! at `/image.f32` (and the other image routes), `progress` counts the rows of the pass in
-//! flight, `done` ends a render at full quality, and `error` is a save that did not load (the
-//! last good image stays; `reload` is the number of the render still shown). A new client
-//! first gets the latest `reload`, `pass`, `done` and `error` that still apply.
+//! flight, `done` ends a render at full quality, `denoised` says a denoised image of a pass of
+//! the render shown (`spp` samples, denoised at `quality` in `took_ms`) is at `/denoised.f32`,
+//! with that pass's albedo and normal at `/albedo.f32` and `/normal.f32` (see
+//! [`Feed::denoise_sink`]), and `error` is a save that did not load (the last good image stays;
+//! `reload` is the number of the render still shown). A new client first gets the latest
+//! `reload`, `pass`, `denoised`, `done` and `error` that still apply.
 //!
 //! An error's `message` is at most [`MAX_MESSAGE`] bytes and its `source_line` (the report's,
 //! from a scene or prefab file only) at most [`MAX_SOURCE_LINE`] characters, each ending in
@@ -29,13 +33,14 @@ use std::path::PathBuf;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock, PoisonError};
 use std::time::{Duration, Instant};
 
+use glam::Vec3;
 use image::ImageFormat;
 use indicatif::ProgressBar;
 use serde_json::{Value, json};
 
 use crate::ecs::resources::ChangeSummary;
 use crate::film::Film;
-use crate::watch::{Observer, Report};
+use crate::watch::{DenoiseSink, DenoisedFrame, Observer, Report};
 
 /// The first 8 bytes of `/image.f32`. Then four little-endian `u32`: width, height, reload
 /// number (low 32 bits) and samples per pixel; then `width × height` pixels of three
@@ -100,19 +105,10 @@ impl Frame {
     pub fn raw(&self) -> &[u8] {
         self.raw.get_or_init(|| {
             let f = &self.film;
-            let mut out = Vec::with_capacity(24 + f.sum.len() * 12);
-            out.extend_from_slice(RAW_MAGIC);
-            for v in [f.width, f.height, self.reload as u32, f.samples] {
-                out.extend_from_slice(&v.to_le_bytes());
-            }
             // As `Film::mean`, without its intermediate vector.
             let (count, fixed) = (f.count(), f.fixed());
-            for s in &f.sum {
-                for v in fixed.mean(s, count).to_array() {
-                    out.extend_from_slice(&v.to_le_bytes());
-                }
-            }
-            out
+            let means = f.sum.iter().map(|s| fixed.mean(s, count));
+            encode_raw(f.width, f.height, self.reload, f.samples, means)
         })
     }
 
@@ -137,6 +133,99 @@ impl Frame {
         encoded(&self.exr, |out| {
             self.film.to_linear().write_to(out, ImageFormat::OpenExr)
         })
+    }
+}
+
+/// The raw float encoding (see [`RAW_MAGIC`]) of `pixels`, `width × height` of them.
+fn encode_raw(
+    width: u32,
+    height: u32,
+    reload: u64,
+    samples: u32,
+    pixels: impl ExactSizeIterator<Item = Vec3>,
+) -> Vec<u8> {
+    let mut out = Vec::with_capacity(24 + pixels.len() * 12);
+    out.extend_from_slice(RAW_MAGIC);
+    // The reload's low 32 bits, as documented.
+    for v in [width, height, reload as u32, samples] {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    for p in pixels {
+        for v in p.to_array() {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// The images of a pass of the denoise thread (see [`Feed::denoise_sink`]), each already in the
+/// raw float encoding of [`RAW_MAGIC`]: the newest denoised pass is the only one kept.
+#[derive(Debug)]
+pub struct DenoisedImages {
+    reload: u64,
+    samples: u32,
+    denoised: Vec<u8>,
+    albedo: Option<Vec<u8>>,
+    normal: Option<Vec<u8>>,
+}
+
+/// The images of a denoised pass the server hands out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DenoisedLayer {
+    /// The denoised colour.
+    Denoised,
+    /// The pass's mean albedo (what guided the denoiser).
+    Albedo,
+    /// The pass's mean shading normal, components in [-1, 1].
+    Normal,
+}
+
+impl DenoisedImages {
+    /// The encodings of `frame`'s denoised colour, albedo and normal. `None` if the denoised
+    /// colour does not have one value per pixel (no such frame comes from the denoise thread);
+    /// an albedo or normal of the wrong size is left out.
+    fn of(frame: &DenoisedFrame) -> Option<Self> {
+        let images = &frame.images;
+        let (width, height) = (images.width, images.height);
+        let pixels = usize::try_from(u64::from(width) * u64::from(height)).ok()?;
+        let encode = |values: &[Vec3]| {
+            (values.len() == pixels).then(|| {
+                encode_raw(
+                    width,
+                    height,
+                    frame.reload,
+                    frame.samples,
+                    values.iter().copied(),
+                )
+            })
+        };
+        Some(Self {
+            reload: frame.reload,
+            samples: frame.samples,
+            denoised: encode(&frame.denoised)?,
+            albedo: images.albedo.as_deref().and_then(encode),
+            normal: images.normal.as_deref().and_then(encode),
+        })
+    }
+
+    /// The reload whose render made them.
+    pub fn reload(&self) -> u64 {
+        self.reload
+    }
+
+    /// Samples per pixel of the pass.
+    pub fn samples(&self) -> u32 {
+        self.samples
+    }
+
+    /// The raw float encoding of one image, if the pass has it (albedo and normal exist when the
+    /// film collected features).
+    pub fn raw(&self, layer: DenoisedLayer) -> Option<&[u8]> {
+        match layer {
+            DenoisedLayer::Denoised => Some(&self.denoised),
+            DenoisedLayer::Albedo => self.albedo.as_deref(),
+            DenoisedLayer::Normal => self.normal.as_deref(),
+        }
     }
 }
 
@@ -201,6 +290,7 @@ struct Render {
 struct Sticky {
     reload: Option<Arc<str>>,
     pass: Option<Arc<str>>,
+    denoised: Option<Arc<str>>,
     done: Option<Arc<str>>,
     error: Option<Arc<str>>,
 }
@@ -209,6 +299,8 @@ struct Sticky {
 struct State {
     current: Option<Arc<Frame>>,
     previous: Option<Arc<Frame>>,
+    /// The newest denoised pass of the reload shown.
+    denoised: Option<Arc<DenoisedImages>>,
     render: Option<Render>,
     sticky: Sticky,
     clients: Vec<Arc<Client>>,
@@ -262,6 +354,11 @@ impl Feed {
         self.state().previous.clone()
     }
 
+    /// The newest denoised pass of the reload shown, if one arrived (see [`Feed::denoise_sink`]).
+    pub fn denoised(&self) -> Option<Arc<DenoisedImages>> {
+        self.state().denoised.clone()
+    }
+
     /// A new event-stream client, already holding the events that describe the present; `None`
     /// if `max` clients are connected.
     pub fn subscribe(&self, max: usize) -> Option<Arc<Client>> {
@@ -274,7 +371,7 @@ impl Feed {
             ready: Condvar::new(),
         });
         let s = &state.sticky;
-        for e in [&s.reload, &s.pass, &s.done, &s.error]
+        for e in [&s.reload, &s.pass, &s.denoised, &s.done, &s.error]
             .into_iter()
             .flatten()
         {
@@ -340,6 +437,52 @@ impl Feed {
         Box::new(move |report, film| feed.observe(report, film))
     }
 
+    /// This feed as the watch loop's denoise sink ([`crate::watch::Watch::set_denoise_sink`]):
+    /// see [`Feed::take_denoised`].
+    pub fn denoise_sink(&self) -> DenoiseSink {
+        let feed = self.clone();
+        Arc::new(move |frame| feed.take_denoised(frame))
+    }
+
+    /// Takes a denoised pass from the denoise thread: keeps its denoised colour, albedo and
+    /// normal (encoded here, outside the lock) in place of the last ones and sends a `denoised`
+    /// event. A pass of an older reload than the image shown, or of an older reload or fewer
+    /// samples than the denoised pass kept, arrived late and is dropped.
+    pub fn take_denoised(&self, frame: &DenoisedFrame) {
+        if !Self::wanted(&self.state(), frame) {
+            return;
+        }
+        let Some(images) = DenoisedImages::of(frame) else {
+            return;
+        };
+        let mut state = self.state();
+        // Checked again: an image of a newer reload may have come meanwhile.
+        if !Self::wanted(&state, frame) {
+            return;
+        }
+        state.denoised = Some(Arc::new(images));
+        let event = json!({
+            "kind": "denoised",
+            "reload": frame.reload,
+            "spp": frame.samples,
+            "quality": frame.quality.name(),
+            "took_ms": ms(frame.took),
+            "since_save_ms": ms(frame.saved.elapsed()),
+        });
+        let text = Self::broadcast(&mut state, &event);
+        state.sticky.denoised = Some(text);
+    }
+
+    /// Whether `frame` is newer than what the feed shows and keeps.
+    fn wanted(state: &State, frame: &DenoisedFrame) -> bool {
+        let shown = state.current.as_ref().map_or(0, |c| c.reload);
+        let kept = state
+            .denoised
+            .as_ref()
+            .map_or((0, 0), |d| (d.reload, d.samples));
+        frame.reload >= shown && (frame.reload, frame.samples) >= kept
+    }
+
     /// Takes one report of the watch loop (with the film of a [`Report::Wrote`]): updates the
     /// images and sends the matching event. Returns at once: the film is copied (~1 ms at 512²),
     /// encodings are made on request.
@@ -391,6 +534,11 @@ impl Feed {
                     state.previous = state.current.take();
                 }
                 state.current = Some(Arc::new(Frame::new(*reload, film.clone())));
+                // The denoised images of an older reload are not of this image.
+                if state.denoised.as_ref().is_some_and(|d| d.reload < *reload) {
+                    state.denoised = None;
+                    state.sticky.denoised = None;
+                }
                 let render = match state.render.as_mut() {
                     Some(r) if r.reload == *reload => r,
                     _ => state.render.insert(Render {
@@ -460,10 +608,12 @@ impl Feed {
         let text = Self::broadcast(&mut state, &event);
         let sticky = &mut state.sticky;
         match event["kind"].as_str() {
-            // A good save starts afresh: the error and the old render's events no longer apply.
+            // A good save starts afresh: the error and the old render's events no longer apply
+            // (its denoised image does until the new render's first image replaces it).
             Some("reload") => {
                 *sticky = Sticky {
                     reload: Some(text),
+                    denoised: sticky.denoised.take(),
                     ..Sticky::default()
                 }
             }
@@ -627,6 +777,159 @@ mod tests {
         assert_eq!(before(&feed), Some(1));
         wrote(&feed, 7, true, &film);
         assert_eq!(before(&feed), Some(4));
+    }
+
+    /// A denoised pass of `reload` at `samples` spp, 2×1 pixels: denoised colour `samples`
+    /// (each channel), albedo `(0.25, 0.5, 0.75)`, normals `±z`.
+    fn denoised(reload: u64, samples: u32) -> DenoisedFrame {
+        let s = samples as f32;
+        DenoisedFrame {
+            reload,
+            samples,
+            images: crate::denoised::FilmImages {
+                width: 2,
+                height: 1,
+                colour: vec![Vec3::ZERO; 2],
+                albedo: Some(vec![Vec3::new(0.25, 0.5, 0.75); 2]),
+                normal: Some(vec![Vec3::Z, -Vec3::Z]),
+            },
+            denoised: vec![Vec3::splat(s); 2],
+            quality: crate::denoise::Quality::Balanced,
+            took: Duration::from_micros(1500),
+            saved: Instant::now(),
+        }
+    }
+
+    /// The header (width, height, reload, samples) and floats of a raw encoding.
+    fn decode(raw: &[u8]) -> ([u32; 4], Vec<f32>) {
+        assert_eq!(&raw[..8], RAW_MAGIC);
+        let u = |i: usize| u32::from_le_bytes(raw[8 + 4 * i..12 + 4 * i].try_into().unwrap());
+        let floats = raw[24..]
+            .chunks(4)
+            .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+            .collect();
+        ([u(0), u(1), u(2), u(3)], floats)
+    }
+
+    /// `(reload, spp)` of the denoised pass the feed keeps.
+    fn kept(feed: &Feed) -> Option<(u64, u32)> {
+        feed.denoised().map(|d| (d.reload(), d.samples()))
+    }
+
+    #[test]
+    fn the_newest_denoised_pass_of_the_reload_shown_is_kept() {
+        let feed = Feed::new();
+        let sink = feed.denoise_sink();
+        let film = Film::new(2, 1);
+        wrote(&feed, 2, true, &film);
+        assert_eq!(kept(&feed), None, "nothing before a denoised pass");
+        sink(&denoised(2, 4));
+        assert_eq!(kept(&feed), Some((2, 4)));
+        sink(&denoised(2, 2));
+        assert_eq!(kept(&feed), Some((2, 4)), "fewer samples arrived late");
+        sink(&denoised(1, 64));
+        assert_eq!(kept(&feed), Some((2, 4)), "an older reload arrived late");
+        sink(&denoised(2, 8));
+        assert_eq!(kept(&feed), Some((2, 8)));
+        // The next reload's first image: the denoised one is of another image now.
+        wrote(&feed, 3, false, &film);
+        assert_eq!(kept(&feed), None);
+        sink(&denoised(2, 16));
+        assert_eq!(
+            kept(&feed),
+            None,
+            "a pass of the reload before is not shown"
+        );
+        sink(&denoised(3, 1));
+        assert_eq!(kept(&feed), Some((3, 1)));
+    }
+
+    #[test]
+    fn denoised_images_are_raw_floats_of_the_same_pass() {
+        let feed = Feed::new();
+        wrote(&feed, 5, true, &Film::new(2, 1));
+        feed.denoise_sink()(&denoised(5, 3));
+        let images = feed.denoised().expect("kept");
+        let layer = |l| decode(images.raw(l).expect("present"));
+        assert_eq!(layer(DenoisedLayer::Denoised), ([2, 1, 5, 3], vec![3.0; 6]));
+        assert_eq!(
+            layer(DenoisedLayer::Albedo),
+            ([2, 1, 5, 3], [0.25, 0.5, 0.75].repeat(2))
+        );
+        assert_eq!(
+            layer(DenoisedLayer::Normal),
+            ([2, 1, 5, 3], vec![0.0, 0.0, 1.0, 0.0, 0.0, -1.0])
+        );
+
+        // A pass without features has only the denoised colour; one of the wrong size nothing.
+        let mut plain = denoised(5, 4);
+        plain.images.albedo = None;
+        plain.images.normal = Some(vec![Vec3::Z]);
+        feed.take_denoised(&plain);
+        let images = feed.denoised().expect("kept");
+        assert_eq!(images.samples(), 4);
+        assert!(images.raw(DenoisedLayer::Denoised).is_some());
+        assert_eq!(images.raw(DenoisedLayer::Albedo), None);
+        assert_eq!(
+            images.raw(DenoisedLayer::Normal),
+            None,
+            "1 normal for 2 pixels"
+        );
+        let mut short = denoised(5, 8);
+        short.denoised.pop();
+        feed.take_denoised(&short);
+        assert_eq!(
+            kept(&feed),
+            Some((5, 4)),
+            "a short denoised image is not kept"
+        );
+    }
+
+    #[test]
+    fn denoised_events_say_which_pass_and_are_replayed_while_they_apply() {
+        let feed = Feed::new();
+        let early = feed.subscribe(8).expect("room");
+        wrote(&feed, 0, true, &Film::new(2, 1));
+        feed.denoise_sink()(&denoised(0, 16));
+        let events: Vec<Value> = early
+            .next_batch(Duration::ZERO)
+            .iter()
+            .map(|e| serde_json::from_str(e).expect("JSON"))
+            .collect();
+        let event = events.last().expect("events");
+        assert_eq!(event["kind"], "denoised");
+        assert_eq!(
+            (
+                &event["reload"],
+                &event["spp"],
+                &event["quality"],
+                &event["took_ms"]
+            ),
+            (&json!(0), &json!(16), &json!("balanced"), &json!(1.5))
+        );
+        assert!(event["since_save_ms"].as_f64().is_some_and(|t| t >= 0.0));
+        let replayed = |feed: &Feed| {
+            let client = feed.subscribe(8).expect("room");
+            let kinds: Vec<String> = client
+                .next_batch(Duration::ZERO)
+                .iter()
+                .map(|e| serde_json::from_str::<Value>(e).expect("JSON")["kind"].to_string())
+                .collect();
+            feed.unsubscribe(&client);
+            kinds.join(" ")
+        };
+        assert_eq!(replayed(&feed), r#""pass" "denoised""#);
+        // A save: the denoised image stays until the new render's first image.
+        let started = Report::Started {
+            reload: 1,
+            trigger: Vec::new(),
+            spp: 1,
+            saved: Instant::now(),
+        };
+        feed.observe(&started, None);
+        assert_eq!(replayed(&feed), r#""reload" "denoised""#);
+        wrote(&feed, 1, true, &Film::new(2, 1));
+        assert_eq!(replayed(&feed), r#""reload" "pass""#);
     }
 
     #[test]

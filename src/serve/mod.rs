@@ -10,9 +10,14 @@
 //! | `GET /image.exr` | the latest image as linear float OpenEXR (like `-o out.exr`) |
 //! | `GET /image.f32` | the latest image as raw linear floats (see [`RAW_MAGIC`]), for the page |
 //! | `GET /previous.f32` | the last image of the render before the latest save (the page's A/B) |
+//! | `GET /denoised.f32` | the newest denoised pass of the render shown, as raw floats (see [`Feed::denoise_sink`]) |
+//! | `GET /albedo.f32` | that pass's mean albedo, as raw floats |
+//! | `GET /normal.f32` | that pass's mean shading normal (components in [-1, 1]), as raw floats |
 //! | `GET /events` | server-sent events: one JSON object per `data:` line (see [`Feed`]) |
 //!
-//! The images answer `503` until the first pass exists. Query strings are ignored (`/image.png?t=1`
+//! The images answer `503` until the first pass exists; the denoised pass's images answer `404`
+//! while there is none for the render shown (none yet, denoising off, or no denoiser). Each
+//! image route names its pass in the headers `X-Rondo-Reload` and `X-Rondo-Samples`. Query strings are ignored (`/image.png?t=1`
 //! is `/image.png`); paths are matched exactly, so `/../image.png` or `//image.png` are 404.
 //!
 //! Whatever the bound address, the server answers only requests whose `Host` names an IP
@@ -41,8 +46,8 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 pub use feed::{
-    CUT, Client, Encoding, Feed, Frame, MAX_MESSAGE, MAX_SOURCE_LINE, RAW_MAGIC, changed_text,
-    error_location,
+    CUT, Client, DenoisedImages, DenoisedLayer, Encoding, Feed, Frame, MAX_MESSAGE,
+    MAX_SOURCE_LINE, RAW_MAGIC, changed_text, error_location,
 };
 
 /// The page, compiled into the binary.
@@ -398,6 +403,7 @@ enum Route {
     Exr,
     Raw,
     PreviousRaw,
+    Denoised(DenoisedLayer),
     Events,
 }
 
@@ -411,6 +417,9 @@ impl Route {
             "/image.exr" => Self::Exr,
             "/image.f32" => Self::Raw,
             "/previous.f32" => Self::PreviousRaw,
+            "/denoised.f32" => Self::Denoised(DenoisedLayer::Denoised),
+            "/albedo.f32" => Self::Denoised(DenoisedLayer::Albedo),
+            "/normal.f32" => Self::Denoised(DenoisedLayer::Normal),
             "/events" => Self::Events,
             _ => return None,
         })
@@ -468,25 +477,48 @@ fn answer(
         Route::Exr => (feed.current(), "image/x-exr", Encoding::Exr),
         Route::Raw => (feed.current(), "application/octet-stream", Encoding::Raw),
         Route::PreviousRaw => (feed.previous(), "application/octet-stream", Encoding::Raw),
+        Route::Denoised(layer) => {
+            let images = feed.denoised();
+            let Some((images, bytes)) = images.as_ref().and_then(|d| Some((d, d.raw(layer)?)))
+            else {
+                return text(stream, 404, "no denoised image of this render\n");
+            };
+            let pass = (images.reload(), images.samples());
+            return respond_image(stream, "application/octet-stream", pass, bytes, with_body);
+        }
     };
     let Some(frame) = frame else {
         return text(stream, 503, "no image yet\n");
     };
     match frame.bytes(encoding) {
         // Written from the shared frame, no copy.
-        Ok(bytes) => http::respond(
-            stream,
-            200,
-            &[
-                ("Content-Type", content_type),
-                ("X-Rondo-Reload", &frame.reload().to_string()),
-                ("X-Rondo-Samples", &frame.samples().to_string()),
-            ],
-            bytes,
-            with_body,
-        ),
+        Ok(bytes) => {
+            let pass = (frame.reload(), frame.samples());
+            respond_image(stream, content_type, pass, bytes, with_body)
+        }
         Err(e) => text(stream, 500, &format!("cannot encode the image: {e}\n")),
     }
+}
+
+/// Answers an image: its bytes, naming its pass `(reload, samples)` in the headers.
+fn respond_image(
+    stream: &mut TcpStream,
+    content_type: &str,
+    (reload, samples): (u64, u32),
+    bytes: &[u8],
+    with_body: bool,
+) -> std::io::Result<()> {
+    http::respond(
+        stream,
+        200,
+        &[
+            ("Content-Type", content_type),
+            ("X-Rondo-Reload", &reload.to_string()),
+            ("X-Rondo-Samples", &samples.to_string()),
+        ],
+        bytes,
+        with_body,
+    )
 }
 
 /// Answers `/events`: the response head, then the client's queued events until a write fails
@@ -539,7 +571,24 @@ mod tests {
         assert_eq!(Route::of("/"), Some(Route::Page));
         assert_eq!(Route::of("/image.png?t=3"), Some(Route::Png));
         assert_eq!(Route::of("/events"), Some(Route::Events));
+        assert_eq!(
+            Route::of("/denoised.f32?r=2"),
+            Some(Route::Denoised(DenoisedLayer::Denoised))
+        );
+        assert_eq!(
+            Route::of("/albedo.f32"),
+            Some(Route::Denoised(DenoisedLayer::Albedo))
+        );
+        assert_eq!(
+            Route::of("/normal.f32"),
+            Some(Route::Denoised(DenoisedLayer::Normal))
+        );
         for bad in [
+            "/../denoised.f32",
+            "//albedo.f32",
+            "/normal.f32/",
+            "/DENOISED.F32",
+            "/denoised.f32%00",
             "/../image.png",
             "//image.png",
             "/image.png/",

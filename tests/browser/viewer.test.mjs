@@ -6,7 +6,9 @@
 //
 // RONDO_BIN names the binary (default: ../../target/release/rondo), RONDO_LATENCY_EDITS the
 // number of timed edits (default 5). Every wait is bounded; any failure, including a missing
-// chromium, exits non-zero. The last line is "N passed, N failed".
+// chromium, exits non-zero. The last line is "N passed, N failed". The denoised view needs Open
+// Image Denoise (scripts/fetch-oidn.sh): without it its checks are skipped, unless
+// RONDO_REQUIRE_OIDN=1 (as in CI), when they fail.
 
 import { spawn } from "node:child_process";
 import fs from "node:fs";
@@ -33,11 +35,13 @@ function check(name, ok, detail = "") {
 }
 
 // A scene whose centre pixel sees only the `wall` emitter, so its colour is exactly the wall's
-// emission (any sample count, preview included). Line 5 holds the wall's material.
-function scene(wall) {
+// emission (any sample count, preview included). Line 5 holds the wall's material. Pixel
+// (32, 7) sees only the ball (albedo 0.5, unlit from the front: black). `settings` are extra
+// settings.
+function scene(wall, settings = "") {
   return `Scene(
     camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0), fov: 40.0),
-    settings: Settings(width: 64, height: 64, spp: 4, max_depth: 3),
+    settings: Settings(width: 64, height: 64, spp: 4, max_depth: 3${settings}),
     materials: {
         "wall": Light(emit: Constant(${wall}), intensity: 1.0, two_sided: true),
         "ball": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
@@ -113,6 +117,42 @@ async function waitPixel(page, x, y, rgb) {
   }
 }
 
+// Picks an image in the raw / denoised / albedo / normal switch, as a click on its label.
+async function choose(page, mode) {
+  await page.click(`#modes label:has(input[value="${mode}"])`);
+}
+
+// What the footer says is shown ("denoised · 4 spp · high · 20 ms").
+const shownText = (page) => page.textContent("#shown");
+
+// Waits until the footer's "shown" text matches `pattern` (and the canvas draws that kind).
+async function waitShown(page, pattern, kind) {
+  try {
+    await page.waitForFunction(([source, kind]) => new RegExp(source).test(document.getElementById("shown").textContent)
+      && document.getElementById("canvas").dataset.kind === kind, [pattern.source, kind], { timeout: WAIT, polling: 10 });
+  } catch (e) {
+    throw new Error(`the page never said ${pattern} (canvas ${kind}): it says "${await shownText(page).catch(() => "?")}"\n${e.stack}`);
+  }
+}
+
+// Waits until rondo's log matches `pattern`.
+async function waitLog(rondo, pattern) {
+  const end = Date.now() + WAIT;
+  while (!pattern.test(rondo.log.join(""))) {
+    if (Date.now() > end) throw new Error(`rondo never printed ${pattern}`);
+    await new Promise((r) => setTimeout(r, 20));
+  }
+}
+
+// A digest of the canvas's pixels, to tell images apart.
+const canvasDigest = (page) => page.evaluate(() => {
+  const c = document.getElementById("canvas");
+  const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+  let h = 2166136261;
+  for (let i = 0; i < d.length; i++) h = Math.imul(h ^ d[i], 16777619);
+  return `${c.width}x${c.height}:${h >>> 0}`;
+});
+
 async function launch() {
   if (!fs.existsSync(browserPath)) throw new Error(`${browserPath} missing: apt-get install chromium`);
   const profile = fs.mkdtempSync(path.join(os.tmpdir(), "rondo-chromium-"));
@@ -137,6 +177,8 @@ async function behaviour(context) {
     const loads = [];
     page.on("load", () => loads.push(Date.now()));
     await page.goto(url);
+    // The raw image: these checks are of exact emitted values, which the denoiser only nears.
+    await choose(page, "raw");
     await waitPixel(page, 32, 32, [255, 0, 0]);
     check("the first image appears (centre pixel red)", true);
     await page.evaluate(() => { window.__marker = "same page"; });
@@ -192,6 +234,79 @@ async function behaviour(context) {
   } finally {
     const code = await stopRondo(rondo.child);
     check("rondo stops on SIGINT", code === 0, String(code));
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+}
+
+// The switch raw / denoised / albedo / normal on the scene of `behaviour`: denoised by default
+// once the render has a denoised image, each image drawn (closed forms where there are some),
+// a choice that sticks over saves, and raw with a word when the chosen image does not exist.
+async function denoising(context) {
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), "rondo-viewer-denoise-"));
+  const file = path.join(dir, "scene.ron");
+  fs.writeFileSync(file, scene("(1.0, 0.0, 0.0)"));
+  const rondo = startRondo(file, ["--threads", "2"]);
+  try {
+    const page = await context.newPage();
+    await page.goto(await rondo.url);
+    // The last pass (4 spp) denoised, or rondo's warning that there is no denoiser.
+    const missing = waitLog(rondo, /denoiser \(Open Image Denoise\) is not available/).then(() => "missing");
+    const denoised = waitShown(page, /^denoised · 4 spp · \w+ · /, "denoised").then(() => "denoised");
+    missing.catch(() => {});
+    denoised.catch(() => {});
+    if (await Promise.race([missing, denoised]) === "missing") {
+      if (process.env.RONDO_REQUIRE_OIDN === "1") {
+        check("the viewer shows denoised images", false, "RONDO_REQUIRE_OIDN=1 but the denoiser is missing");
+      } else {
+        console.log("skip the denoised view: no Open Image Denoise (scripts/fetch-oidn.sh)");
+      }
+      await page.close();
+      return;
+    }
+    check("a denoised pass is shown by default, and the footer says so", true, await shownText(page));
+    const digests = { denoised: await canvasDigest(page) };
+
+    // Albedo: the emitter's is its emission (1, 0, 0), the ball's 0.5 (sRGB 188).
+    await choose(page, "albedo");
+    await waitShown(page, /^albedo · 4 spp$/, "albedo");
+    digests.albedo = await canvasDigest(page);
+    const albedo = [await pixelAt(page, 32, 32), await pixelAt(page, 32, 7)];
+    check("albedo: the wall's emission and the ball's 0.5", String(albedo) === "255,0,0,188,188,188", String(albedo));
+
+    // The switch is a radio group: an arrow key moves to the next image. The wall faces the
+    // camera: normal (0, 0, -1), drawn as n * 0.5 + 0.5 = (128, 128, 0).
+    await page.focus('#modes input[value="albedo"]');
+    await page.keyboard.press("ArrowRight");
+    await waitShown(page, /^normal · 4 spp$/, "normal");
+    digests.normal = await canvasDigest(page);
+    check("normal (chosen with the keyboard): the wall's, as n * 0.5 + 0.5", String(await pixelAt(page, 32, 32)) === "128,128,0",
+      String(await pixelAt(page, 32, 32)));
+
+    await choose(page, "raw");
+    await waitShown(page, /^raw · 4 spp$/, "raw");
+    digests.raw = await canvasDigest(page);
+    check("raw: the emission itself", String(await pixelAt(page, 32, 32)) === "255,0,0", String(await pixelAt(page, 32, 32)));
+    check("the four images differ", new Set(Object.values(digests)).size === 4, JSON.stringify(digests));
+
+    // The choice sticks: the next render is denoised, raw stays.
+    save(file, scene("(0.0, 0.0, 1.0)"));
+    await waitLog(rondo, /reload 1: denoised 4 spp/);
+    await waitPixel(page, 32, 32, [0, 0, 255]);
+    check("a chosen raw image stays raw over a save", /^raw · 4 spp$/.test(await shownText(page)), await shownText(page));
+
+    // Denoised chosen, then a save that turns the denoiser off: raw, and the footer says why.
+    await choose(page, "denoised");
+    await waitShown(page, /^denoised · 4 spp/, "denoised");
+    save(file, scene("(0.0, 1.0, 0.0)", ", denoise: false"));
+    await waitPixel(page, 32, 32, [0, 255, 0]);
+    await page.waitForFunction(() => /4\/4 spp · done/.test(document.getElementById("status").textContent), null, { timeout: WAIT });
+    check("with no denoised image of the render, raw is shown and the footer says so",
+      await shownText(page) === "raw · 4 spp (no denoised image of reload 2 yet)", await shownText(page));
+    await page.close();
+  } catch (e) {
+    throw new Error(`${e.message}\nrondo's log:\n${rondo.log.join("")}`);
+  } finally {
+    await stopRondo(rondo.child);
     fs.rmSync(dir, { recursive: true, force: true });
   }
 }
@@ -283,6 +398,7 @@ let context, profile;
 try {
   ({ context, profile } = await launch());
   await behaviour(context);
+  await denoising(context);
   await latency(context);
   if (screenshot) await takeScreenshot(context, screenshot);
 } catch (e) {
