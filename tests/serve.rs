@@ -61,10 +61,22 @@ impl Rondo {
 
     /// As [`Rondo::start`], serving on `serve`.
     fn start_on(name: &str, text: &str, serve: &str, args: &[&str]) -> Self {
+        Self::start_with(name, text, serve, &[], args)
+    }
+
+    /// As [`Rondo::start_on`], with the environment variables `env` set.
+    fn start_with(
+        name: &str,
+        text: &str,
+        serve: &str,
+        env: &[(&str, &std::path::Path)],
+        args: &[&str],
+    ) -> Self {
         let dir = common::temp_dir(&format!("serve-{name}"));
         let scene = dir.join("scene.ron");
         std::fs::write(&scene, text).expect("write scene");
         let mut child = Command::new(env!("CARGO_BIN_EXE_rondo"))
+            .envs(env.iter().copied())
             .arg("watch")
             .arg(&scene)
             .args(["--serve", serve, "--threads", "2"])
@@ -798,4 +810,239 @@ fn a_huge_error_is_cut_in_the_event_stream() {
         "the source line is cut"
     );
     assert!(source.ends_with(CUT));
+}
+
+/// Whether Open Image Denoise is found (as rondo finds it); without it the tests that need it
+/// pass after saying so, unless `RONDO_REQUIRE_OIDN=1` (CI), when they fail.
+fn denoiser_available() -> bool {
+    match rondo::denoise::Denoiser::shared() {
+        Ok(_) => true,
+        Err(e) if std::env::var("RONDO_REQUIRE_OIDN").is_ok_and(|v| v == "1") => {
+            panic!("RONDO_REQUIRE_OIDN=1 but {e}")
+        }
+        Err(e) => {
+            eprintln!("skipped: {e}");
+            false
+        }
+    }
+}
+
+/// The header `[width, height, reload, samples]` and the floats of a raw float image.
+fn raw_floats(body: &[u8]) -> ([u32; 4], Vec<f32>) {
+    assert_eq!(&body[..8], b"RONDOF32");
+    let u = |i: usize| u32::from_le_bytes(body[8 + 4 * i..12 + 4 * i].try_into().expect("u32"));
+    let floats = body[24..]
+        .chunks(4)
+        .map(|b| f32::from_le_bytes(b.try_into().expect("f32")))
+        .collect();
+    ([u(0), u(1), u(2), u(3)], floats)
+}
+
+/// A first image of `reload`, 2×1 pixels, for the library's server.
+fn wrote(feed: &rondo::serve::Feed, reload: u64) {
+    let report = rondo::watch::Report::Wrote {
+        reload,
+        samples: 1,
+        preview: false,
+        spp: 8,
+        changes: rondo::ecs::resources::ChangeSummary::default(),
+        new_scene: true,
+        at: Instant::now(),
+    };
+    feed.observe(&report, Some(&rondo::Film::new(2, 1)));
+}
+
+const DENOISED_ROUTES: [&str; 3] = ["/denoised.f32", "/albedo.f32", "/normal.f32"];
+
+#[test]
+fn the_newest_denoised_pass_is_served_with_its_albedo_and_normal() {
+    use glam::Vec3;
+    let (viewer, feed) = library_server(Limits::default());
+    let addr = viewer.addr();
+    wrote(&feed, 4);
+    for target in DENOISED_ROUTES {
+        let get = request(addr, "GET", target);
+        assert_eq!(get.status, 404, "{target} before a denoised pass");
+        assert_eq!(request(addr, "HEAD", target).status, 404, "HEAD {target}");
+    }
+    let events = Events::open(addr);
+    events.wait("the pass", |e| e["kind"] == "pass");
+
+    let sink = feed.denoise_sink();
+    sink(&rondo::watch::DenoisedFrame {
+        reload: 4,
+        samples: 8,
+        images: rondo::denoised::FilmImages {
+            width: 2,
+            height: 1,
+            colour: vec![Vec3::new(9.0, 9.0, 9.0); 2],
+            albedo: Some(vec![Vec3::new(0.25, 0.5, 0.75), Vec3::ONE]),
+            normal: Some(vec![Vec3::Z, Vec3::NEG_X]),
+        },
+        denoised: vec![Vec3::new(1.0, 2.0, 3.0), Vec3::new(4.0, 5.0, 6.0)],
+        quality: rondo::denoise::Quality::Balanced,
+        took: Duration::from_millis(21),
+        saved: Instant::now(),
+    });
+    let (event, _) = events.wait("the denoised pass", |e| e["kind"] == "denoised");
+    assert_eq!(
+        (&event["reload"], &event["spp"], &event["quality"]),
+        (&4.into(), &8.into(), &"balanced".into())
+    );
+    assert_eq!(event["took_ms"].as_f64(), Some(21.0));
+    assert!(event["since_save_ms"].as_f64().is_some_and(|t| t >= 0.0));
+
+    let expected: [Vec<f32>; 3] = [
+        vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
+        vec![0.25, 0.5, 0.75, 1.0, 1.0, 1.0],
+        vec![0.0, 0.0, 1.0, -1.0, 0.0, 0.0],
+    ];
+    for (target, floats) in DENOISED_ROUTES.into_iter().zip(expected) {
+        let get = request(addr, "GET", target);
+        assert_eq!(get.status, 200, "{target}");
+        assert_eq!(get.header("Content-Type"), Some("application/octet-stream"));
+        assert_eq!(
+            (get.header("X-Rondo-Reload"), get.header("X-Rondo-Samples")),
+            (Some("4"), Some("8")),
+            "{target} names its pass"
+        );
+        assert_eq!(raw_floats(&get.body), ([2, 1, 4, 8], floats), "{target}");
+        let head = request(addr, "HEAD", target);
+        assert_eq!((head.status, head.body.len()), (200, 0));
+        // Exact paths only, and the Host check, as for every route.
+        for bad in [
+            format!("{target}/"),
+            format!("/{target}"),
+            format!("/..{target}"),
+            target.to_uppercase(),
+        ] {
+            assert_eq!(request(addr, "GET", &bad).status, 404, "{bad}");
+        }
+        assert_eq!(request_as(addr, "GET", target, "evil.example").status, 403);
+        assert_eq!(request(addr, "POST", target).status, 405);
+    }
+    // A client that comes later is told about it at once.
+    let late = Events::open(addr);
+    late.wait("the denoised pass, replayed", |e| {
+        e["kind"] == "denoised" && e["spp"] == 8
+    });
+
+    // The next render's first image: the denoised pass is of another image now.
+    wrote(&feed, 5);
+    for target in DENOISED_ROUTES {
+        assert_eq!(request(addr, "GET", target).status, 404, "{target}");
+    }
+}
+
+#[test]
+fn watch_serve_denoises_each_pass_for_the_viewer() {
+    if !denoiser_available() {
+        return;
+    }
+    let rondo = Rondo::start("denoised", &scene(RED, 32, 4), &[]);
+    let events = rondo.events();
+    let (event, _) = events.wait("the last pass denoised", |e| {
+        e["kind"] == "denoised" && e["reload"] == 0 && e["spp"] == 4
+    });
+    assert!(
+        ["fast", "balanced", "high"].contains(&event["quality"].as_str().unwrap_or("")),
+        "{event}"
+    );
+    assert!(event["took_ms"].as_f64().is_some() && event["since_save_ms"].as_f64().is_some());
+    let get = |target: &str| {
+        let reply = rondo.get(target);
+        assert_eq!(reply.status, 200, "{target}");
+        assert_eq!(
+            (
+                reply.header("X-Rondo-Reload"),
+                reply.header("X-Rondo-Samples")
+            ),
+            (Some("0"), Some("4")),
+            "{target} is of the last pass"
+        );
+        raw_pixel(&reply.body, 16, 16)
+    };
+    // The centre pixel sees only the emitter, facing the camera: its albedo is its emission,
+    // its normal points back at the camera; denoised, it stays close to the emission.
+    assert_eq!(get("/albedo.f32"), [1.0, 0.0, 0.0]);
+    assert_eq!(get("/normal.f32"), [0.0, 0.0, -1.0]);
+    let denoised = get("/denoised.f32");
+    assert!(
+        (denoised[0] - 1.0).abs() < 0.02 && denoised[1].abs() < 0.02 && denoised[2].abs() < 0.02,
+        "{denoised:?}"
+    );
+    assert_eq!(
+        get("/image.f32"),
+        [1.0, 0.0, 0.0],
+        "the raw image is not replaced"
+    );
+}
+
+#[test]
+fn watch_denoise_writes_the_denoised_output_and_the_viewer_shows_it() {
+    if !denoiser_available() {
+        return;
+    }
+    let rondo = Rondo::start(
+        "denoise-output",
+        &scene(RED, 32, 4),
+        &["--denoise", "-o", "{dir}/out.exr"],
+    );
+    let line = rondo.line("a denoised pass", |l| l.starts_with("reload 0: denoised"));
+    assert!(
+        line.ends_with(", wrote out.exr"),
+        "--denoise reaches the loop: {line}"
+    );
+    rondo
+        .events()
+        .wait("a denoised pass", |e| e["kind"] == "denoised");
+}
+
+#[test]
+fn without_the_denoiser_denoise_is_refused_and_the_viewer_stays_raw() {
+    let empty = common::temp_dir("serve-no-oidn");
+    let good = empty.join("scene.ron");
+    std::fs::write(&good, scene(RED, 32, 4)).expect("write scene");
+    let mut refused = Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .env("RONDO_OIDN_DIR", empty.path())
+        .arg("watch")
+        .arg(&good)
+        .args(["--serve", "127.0.0.1:0", "--denoise"])
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start rondo");
+    let status =
+        common::wait_or_kill(&mut refused, WAIT).expect("--denoise without a denoiser ends");
+    let mut text = String::new();
+    refused
+        .stderr
+        .take()
+        .expect("piped stderr")
+        .read_to_string(&mut text)
+        .expect("stderr");
+    assert!(!status.success(), "{text}");
+    assert!(
+        text.contains("Open Image Denoise") && text.contains("not available"),
+        "{text}"
+    );
+    assert!(!text.contains("viewer:"), "refused before serving: {text}");
+
+    // Without the flag: one warning, and the raw images.
+    let env = [("RONDO_OIDN_DIR", empty.path())];
+    let rondo = Rondo::start_with("no-oidn", &scene(RED, 32, 4), "127.0.0.1:0", &env, &[]);
+    rondo.line("the warning", |l| {
+        l.starts_with("warning: ")
+            && l.contains("not available")
+            && l.ends_with("showing the raw image")
+    });
+    rondo.events().done(0);
+    assert_eq!(
+        raw_pixel(&rondo.get("/image.f32").body, 16, 16),
+        [1.0, 0.0, 0.0]
+    );
+    for target in DENOISED_ROUTES {
+        assert_eq!(rondo.get(target).status, 404, "{target}");
+    }
 }
