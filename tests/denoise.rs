@@ -7,6 +7,8 @@
 
 mod common;
 
+use std::path::Path;
+use std::process::Command;
 use std::sync::atomic::AtomicBool;
 
 use rondo::denoise::{DenoiseError, DenoiseInput, Denoiser, Quality};
@@ -265,7 +267,11 @@ fn a_set_cancel_flag_cancels_and_the_denoiser_works_afterwards() {
     let Some(denoiser) = denoiser() else { return };
     let s = scene();
     let result = denoiser.denoise(&s.input(&s.noisy), Quality::High, &AtomicBool::new(true));
-    assert_eq!(result, Err(DenoiseError::Cancelled));
+    assert!(
+        matches!(result, Err(DenoiseError::Cancelled)),
+        "{:?}",
+        result.map(|d| format!("{} values", d.len()))
+    );
     let again = denoiser.denoise(&s.input(&s.noisy), Quality::High, &AtomicBool::new(false));
     assert!(again.is_ok_and(|d| d.len() == s.noisy.len()));
 }
@@ -348,4 +354,80 @@ fn a_file_that_is_not_a_library_is_unavailable_with_the_loader_error() {
         message.contains("libOpenImageDenoise.so.2 could not be loaded"),
         "{message}"
     );
+}
+
+/// Loads the denoiser as rondo does and denoises a small image with it; prints the outcome for
+/// the parent test. Run only in a child process, with `RONDO_OIDN_DIR` set, by the tests below.
+#[test]
+#[ignore = "run in a child process by the RONDO_OIDN_DIR tests"]
+fn child_loads_and_denoises() {
+    match Denoiser::load() {
+        Ok(denoiser) => {
+            let color = vec![0.5; 16 * 16 * 3];
+            let input = DenoiseInput {
+                width: 16,
+                height: 16,
+                color: &color,
+                albedo: None,
+                normal: None,
+            };
+            let result = denoiser.denoise(&input, Quality::Fast, &AtomicBool::new(false));
+            let values = result.map(|d| d.len());
+            println!("child: loaded {}: {values:?}", denoiser.location());
+        }
+        Err(e) => println!("child: {e}"),
+    }
+}
+
+/// Runs [`child_loads_and_denoises`] in a child process with `RONDO_OIDN_DIR=dir`; returns
+/// its output.
+fn child_with_variable(dir: &Path) -> String {
+    let output = Command::new(std::env::current_exe().expect("test binary"))
+        .args([
+            "child_loads_and_denoises",
+            "--exact",
+            "--ignored",
+            "--nocapture",
+        ])
+        .env("RONDO_OIDN_DIR", dir)
+        .output()
+        .expect("run the test binary");
+    assert!(output.status.success(), "{output:?}");
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+#[test]
+fn the_variable_is_the_only_place_looked_when_set() {
+    let dir = common::temp_dir("oidn-variable-empty");
+    let output = child_with_variable(&dir);
+    assert!(
+        output.contains(&format!("child: the denoiser (Open Image Denoise) is not available: libOpenImageDenoise.so.2 not found in {}; ", dir.display())),
+        "{output}"
+    );
+}
+
+/// The libraries in a directory not named `lib` (here: symbolic links to them), where their
+/// `RPATH $ORIGIN/../lib` finds nothing: they load because TBB and the core are loaded first
+/// by full path.
+#[test]
+fn the_variable_names_any_directory_holding_the_libraries() {
+    let Some(denoiser) = denoiser() else { return };
+    let Some(found) = Path::new(denoiser.location()).parent() else {
+        eprintln!("skipped: loaded by the system loader, from an unknown directory");
+        return;
+    };
+    let dir = common::temp_dir("oidn-variable-links");
+    let links = dir.join("oidn-elsewhere");
+    std::fs::create_dir(&links).expect("create dir");
+    for entry in std::fs::read_dir(found).expect("read the library directory") {
+        let path = entry.expect("directory entry").path();
+        let name = path.file_name().expect("file name");
+        std::os::unix::fs::symlink(&path, links.join(name)).expect("symlink");
+    }
+    let output = child_with_variable(&links);
+    let expected = format!(
+        "child: loaded {}: Ok(768)",
+        links.join("libOpenImageDenoise.so.2").display()
+    );
+    assert!(output.contains(&expected), "{output}");
 }

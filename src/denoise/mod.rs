@@ -14,6 +14,9 @@
 //! The filter is OIDN's `RT` (ray-traced images) on HDR colour, optionally guided by the first
 //! hit's albedo and shading normal, on the CPU device. The raw image is never changed: the
 //! denoised image is a new buffer.
+//!
+//! On one machine the same input gives the same output bits (`tests/denoise.rs` checks it);
+//! other CPUs may run other kernels (AVX2, AVX-512) and differ in the last bits.
 
 mod oidn;
 
@@ -369,6 +372,12 @@ mod tests {
             [0.0, 0.0, 0.0, 0.0, 0.25, 1.0]
         );
         assert_eq!(sanitized(&values, -1.0, 1.0)[3], -0.5);
+    }
+
+    #[test]
+    fn the_denoiser_can_be_shared_between_threads() {
+        fn send_sync<T: Send + Sync>() {}
+        send_sync::<Denoiser>();
     }
 
     #[test]
