@@ -67,6 +67,10 @@ enum Command {
         /// Merge even with samples missing: the image averages the samples present.
         #[arg(long)]
         allow_gaps: bool,
+        /// Write the merged image denoised (a .png output; the partials' albedo and normal
+        /// buffers guide the denoiser). An .exr output stays a partial of the raw sums.
+        #[arg(long)]
+        denoise: bool,
     },
     /// Split a render over a cluster's scheduler.
     Farm {
@@ -197,7 +201,8 @@ enum BenchCommand {
     },
     /// Error against a reference image as a function of render time, for each light-transport
     /// method and sampler over a sweep of spp (renders interleaved); writes accuracy.csv,
-    /// accuracy.svg (log-log RMSE against time) and summary.md (equal-time comparison) in --out.
+    /// accuracy.svg (log-log RMSE against time), accuracy_relative.svg, accuracy_lamp_out.svg
+    /// and summary.md (equal-time comparison) in --out.
     Accuracy {
         /// Scene file (.ron).
         scene: PathBuf,
@@ -226,6 +231,16 @@ enum BenchCommand {
         /// First seed of the sweep (render k uses seed + k).
         #[arg(long, default_value_t = rondo::bench::accuracy::DEFAULT_SEED)]
         seed: u64,
+        /// Also measure every render denoised (Open Image Denoise, albedo and normal): its
+        /// time is the render with the feature buffers plus the denoise, wall clock. Drawn
+        /// dashed; summary.md says from which error on the raw render is the better choice.
+        #[arg(long)]
+        denoise: bool,
+        /// Write every image there as <method>_<sampler>_<spp>spp[_denoised].exr (a denoised
+        /// one with the layer `raw`), named in accuracy.csv's `image` column for
+        /// benches/flip/flip.py.
+        #[arg(long, value_name = "DIR")]
+        keep_images: Option<PathBuf>,
     },
     /// Load, first image and `check` of generated scenes over sizes, stage by stage.
     Load {
@@ -300,7 +315,8 @@ fn run(cli: Cli) -> Result<()> {
             output,
             spp,
             allow_gaps,
-        } => merge::run(&inputs, &output, spp, allow_gaps),
+            denoise,
+        } => merge::run(&inputs, &output, spp, allow_gaps, denoise),
         Command::Farm {
             what:
                 FarmCommand::Slurm {
@@ -380,6 +396,8 @@ fn run(cli: Cli) -> Result<()> {
                     max_depth,
                     threads,
                     seed,
+                    denoise,
+                    keep_images,
                 },
         } => bench::accuracy(&rondo::bench::accuracy::AccuracyOptions {
             scene,
@@ -391,6 +409,8 @@ fn run(cli: Cli) -> Result<()> {
             threads,
             max_depth,
             seed,
+            denoise,
+            keep_images,
         }),
         Command::Watch {
             scene,

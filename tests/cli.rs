@@ -279,3 +279,123 @@ fn a_range_render_reports_the_samples_it_rendered() {
     // Both are printed to 0.01.
     assert!(rays + 0.01 >= samples, "{err}");
 }
+
+/// The channels of an EXR file and their values, by name.
+fn exr_channels(path: &Path) -> std::collections::BTreeMap<String, Vec<f32>> {
+    let image = exr::prelude::read_all_flat_layers_from_file(path).expect("an EXR");
+    image.layer_data[0]
+        .channel_data
+        .list
+        .iter()
+        .map(|c| {
+            let values = c.sample_data.values_as_f32().collect();
+            (c.name.to_string(), values)
+        })
+        .collect()
+}
+
+#[test]
+fn render_denoise_writes_the_denoised_colour_beside_the_raw_one_and_the_features() {
+    if common::denoiser().is_none() {
+        return;
+    }
+    let dir = temp_dir("cli-denoise");
+    let (plain, layered) = (dir.join("plain.exr"), dir.join("layered.exr"));
+    let size = ["--spp", "2", "--width", "48", "--height", "48"];
+    let scene = cornell();
+    let out = rondo(&[&["render", text(&scene), "-o", text(&plain)], &size[..]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let args = ["render", text(&scene), "-o", text(&layered), "--denoise"];
+    let out = rondo(&[&args[..], &["--aov", "albedo,normal"], &size[..]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("denoised in"), "{}", stderr(&out));
+    let (plain, layered) = (exr_channels(&plain), exr_channels(&layered));
+    let names: Vec<&str> = layered.keys().map(String::as_str).collect();
+    assert_eq!(
+        names,
+        [
+            "B", "G", "R", "albedo.B", "albedo.G", "albedo.R", "normal.B", "normal.G",
+            "normal.R", "raw.B", "raw.G", "raw.R"
+        ]
+    );
+    // The raw layer is the image a render without the denoiser writes, to the bit; the colour
+    // is another (denoised) image.
+    for c in ["R", "G", "B"] {
+        assert_eq!(layered[&format!("raw.{c}")], plain[c]);
+        assert_ne!(layered[c], plain[c]);
+    }
+}
+
+#[test]
+fn denoise_and_aov_are_refused_where_they_cannot_apply_before_rendering() {
+    let dir = temp_dir("cli-denoise-refused");
+    let png = dir.join("x.png");
+    assert_refused(
+        &rondo(&["render", text(&cornell()), "-o", text(&png), "--aov", "albedo"]),
+        "only an .exr holds",
+    );
+    let partial = dir.join("p.exr");
+    let out = rondo(&[
+        "render",
+        text(&cornell()),
+        "-o",
+        text(&partial),
+        "--samples",
+        "0..1",
+        "--denoise",
+    ]);
+    assert_refused(&out, "a partial (--samples, --resume) holds the raw sums");
+    // Without the library, `--denoise` is refused before any work, saying how to get it.
+    let empty = temp_dir("cli-no-oidn");
+    let out = Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .args(["render", text(&cornell()), "-o", text(&png), "--denoise"])
+        .env("RONDO_OIDN_DIR", empty.path())
+        .output()
+        .expect("run rondo");
+    assert_refused(&out, "scripts/fetch-oidn.sh");
+    assert!(!png.exists(), "nothing written");
+}
+
+#[test]
+fn merge_denoise_denoises_merged_partials_into_a_png_and_refuses_an_exr() {
+    if common::denoiser().is_none() {
+        return;
+    }
+    let dir = temp_dir("cli-merge-denoise");
+    let scene = cornell();
+    let size = ["--width", "32", "--height", "32"];
+    let mut parts = Vec::new();
+    for range in ["0..2", "2..4"] {
+        let part = dir.join(format!("{}.exr", range.replace("..", "-")));
+        let args = ["render", text(&scene), "-o", text(&part), "--samples", range];
+        let out = rondo(&[&args[..], &size[..]].concat());
+        assert!(out.status.success(), "{}", stderr(&out));
+        parts.push(part);
+    }
+    let png = dir.join("merged.png");
+    let out = rondo(&[
+        "merge",
+        text(&parts[0]),
+        text(&parts[1]),
+        "-o",
+        text(&png),
+        "--denoise",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let raw = dir.join("raw.png");
+    let out = rondo(&["merge", text(&parts[0]), text(&parts[1]), "-o", text(&raw)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (a, b) = (image::open(&png).expect("png"), image::open(&raw).expect("png"));
+    assert_eq!(a.width(), 32);
+    assert_ne!(a.to_rgb8().into_raw(), b.to_rgb8().into_raw(), "denoised");
+    let exr = dir.join("merged.exr");
+    let out = rondo(&[
+        "merge",
+        text(&parts[0]),
+        text(&parts[1]),
+        "-o",
+        text(&exr),
+        "--denoise",
+    ]);
+    assert_refused(&out, "an .exr merge is a partial of the raw sums");
+}

@@ -30,7 +30,9 @@ pub fn run(
     }
     if part.is_some() && (options.denoise || !aov.is_empty()) {
         bail!(
-            "--denoise and --aov make a finished image; a partial (--samples, --resume) holds             the raw sums and always the feature buffers: denoise the merged image instead             (`rondo merge … -o x.png --denoise`)"
+            "--denoise and --aov make a finished image; a partial (--samples, --resume) holds \
+            the raw sums and always the feature buffers: denoise the merged image instead \
+            (`rondo merge … -o x.png --denoise`)"
         );
     }
     let mut r = options.renderer()?;
