@@ -1,13 +1,32 @@
 //! `rondo bench accuracy`: error against a reference image as a function of render time, for
 //! each light-transport method and sampler over a sweep of samples per pixel. Writes
 //! `accuracy.csv`, `accuracy.svg` (log-log RMSE against seconds, one line per method and
-//! sampler, spp at each point, fitted slope in the legend), `accuracy_relative.svg` (the same for √relMSE) and `summary.md` (the
-//! equal-time comparison in both metrics).
+//! sampler, spp at each point, fitted slope in the legend), `accuracy_relative.svg` and
+//! `accuracy_lamp_out.svg` (the same for √relMSE and the lamp-out RMSE) and `summary.md` (the
+//! equal-time comparison in every metric).
 //!
-//! Why two metrics: RMSE weighs every pixel by its brightness, so a directly visible lamp of
+//! Why three metrics: RMSE weighs every pixel by its brightness, so a directly visible lamp of
 //! radiance 1500 (whose edge pixels are noisy by antialiasing alone, the same for every method)
 //! or a few caustic fireflies can decide it. √relMSE (relative MSE with ε = 0.01, see
-//! [`crate::metrics`]) weighs every pixel alike; both fall as 1/√t.
+//! [`crate::metrics`]) weighs every pixel alike; both fall as 1/√t. The lamp-out RMSE
+//! ([`crate::metrics::lamp_out_rmse`]: pixels whose reference exceeds 1 left out, both images
+//! clamped to [0, 1]) is the error of the peer-renderer benches (Mitsuba, Cycles) and of the
+//! figures in BENCHMARKS.md.
+//!
+//! With `denoise`, every render is made a second time with the feature buffers (albedo and
+//! normal) and the same seed, so its colour is the raw render's to the bit, and denoised by
+//! Open Image Denoise (quality high, guided by albedo and normal). Its row (`denoised` set)
+//! times the render with the features plus the denoise (the film's means, the filter, its
+//! output), wall clock; the library is loaded and run once before the sweep, as the scene is,
+//! so neither load is timed. The denoiser is biased: its error does not fall as 1/√t, so its
+//! curves get no slope and no "error · √s", and `summary.md` gives instead, per method and
+//! sampler, the error level from which on the raw render is the better choice
+//! ([`crossover`]).
+//!
+//! With `keep_images`, every image is written there as `<method>_<sampler>_<spp>spp.exr` (raw)
+//! and `<method>_<sampler>_<spp>spp_denoised.exr` (the denoised colour, the raw colour as the
+//! layer `raw`), and `accuracy.csv` names each row's image in its `image` column, which
+//! `benches/flip/flip.py` matches to add FLIP.
 //!
 //! Renders are interleaved (for each spp, every method and sampler in turn) so that a change in machine
 //! load during the sweep hits every method alike. Each render uses its own seed, `seed + k`,
@@ -19,8 +38,17 @@
 //! equal time (its square, the time ratio at equal error).
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
 
-use crate::metrics::{ErrorMetrics, Image, MetricsError, compare};
+use glam::Vec3;
+
+pub use super::accuracy_chart::write_chart;
+pub use super::accuracy_summary::{Crossover, crossover, raw_line, summary_markdown};
+use crate::denoise::{DenoiseError, Denoiser, Quality};
+use crate::denoised::FilmImages;
+use crate::layers::{Layer, write_layers};
+use crate::metrics::{ErrorMetrics, Image, MetricsError, compare, lamp_out_rmse};
 use crate::scene::error::SceneError;
 use crate::scene::format::Method;
 use crate::shading::sampler::SamplerKind;
@@ -47,6 +75,10 @@ pub struct AccuracyOptions {
     pub max_depth: Option<u32>,
     /// First seed of the sweep; render `k` uses `seed + k`.
     pub seed: u64,
+    /// Also measure each render denoised (see the module documentation).
+    pub denoise: bool,
+    /// Directory to write every image into, if any.
+    pub keep_images: Option<PathBuf>,
 }
 
 /// Default first seed of a sweep: far from the small seeds references are made with.
@@ -64,10 +96,28 @@ pub struct AccuracyRow {
     /// Seed of the render.
     pub seed: u64,
     /// Wall time of the render (scene update and BVH check included; the scene is already
-    /// loaded and parsed).
+    /// loaded and parsed), plus that of the denoise for a denoised row.
     pub seconds: f64,
     /// Error against the reference.
     pub metrics: ErrorMetrics,
+    /// Lamp-out clamped RMSE against the reference ([`lamp_out_rmse`]).
+    pub lamp_out_rmse: f64,
+    /// Whether the image measured is the denoised one.
+    pub denoised: bool,
+}
+
+impl AccuracyRow {
+    /// The file name of the row's image in `keep_images`:
+    /// `<method>_<sampler>_<spp>spp[_denoised].exr`.
+    pub fn image_name(&self) -> String {
+        format!(
+            "{}_{}_{}spp{}.exr",
+            self.method,
+            self.sampler,
+            self.spp,
+            if self.denoised { "_denoised" } else { "" }
+        )
+    }
 }
 
 /// An error measure that falls as 1/√t for an unbiased Monte Carlo method.
@@ -77,17 +127,20 @@ pub enum Metric {
     Rmse,
     /// Square root of the relative MSE.
     RelRmse,
+    /// Lamp-out clamped RMSE ([`lamp_out_rmse`]).
+    LampOutRmse,
 }
 
 impl Metric {
-    /// Both metrics, in the order reported.
-    pub const ALL: [Self; 2] = [Self::Rmse, Self::RelRmse];
+    /// Every metric, in the order reported.
+    pub const ALL: [Self; 3] = [Self::Rmse, Self::RelRmse, Self::LampOutRmse];
 
-    /// The metric's value for one image.
-    pub fn of(self, m: &ErrorMetrics) -> f64 {
+    /// The metric's value for one row.
+    pub fn of(self, r: &AccuracyRow) -> f64 {
         match self {
-            Self::Rmse => m.rmse,
-            Self::RelRmse => m.rel_mse.sqrt(),
+            Self::Rmse => r.metrics.rmse,
+            Self::RelRmse => r.metrics.rel_mse.sqrt(),
+            Self::LampOutRmse => r.lamp_out_rmse,
         }
     }
 
@@ -96,11 +149,21 @@ impl Metric {
         match self {
             Self::Rmse => "RMSE",
             Self::RelRmse => "√relMSE",
+            Self::LampOutRmse => "lamp-out RMSE",
+        }
+    }
+
+    /// The chart's file name.
+    pub fn chart_file(self) -> &'static str {
+        match self {
+            Self::Rmse => "accuracy.svg",
+            Self::RelRmse => "accuracy_relative.svg",
+            Self::LampOutRmse => "accuracy_lamp_out.svg",
         }
     }
 }
 
-/// The summary of one method's rows with one sampler in one metric.
+/// The summary of one method's raw rows with one sampler in one metric.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MethodFit {
     /// Method.
@@ -126,8 +189,8 @@ pub struct AccuracyReport {
     pub height: u32,
     /// Every render, in the order made.
     pub rows: Vec<AccuracyRow>,
-    /// One summary per metric, method and sampler: the RMSE fits in the order the methods (then
-    /// samplers) were asked, then the √relMSE fits.
+    /// One summary per metric, method and sampler of the raw rows: the RMSE fits in the order
+    /// the methods (then samplers) were asked, then the √relMSE fits, then the lamp-out ones.
     pub fits: Vec<MethodFit>,
 }
 
@@ -143,6 +206,33 @@ pub enum AccuracyError {
     /// Nothing to do.
     #[error("nothing to measure: give at least one spp value (all ≥ 1), method and sampler")]
     Empty,
+    /// Two renders would write the same image file.
+    #[error(
+        "{method} {sampler} at {spp} spp is asked twice: --keep-images names each image by them"
+    )]
+    Duplicate {
+        /// Method.
+        method: Method,
+        /// Sampler.
+        sampler: SamplerKind,
+        /// Samples per pixel.
+        spp: u32,
+    },
+    /// The denoiser could not be loaded or failed.
+    #[error(transparent)]
+    Denoise(#[from] DenoiseError),
+    /// The denoiser gave NaN or infinite values.
+    #[error("{}: the denoised image of {method} at {spp} spp has {count} non-finite values", scene.display())]
+    DenoisedNonFinite {
+        /// Scene file.
+        scene: PathBuf,
+        /// Method.
+        method: Method,
+        /// Samples per pixel.
+        spp: u32,
+        /// Channel values.
+        count: usize,
+    },
     /// The thread pool could not be built.
     #[error("cannot start the thread pool: {0}")]
     Pool(#[from] rayon::ThreadPoolBuildError),
@@ -169,7 +259,8 @@ pub enum AccuracyError {
 }
 
 /// Runs the sweep: renders every (spp, method) pair, interleaved, and compares each image with
-/// the reference. `on_row` sees each row as it is measured. Writes nothing.
+/// the reference; with `denoise`, each render is followed by its denoised twin. `on_row` sees
+/// each row as it is measured. Writes nothing but the kept images.
 pub fn measure(
     options: &AccuracyOptions,
     mut on_row: impl FnMut(&AccuracyRow),
@@ -186,7 +277,16 @@ pub fn measure(
         .iter()
         .flat_map(|&m| options.samplers.iter().map(move |&s| (m, s)))
         .collect();
+    if options.keep_images.is_some() {
+        check_distinct(&curves, &options.spp_list)?;
+    }
     let reference = Image::read(&options.reference)?;
+    // Loaded before the work starts: a sweep that cannot denoise is refused at once.
+    let denoiser = if options.denoise {
+        Some(Denoiser::shared()?)
+    } else {
+        None
+    };
     let mut renderer = Renderer::new(options.threads, PassPlan::Single)?;
     let overrides = |(method, sampler): (Method, SamplerKind), spp: u32, seed: u64| Overrides {
         width: Some(reference.width),
@@ -197,10 +297,15 @@ pub fn measure(
         method: Some(method),
         sampler: Some(sampler),
     };
-    // Warm-up, not recorded: builds the BVH and touches every page once.
+    // Warm-up, not recorded: builds the BVH and touches every page once; the denoiser's
+    // device and filter are made once too.
     renderer.set_overrides(overrides(curves[0], 1, options.seed));
+    renderer.set_features(denoiser.is_some());
     renderer.load(&options.scene)?;
     renderer.render_to_completion();
+    if let Some(d) = denoiser {
+        FilmImages::of(renderer.film()).denoise(d, Quality::High, &AtomicBool::new(false))?;
+    }
 
     let mut rows = Vec::new();
     let mut k = 0u64;
@@ -209,37 +314,66 @@ pub fn measure(
             k += 1;
             let seed = options.seed.wrapping_add(k);
             renderer.set_overrides(overrides((method, sampler), spp, seed));
-            renderer.load(&options.scene)?;
-            let seconds = renderer.render_to_completion().as_secs_f64();
-            let nonfinite = renderer.stats().nonfinite;
-            if nonfinite > 0 {
-                return Err(AccuracyError::NonFinite {
-                    scene: options.scene.clone(),
-                    method,
-                    spp,
-                    count: nonfinite,
-                });
-            }
-            let image = Image::from_film(renderer.film());
-            let metrics =
-                compare(&image, &reference).ok_or_else(|| MetricsError::SizeMismatch {
+            let mut passes = vec![None];
+            passes.extend(denoiser.map(Some));
+            for pass in passes {
+                renderer.set_features(pass.is_some());
+                renderer.load(&options.scene)?;
+                let mut seconds = renderer.render_to_completion().as_secs_f64();
+                let nonfinite = renderer.stats().nonfinite;
+                if nonfinite > 0 {
+                    return Err(AccuracyError::NonFinite {
+                        scene: options.scene.clone(),
+                        method,
+                        spp,
+                        count: nonfinite,
+                    });
+                }
+                let (image, raw) = match pass {
+                    None => (Image::from_film(renderer.film()), None),
+                    Some(d) => {
+                        let start = Instant::now();
+                        let images = FilmImages::of(renderer.film());
+                        let denoised = images.denoise(d, Quality::High, &AtomicBool::new(false))?;
+                        seconds += start.elapsed().as_secs_f64();
+                        let image = image_of(reference.width, reference.height, &denoised);
+                        let count = image.data.iter().filter(|v| !v.is_finite()).count();
+                        if count > 0 {
+                            return Err(AccuracyError::DenoisedNonFinite {
+                                scene: options.scene.clone(),
+                                method,
+                                spp,
+                                count,
+                            });
+                        }
+                        (image, Some(images.colour))
+                    }
+                };
+                let mismatch = || MetricsError::SizeMismatch {
                     path: options.scene.clone(),
                     size: (image.width, image.height),
                     reference: options.reference.clone(),
                     reference_size: (reference.width, reference.height),
-                })?;
-            let row = AccuracyRow {
-                method,
-                sampler,
-                spp,
-                seed,
-                seconds,
-                metrics,
-            };
-            on_row(&row);
-            rows.push(row);
+                };
+                let row = AccuracyRow {
+                    method,
+                    sampler,
+                    spp,
+                    seed,
+                    seconds,
+                    metrics: compare(&image, &reference).ok_or_else(mismatch)?,
+                    lamp_out_rmse: lamp_out_rmse(&image, &reference).ok_or_else(mismatch)?,
+                    denoised: pass.is_some(),
+                };
+                if let Some(dir) = &options.keep_images {
+                    keep_image(&dir.join(row.image_name()), &image, raw.as_deref())?;
+                }
+                on_row(&row);
+                rows.push(row);
+            }
         }
     }
+    renderer.set_features(false);
     let fits = Metric::ALL
         .iter()
         .flat_map(|&metric| curves.iter().map(move |&c| (metric, c)))
@@ -251,6 +385,50 @@ pub fn measure(
         rows,
         fits,
     })
+}
+
+/// Refuses a sweep in which two renders would write the same image file.
+fn check_distinct(curves: &[(Method, SamplerKind)], spp_list: &[u32]) -> Result<(), AccuracyError> {
+    let mut seen = std::collections::HashSet::new();
+    for &spp in spp_list {
+        for &(method, sampler) in curves {
+            if !seen.insert((method, sampler, spp)) {
+                return Err(AccuracyError::Duplicate {
+                    method,
+                    sampler,
+                    spp,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// An [`Image`] of `width` × `height` pixels.
+fn image_of(width: u32, height: u32, pixels: &[Vec3]) -> Image {
+    Image {
+        width,
+        height,
+        data: pixels.iter().flat_map(|p| p.to_array()).collect(),
+    }
+}
+
+/// Writes `image` as an EXR at `path`, with `raw` as the layer `raw` if given.
+fn keep_image(path: &Path, image: &Image, raw: Option<&[Vec3]>) -> Result<(), AccuracyError> {
+    let colour: Vec<Vec3> = image
+        .data
+        .chunks_exact(3)
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect();
+    let layers: Vec<Layer> = raw
+        .map(|pixels| Layer {
+            name: "raw",
+            pixels,
+        })
+        .into_iter()
+        .collect();
+    write_layers(path, image.width, image.height, &colour, &layers, false)
+        .map_err(write_error(path))
 }
 
 /// Least-squares slope of `y` against `x`; `None` with fewer than two distinct `x`.
@@ -266,7 +444,7 @@ pub fn slope(points: &[(f64, f64)]) -> Option<f64> {
     (sxx > 0.0).then(|| sxy / sxx)
 }
 
-/// The summary of the rows of `method` with `sampler` in `metric`.
+/// The summary of the raw rows of `method` with `sampler` in `metric`.
 pub fn fit(
     method: Method,
     sampler: SamplerKind,
@@ -275,14 +453,14 @@ pub fn fit(
 ) -> MethodFit {
     let mine: Vec<&AccuracyRow> = rows
         .iter()
-        .filter(|r| (r.method, r.sampler) == (method, sampler))
+        .filter(|r| (r.method, r.sampler, r.denoised) == (method, sampler, false))
         .collect();
     let logs: Vec<(f64, f64)> = mine
         .iter()
-        .filter(|r| metric.of(&r.metrics) > 0.0 && r.seconds > 0.0)
-        .map(|r| (r.seconds.ln(), metric.of(&r.metrics).ln()))
+        .filter(|r| metric.of(r) > 0.0 && r.seconds > 0.0)
+        .map(|r| (r.seconds.ln(), metric.of(r).ln()))
         .collect();
-    let at_one_second = if mine.iter().all(|r| metric.of(&r.metrics) == 0.0) {
+    let at_one_second = if mine.iter().all(|r| metric.of(r) == 0.0) {
         0.0
     } else if logs.is_empty() {
         f64::NAN
@@ -305,13 +483,22 @@ fn write_error(path: &Path) -> impl Fn(std::io::Error) -> AccuracyError + '_ {
     }
 }
 
-/// Writes `rows` as CSV with a header line.
-pub fn write_csv(path: &Path, rows: &[AccuracyRow]) -> Result<(), AccuracyError> {
-    // The sampler comes last, so the columns of files written before it keep their places.
-    let mut text = String::from("method,spp,seed,seconds,rmse,rel_mse,mae,sampler\n");
+/// Writes `rows` as CSV with a header line; `images` fills the `image` column with each row's
+/// [`AccuracyRow::image_name`] (left empty otherwise).
+pub fn write_csv(path: &Path, rows: &[AccuracyRow], images: bool) -> Result<(), AccuracyError> {
+    crate::output_file::write_bytes(path, csv_text(rows, images).as_bytes())
+        .map_err(write_error(path))
+}
+
+/// The text of [`write_csv`].
+pub fn csv_text(rows: &[AccuracyRow], images: bool) -> String {
+    // New columns come last, so the columns of files written before them keep their places.
+    let mut text = String::from(
+        "method,spp,seed,seconds,rmse,rel_mse,mae,sampler,denoised,lamp_out_rmse,image\n",
+    );
     for r in rows {
         text += &format!(
-            "{},{},{},{:.6},{:.6e},{:.6e},{:.6e},{}\n",
+            "{},{},{},{:.6},{:.6e},{:.6e},{:.6e},{},{},{:.6e},{}\n",
             r.method,
             r.spp,
             r.seed,
@@ -319,226 +506,62 @@ pub fn write_csv(path: &Path, rows: &[AccuracyRow]) -> Result<(), AccuracyError>
             r.metrics.rmse,
             r.metrics.rel_mse,
             r.metrics.mae,
-            r.sampler
+            r.sampler,
+            r.denoised,
+            r.lamp_out_rmse,
+            if images {
+                r.image_name()
+            } else {
+                String::new()
+            }
         );
     }
-    crate::output_file::write_bytes(path, text.as_bytes()).map_err(write_error(path))
+    text
 }
 
-/// The equal-time comparison as Markdown, one table per metric: per method its slope and
-/// error at one second, and against the best method its error ratio at equal time and time
-/// ratio at equal error.
-pub fn summary_markdown(report: &AccuracyReport) -> String {
-    let mut s = String::new();
-    for metric in Metric::ALL {
-        let fits: Vec<&MethodFit> = report.fits.iter().filter(|f| f.metric == metric).collect();
-        let best = fits
-            .iter()
-            .filter(|f| f.at_one_second.is_finite())
-            .min_by(|a, b| a.at_one_second.total_cmp(&b.at_one_second));
-        let name = metric.name();
-        s += &format!(
-            "| method, sampler | slope of ln {name} vs ln t | {name} · √s | error ÷ best, equal time | time ÷ best, equal error |\n|---|---|---|---|---|\n"
-        );
-        for f in &fits {
-            let slope = f.slope.map_or("–".to_string(), |v| format!("{v:.2}"));
-            let (ratio, time) = match best {
-                Some(b) if b.at_one_second > 0.0 => {
-                    let r = f.at_one_second / b.at_one_second;
-                    (format!("{r:.2}"), format!("{:.1}", r * r))
-                }
-                Some(b) if f.at_one_second == b.at_one_second => ("1 (exact)".into(), "1".into()),
-                _ => ("∞ (best is exact)".into(), "∞".into()),
-            };
-            s += &format!(
-                "| {} | {slope} | {:.4e} | {ratio} | {time} |\n",
-                curve_name(f),
-                f.at_one_second
-            );
-        }
-        s += "\n";
-    }
-    s
-}
-
-/// A curve's name in tables and legends: `mis sobol`.
-fn curve_name(f: &MethodFit) -> String {
-    format!("{} {}", f.method, f.sampler)
-}
-
-/// Colour of a curve: one hue per method, paler for the independent sampler.
-fn colour(method: Method, sampler: SamplerKind) -> plotters::style::RGBColor {
-    use plotters::style::RGBColor;
-    let RGBColor(r, g, b) = match method {
-        Method::Naive => RGBColor(214, 39, 40),
-        Method::Nee => RGBColor(31, 119, 180),
-        Method::Mis => RGBColor(44, 160, 44),
-    };
-    let pale = |c: u8| ((u16::from(c) + 2 * 255) / 3) as u8;
-    match sampler {
-        SamplerKind::Independent => RGBColor(pale(r), pale(g), pale(b)),
-        SamplerKind::Sobol => RGBColor(r, g, b),
-    }
-}
-
-/// Writes the log-log chart of `metric` against seconds (SVG). Rows with zero error cannot be
-/// drawn on a log axis; a method that is exact everywhere is named in the legend instead.
-pub fn write_chart(
-    path: &Path,
-    title: &str,
-    metric: Metric,
-    report: &AccuracyReport,
-) -> Result<(), AccuracyError> {
-    let mut svg = String::new();
-    draw_chart(&mut svg, title, metric, report)
-        .and_then(|()| Ok(crate::output_file::write_bytes(path, svg.as_bytes())?))
-        .map_err(|e| AccuracyError::Write {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })
-}
-
-/// Draws the chart of [`write_chart`] as SVG text into `svg`.
-fn draw_chart(
-    svg: &mut String,
-    title: &str,
-    metric: Metric,
-    report: &AccuracyReport,
-) -> Result<(), Box<dyn std::error::Error>> {
-    use plotters::prelude::*;
-    let drawable: Vec<&AccuracyRow> = report
-        .rows
-        .iter()
-        .filter(|r| metric.of(&r.metrics) > 0.0 && r.seconds > 0.0)
-        .collect();
-    let (mut t0, mut t1, mut e0, mut e1) = (f64::INFINITY, 0f64, f64::INFINITY, 0f64);
-    for r in &drawable {
-        t0 = t0.min(r.seconds);
-        t1 = t1.max(r.seconds);
-        e0 = e0.min(metric.of(&r.metrics));
-        e1 = e1.max(metric.of(&r.metrics));
-    }
-    if drawable.is_empty() {
-        // Everything exact: an empty frame with the legend says so.
-        (t0, t1, e0, e1) = (0.01, 1.0, 1e-4, 1.0);
-    }
-    let root = SVGBackend::with_string(svg, (760, 520)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 18))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
-        // Axes in log10 units, labelled with the values: plotters' own log axis places its
-        // labels unevenly.
-        .build_cartesian_2d(
-            (t0 / 1.6).log10()..(t1 * 1.6).log10(),
-            (e0 / 1.6).log10()..(e1 * 1.6).log10(),
-        )?;
-    chart
-        .configure_mesh()
-        .x_desc("render time (s), log scale")
-        .y_desc(format!(
-            "{} against the reference, log scale",
-            metric.name()
-        ))
-        .x_labels(8)
-        .y_labels(8)
-        .light_line_style(WHITE)
-        .x_label_formatter(&|x| short(10f64.powf(*x)))
-        .y_label_formatter(&|y| short(10f64.powf(*y)))
-        .draw()?;
-    for f in report.fits.iter().filter(|f| f.metric == metric) {
-        let c = colour(f.method, f.sampler);
-        let name = curve_name(f);
-        let mine = |r: &AccuracyRow| (r.method, r.sampler) == (f.method, f.sampler);
-        let mut points: Vec<(f64, f64, u32)> = drawable
-            .iter()
-            .filter(|r| mine(r))
-            .map(|r| (r.seconds, metric.of(&r.metrics), r.spp))
-            .collect();
-        points.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let all = report.rows.iter().filter(|r| mine(r)).count();
-        let exact = all - points.len();
-        let mut label = match f.slope {
-            _ if f.at_one_second == 0.0 => format!("{name}: exact (error 0, not drawn)"),
-            Some(s) => format!("{name}: slope {s:.2}"),
-            None => name,
-        };
-        if exact > 0 && f.at_one_second > 0.0 {
-            label += &format!(" ({exact} of {all} renders exact, not drawn)");
-        }
-        chart
-            .draw_series(LineSeries::new(
-                points.iter().map(|p| (p.0.log10(), p.1.log10())),
-                c.stroke_width(2),
-            ))?
-            .label(label)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
-        chart.draw_series(points.iter().map(|&(t, e, spp)| {
-            EmptyElement::at((t.log10(), e.log10()))
-                + Circle::new((0, 0), 3, c.filled())
-                + Text::new(
-                    format!("{spp}"),
-                    (4, -14),
-                    ("sans-serif", 11).into_font().color(&c),
-                )
-        }))?;
-    }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 13))
-        .draw()?;
-    root.present()?;
-    Ok(())
-}
-
-/// A number with three significant digits, without an exponent between 0.001 and 10⁴.
-fn short(v: f64) -> String {
-    if v == 0.0 || !(1e-3..1e4).contains(&v.abs()) {
-        return format!("{v:.2e}");
-    }
-    // The 1e-9 keeps 0.09999999… (= 10^−1 in floating point) in the decade of 0.1.
-    let decimals = (2 - (v.abs() * (1.0 + 1e-9)).log10().floor() as i32).max(0) as usize;
-    format!("{v:.decimals$}")
-}
-
-/// Runs [`measure`] and writes `accuracy.csv`, `accuracy.svg` and `summary.md` in
-/// `options.out`. Returns the report.
+/// Runs [`measure`] and writes `accuracy.csv`, a chart per metric (`accuracy.svg`,
+/// `accuracy_relative.svg`, `accuracy_lamp_out.svg`) and `summary.md` in `options.out`.
+/// Returns the report.
 pub fn run(
     options: &AccuracyOptions,
     on_row: impl FnMut(&AccuracyRow),
 ) -> Result<AccuracyReport, AccuracyError> {
     std::fs::create_dir_all(&options.out).map_err(write_error(&options.out))?;
+    if let Some(dir) = &options.keep_images {
+        std::fs::create_dir_all(dir).map_err(write_error(dir))?;
+    }
     let report = measure(options, on_row)?;
-    write_csv(&options.out.join("accuracy.csv"), &report.rows)?;
+    write_csv(
+        &options.out.join("accuracy.csv"),
+        &report.rows,
+        options.keep_images.is_some(),
+    )?;
     let name = options
         .scene
         .file_stem()
         .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
+    let denoised = report.rows.iter().any(|r| r.denoised);
     let title = |metric: Metric| {
         format!(
-            "{name}: {} against time ({}×{}, spp at each point)",
-            metric.name(),
+            "{name} {}×{}: {} against time, spp at each point{}",
             report.width,
-            report.height
+            report.height,
+            metric.name(),
+            if denoised {
+                "; dashed: denoised (the denoiser is biased)"
+            } else {
+                ""
+            }
         )
     };
-    write_chart(
-        &options.out.join("accuracy.svg"),
-        &title(Metric::Rmse),
-        Metric::Rmse,
-        &report,
-    )?;
-    write_chart(
-        &options.out.join("accuracy_relative.svg"),
-        &title(Metric::RelRmse),
-        Metric::RelRmse,
-        &report,
-    )?;
+    for metric in Metric::ALL {
+        write_chart(
+            &options.out.join(metric.chart_file()),
+            &title(metric),
+            metric,
+            &report,
+        )?;
+    }
     let summary = options.out.join("summary.md");
     let text = format!(
         "{}\n\nscene `{}`, reference `{}`\n\n{}\n",
@@ -549,6 +572,11 @@ pub fn run(
     );
     crate::output_file::write_bytes(&summary, text.as_bytes()).map_err(write_error(&summary))?;
     Ok(report)
+}
+
+/// A curve's name in tables and legends: `mis sobol`.
+pub fn curve_name(method: Method, sampler: SamplerKind) -> String {
+    format!("{method} {sampler}")
 }
 
 #[cfg(test)]
@@ -566,6 +594,8 @@ mod tests {
                 rmse,
                 ..Default::default()
             },
+            lamp_out_rmse: rmse,
+            denoised: false,
         }
     }
 
@@ -581,12 +611,96 @@ mod tests {
     }
 
     #[test]
-    fn axis_labels_keep_three_significant_digits() {
-        assert_eq!(short(0.012345), "0.0123");
-        assert_eq!(short(1.5), "1.50");
-        assert_eq!(short(250.0), "250");
-        assert_eq!(short(1e-5), "1.00e-5");
-        assert_eq!(short(10f64.powf(-1.0)), "0.100");
+    fn fit_leaves_the_denoised_rows_out() {
+        // Raw: 0.3/√t, slope −0.5. A denoised row far below the line would pull both the slope
+        // and the error at one second if it were counted.
+        let mut rows: Vec<AccuracyRow> = [1.0, 4.0]
+            .iter()
+            .map(|&t: &f64| row(Method::Mis, t, 0.3 / t.sqrt()))
+            .collect();
+        rows.push(AccuracyRow {
+            denoised: true,
+            ..row(Method::Mis, 2.0, 0.001)
+        });
+        let f = fit(Method::Mis, SamplerKind::Sobol, Metric::Rmse, &rows);
+        assert!((f.slope.expect("slope") + 0.5).abs() < 1e-9, "{f:?}");
+        assert!((f.at_one_second - 0.3).abs() < 1e-9, "{f:?}");
+    }
+
+    #[test]
+    fn the_csv_keeps_its_old_columns_and_adds_denoised_lamp_out_and_image_at_the_end() {
+        let raw = AccuracyRow {
+            spp: 4,
+            seed: 7,
+            lamp_out_rmse: 0.25,
+            ..row(Method::Mis, 1.5, 0.5)
+        };
+        let denoised = AccuracyRow {
+            denoised: true,
+            ..raw
+        };
+        let text = csv_text(&[raw, denoised], true);
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(
+            lines,
+            [
+                "method,spp,seed,seconds,rmse,rel_mse,mae,sampler,denoised,lamp_out_rmse,image",
+                "mis,4,7,1.500000,5.000000e-1,0.000000e0,0.000000e0,sobol,false,2.500000e-1,mis_sobol_4spp.exr",
+                "mis,4,7,1.500000,5.000000e-1,0.000000e0,0.000000e0,sobol,true,2.500000e-1,mis_sobol_4spp_denoised.exr",
+            ]
+        );
+        // Without kept images the column is there but empty.
+        assert!(csv_text(&[raw], false).ends_with(",false,2.500000e-1,\n"));
+    }
+
+    #[test]
+    fn lamp_out_rmse_leaves_out_bright_reference_pixels_and_clamps() {
+        // Reference: pixel 0 (0.5, 0.5, 0.5); pixel 1 (2, 0, 0), left out (red above 1);
+        // pixel 2 (1, 1, 1), kept (not above 1). Image: pixel 0 (0.75, 0.5, 0.25), pixel 1
+        // anything, pixel 2 (3, 1, -1), clamped to (1, 1, 0).
+        // Squared errors of the six kept values: 0.0625, 0, 0.0625, 0, 0, 1; sum 1.125.
+        // Lamp-out RMSE = √(1.125 / 6) = 0.4330127…
+        let r = Image {
+            width: 3,
+            height: 1,
+            data: vec![0.5, 0.5, 0.5, 2.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+        };
+        let a = Image {
+            width: 3,
+            height: 1,
+            data: vec![0.75, 0.5, 0.25, 9.0, 9.0, 9.0, 3.0, 1.0, -1.0],
+        };
+        let got = lamp_out_rmse(&a, &r).expect("same size");
+        assert!((got - 0.433_012_7).abs() < 1e-7, "{got}");
+        let small = Image {
+            width: 1,
+            height: 1,
+            data: vec![0.0; 3],
+        };
+        assert_eq!(lamp_out_rmse(&small, &r), None);
+    }
+
+    #[test]
+    fn image_names_are_those_flip_matches() {
+        let r = AccuracyRow {
+            spp: 16,
+            sampler: SamplerKind::Independent,
+            ..row(Method::Nee, 1.0, 0.1)
+        };
+        assert_eq!(r.image_name(), "nee_independent_16spp.exr");
+        let d = AccuracyRow {
+            denoised: true,
+            ..r
+        };
+        assert_eq!(d.image_name(), "nee_independent_16spp_denoised.exr");
+    }
+
+    #[test]
+    fn a_kept_image_sweep_refuses_two_renders_of_one_name() {
+        let curves = [(Method::Mis, SamplerKind::Sobol)];
+        assert!(check_distinct(&curves, &[1, 2, 4]).is_ok());
+        let e = check_distinct(&curves, &[1, 2, 1]).expect_err("duplicate");
+        assert!(e.to_string().contains("mis sobol at 1 spp"), "{e}");
     }
 
     #[test]
