@@ -147,6 +147,29 @@ pub fn compare(a: &Image, r: &Image) -> Option<ErrorMetrics> {
     })
 }
 
+/// The lamp-out clamped RMSE of `a` against reference `r`, the error of the peer-renderer
+/// benches (`benches/common/image_metrics.py`): pixels whose reference exceeds 1 in some channel
+/// (a visible lamp and its antialiased edge) are left out, and both images are clamped to
+/// [0, 1], so it judges what a display shows. `None` if the sizes differ; NaN if every pixel is
+/// left out.
+pub fn lamp_out_rmse(a: &Image, r: &Image) -> Option<f64> {
+    if (a.width, a.height) != (r.width, r.height) || a.data.len() != r.data.len() {
+        return None;
+    }
+    let (mut se, mut n) = (0.0f64, 0usize);
+    for (x, y) in a.data.chunks_exact(3).zip(r.data.chunks_exact(3)) {
+        if y.iter().any(|&c| c > 1.0) {
+            continue;
+        }
+        for (&x, &y) in x.iter().zip(y) {
+            let d = f64::from(x.clamp(0.0, 1.0)) - f64::from(y.clamp(0.0, 1.0));
+            se += d * d;
+        }
+        n += 3;
+    }
+    Some((se / n as f64).sqrt())
+}
+
 /// Reads two image files and compares the first against the second (the reference).
 pub fn compare_files(path: &Path, reference: &Path) -> Result<ErrorMetrics, MetricsError> {
     Ok(diff_files(path, reference, None)?.metrics)

@@ -9,7 +9,7 @@ use std::process::{Command, Output};
 
 use common::{scenes_dir, temp_dir};
 use image::Rgb32FImage;
-use rondo::metrics::{Image, REL_EPSILON, compare};
+use rondo::metrics::{Image, REL_EPSILON, compare, lamp_out_rmse};
 
 fn rondo(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_rondo"))
@@ -175,7 +175,7 @@ fn bench_accuracy_smoke_run_writes_its_csv_chart_and_summary() {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next(),
-        Some("method,spp,seed,seconds,rmse,rel_mse,mae,sampler")
+        Some("method,spp,seed,seconds,rmse,rel_mse,mae,sampler,denoised,lamp_out_rmse,image")
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 6, "{csv}");
@@ -212,4 +212,109 @@ fn bench_accuracy_smoke_run_writes_its_csv_chart_and_summary() {
     ]);
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("nope.exr"));
+}
+
+/// The channels of an EXR file and their values, by name.
+fn exr_channels(path: &Path) -> std::collections::BTreeMap<String, Vec<f32>> {
+    let image = exr::prelude::read_all_flat_layers_from_file(path).expect("an EXR");
+    image.layer_data[0]
+        .channel_data
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .collect()
+}
+
+#[test]
+fn bench_accuracy_denoise_measures_a_denoised_twin_of_every_render_and_keeps_the_images() {
+    if common::denoiser().is_none() {
+        return;
+    }
+    // A 32×32 Cornell box at 1 and 2 spp: checks the rows, files and figures, not the times.
+    let dir = temp_dir("bench-accuracy-denoise");
+    let scene = scenes_dir().join("cornell.ron");
+    let reference = dir.join("ref.exr");
+    let size = ["--width", "32", "--height", "32"];
+    let args = ["render", s(&scene), "-o", s(&reference), "--spp", "64"];
+    let out = rondo(&[&args[..], &size[..]].concat());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (results, images) = (dir.join("acc"), dir.join("images"));
+    let out = rondo(&[
+        "bench",
+        "accuracy",
+        s(&scene),
+        "--reference",
+        s(&reference),
+        "--out",
+        s(&results),
+        "--spp-list",
+        "1,2",
+        "--methods",
+        "mis",
+        "--denoise",
+        "--keep-images",
+        s(&images),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    let csv = std::fs::read_to_string(results.join("accuracy.csv")).expect("csv");
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 4, "{csv}");
+    let reference = Image::read(&reference).expect("reference");
+    for spp in ["1", "2"] {
+        let find = |denoised: &str| {
+            rows.iter()
+                .find(|r| r[1] == spp && r[8] == denoised)
+                .unwrap_or_else(|| panic!("no row at {spp} spp, denoised {denoised}:\n{csv}"))
+        };
+        let (raw, den) = (find("false"), find("true"));
+        // The twin is the same render (same seed), denoised.
+        assert_eq!(raw[2], den[2], "{csv}");
+        assert_eq!(raw[10], format!("mis_sobol_{spp}spp.exr"));
+        assert_eq!(den[10], format!("mis_sobol_{spp}spp_denoised.exr"));
+        // Each row's figures are those of its kept image against the reference.
+        for r in [raw, den] {
+            let image = Image::read(&images.join(r[10])).expect("kept image");
+            let m = compare(&image, &reference).expect("size");
+            let lamp_out = lamp_out_rmse(&image, &reference).expect("size");
+            let close = |field: &str, want: f64| {
+                let got: f64 = field.parse().expect("a number");
+                assert!(
+                    (got - want).abs() <= 1e-5 * want,
+                    "{got} against {want}\n{csv}"
+                );
+            };
+            close(r[4], m.rmse);
+            close(r[9], lamp_out);
+        }
+        // The denoised file keeps the raw colour as its layer `raw`, equal to the raw image.
+        let (plain, layered) = (
+            exr_channels(&images.join(raw[10])),
+            exr_channels(&images.join(den[10])),
+        );
+        for c in ["R", "G", "B"] {
+            assert_eq!(layered[&format!("raw.{c}")], plain[c], "{c}");
+            assert_ne!(layered[c], plain[c], "{c}: not denoised");
+        }
+    }
+    let svg = std::fs::read_to_string(results.join("accuracy_lamp_out.svg")).expect("svg");
+    assert!(svg.contains("mis sobol + denoiser"), "{svg}");
+    let summary = std::fs::read_to_string(results.join("summary.md")).expect("summary");
+    assert!(summary.contains("The denoiser is biased"), "{summary}");
+    assert!(
+        summary.contains("| mis sobol | lamp-out RMSE |"),
+        "{summary}"
+    );
 }

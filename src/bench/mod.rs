@@ -2,6 +2,8 @@
 //! results written as CSV, a Markdown table and an SVG chart.
 
 pub mod accuracy;
+pub mod accuracy_chart;
+pub mod accuracy_summary;
 pub mod chart;
 pub mod instances;
 pub mod layout;

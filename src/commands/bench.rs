@@ -224,22 +224,31 @@ pub fn time_edits(
 /// `rondo bench accuracy`: runs the sweep, printing a line per render, then the summary.
 pub fn accuracy(options: &rondo::bench::accuracy::AccuracyOptions) -> Result<()> {
     check_output_dir(&options.out)?;
+    if let Some(dir) = &options.keep_images {
+        check_output_dir(dir)?;
+    }
     let report = rondo::bench::accuracy::run(options, |r| {
         eprintln!(
-            "{:>5} {:>11} {:>6} spp  {:9.4} s  rmse {:.4e}  rel_mse {:.4e}  mae {:.4e}",
+            "{:>5} {:>11}{} {:>6} spp  {:9.4} s  rmse {:.4e}  rel_mse {:.4e}  mae {:.4e}  lamp-out rmse {:.4e}",
             r.method.to_string(),
             r.sampler.to_string(),
+            if r.denoised { " + denoiser" } else { "           " },
             r.spp,
             r.seconds,
             r.metrics.rmse,
             r.metrics.rel_mse,
-            r.metrics.mae
+            r.metrics.mae,
+            r.lamp_out_rmse
         );
     })?;
     println!("{}", rondo::bench::accuracy::summary_markdown(&report));
     println!(
-        "wrote {}/accuracy.csv, accuracy.svg, accuracy_relative.svg, summary.md",
-        options.out.display()
+        "wrote {}/accuracy.csv, accuracy.svg, accuracy_relative.svg, accuracy_lamp_out.svg, summary.md{}",
+        options.out.display(),
+        options
+            .keep_images
+            .as_ref()
+            .map_or(String::new(), |d| format!(" and the images in {}", d.display()))
     );
     Ok(())
 }
