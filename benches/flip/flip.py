@@ -7,7 +7,10 @@ Every *.exr in a directory is measured (the reference itself is skipped). The CS
 per image: file, flip, lamp_out_rmse, rmse. If a directory holds `accuracy.csv` (from
 `rondo bench accuracy`) with a column `image` (or `file`) naming each EXR relative to the
 directory, the script also writes `accuracy_flip.csv` there: accuracy.csv with `flip_ldr` (or
-`flip_hdr`) and `lamp_out_rmse` columns added, rows matched by file name.
+`flip_hdr`) and `lamp_out_rmse` columns added, rows matched by file name (`rondo bench accuracy
+--keep-images DIR` names them `<method>_<sampler>_<spp>spp[_denoised].exr`; a denoised one holds
+the denoised colour as R, G, B, which is what is measured, and the raw one as the layer `raw`).
+With the images in another directory than accuracy.csv, name it with `--accuracy PATH`.
 
 FLIP mode. The default is LDR-FLIP on what the user looks at: each image clamped to [0, 1]
 and encoded with the sRGB transfer function, as rondo writes its PNGs and shows the viewer and
@@ -106,12 +109,16 @@ def collect(paths, reference):
     return out
 
 
-def annotate_accuracy(directory, results, mode):
-    """Writes DIRECTORY/accuracy_flip.csv: accuracy.csv with flip and lamp_out_rmse added,
-    matched by the `image` (or `file`) column. Returns its path, or None with the reason."""
-    src = os.path.join(directory, "accuracy.csv")
+def annotate_accuracy(directory, results, mode, src=None):
+    """Writes DIRECTORY/accuracy_flip.csv: accuracy.csv (or `src`, then beside it) with flip and
+    lamp_out_rmse added, matched by the `image` (or `file`) column's file name. A lamp_out_rmse
+    column already there (rondo writes one) is kept. Returns its path, or None with the reason."""
+    if src is None:
+        src = os.path.join(directory, "accuracy.csv")
+    else:
+        directory = os.path.dirname(src) or "."
     if not os.path.isfile(src):
-        return None, "no accuracy.csv"
+        return None, "no %s" % src
     with open(src, newline="") as f:
         rows = list(csv.DictReader(f))
     if not rows:
@@ -120,7 +127,8 @@ def annotate_accuracy(directory, results, mode):
     if key is None:
         return None, "accuracy.csv has no `image` column naming the EXRs"
     by_name = {os.path.basename(path): r for path, r in results.items()}
-    fields = list(rows[0].keys()) + ["flip_" + mode, "lamp_out_rmse"]
+    ours = "lamp_out_rmse" not in rows[0]
+    fields = list(rows[0].keys()) + ["flip_" + mode] + (["lamp_out_rmse"] if ours else [])
     out = os.path.join(directory, "accuracy_flip.csv")
     matched = 0
     with open(out, "w", newline="") as f:
@@ -130,7 +138,8 @@ def annotate_accuracy(directory, results, mode):
             m = by_name.get(os.path.basename(r[key] or ""))
             matched += m is not None
             r["flip_" + mode] = "%.6g" % m[0] if m else ""
-            r["lamp_out_rmse"] = "%.6g" % m[1] if m else ""
+            if ours:
+                r["lamp_out_rmse"] = "%.6g" % m[1] if m else ""
             w.writerow(r)
     return out, "%d of %d rows matched" % (matched, len(rows))
 
@@ -147,6 +156,10 @@ def main():
                     help="pixels per degree of visual angle (FLIP's default 67: a 0.7 m "
                          "viewing distance from a 24-inch 4K display)")
     ap.add_argument("--layer", help="EXR layer holding the colour (channels LAYER.R, .G, .B)")
+    ap.add_argument("--accuracy", help="accuracy.csv to annotate with every image measured "
+                                       "(default: accuracy.csv in each directory given), for "
+                                       "`rondo bench accuracy --keep-images DIR` with DIR "
+                                       "other than --out")
     args = ap.parse_args()
 
     ref = read_exr(args.reference)
@@ -172,6 +185,10 @@ def main():
         for path, (fl, lo, rm) in results.items():
             w.writerow([os.path.relpath(path), "%.6g" % fl, "%.6g" % lo, "%.6g" % rm])
     print("wrote", out)
+    if args.accuracy:
+        path, why = annotate_accuracy(None, results, args.mode, args.accuracy)
+        print("%s: %s" % (path, why) if path else "%s: not annotated (%s)" % (args.accuracy, why))
+        return
     for d in dict.fromkeys(dirs):
         path, why = annotate_accuracy(d, {p: v for p, v in results.items()
                                           if os.path.dirname(p) == d.rstrip("/")}, args.mode)
