@@ -411,7 +411,8 @@ def main():
         w = csv.writer(f)
         w.writerow(["renderer", "spp", "mode", "seed", "seconds", "cpu_seconds",
                     "process_seconds", "rmse", "lamp_out_rmse"]
-                   + ["lamp_out_rmse_vs_" + os.path.basename(p) for p, _ in extra])
+                   + ["lamp_out_rmse_vs_" + os.path.splitext(os.path.basename(p))[0]
+                      for p, _ in extra])
         for r in rows:
             w.writerow(list(r[:4]) + ["%.4f" % r[4], "%.4f" % r[5],
                                       "" if r[6] is None else "%.4f" % r[6],

@@ -44,26 +44,30 @@ MAX_PIXELS = 64 * 1024 * 1024
 
 
 def read_exr(path, layer=None):
-    """An EXR's RGB (or LAYER.R/G/B) as an H x W x 3 float32 array, top row first."""
+    """An EXR's RGB (or LAYER.R/G/B) as an H x W x 3 float32 array, top row first. The header
+    is read and checked (size, channels) before any pixel is decoded."""
     import OpenEXR
 
+    prefix = layer + "." if layer else ""
+    names = [prefix + c for c in "RGB"]
     try:
-        with OpenEXR.File(path, separate_channels=True) as f:
+        with OpenEXR.File(path, header_only=True) as f:
+            # (The header is emptied when the file closes: read what is needed inside.)
             header = f.header()
             lo, hi = header["dataWindow"]
-            w, h = int(hi[0] - lo[0] + 1), int(hi[1] - lo[1] + 1)
-            if w <= 0 or h <= 0 or w * h > MAX_PIXELS:
-                sys.exit("%s: image size %dx%d out of range" % (path, w, h))
+            present = [c.name for c in header["channels"]]
+        w, h = int(hi[0] - lo[0] + 1), int(hi[1] - lo[1] + 1)
+        if w <= 0 or h <= 0 or w * h > MAX_PIXELS:
+            sys.exit("%s: image size %dx%d out of range" % (path, w, h))
+        missing = [n for n in names if n not in present]
+        if missing:
+            sys.exit("%s: no channel %s (channels: %s)%s" % (
+                path, ", ".join(missing), ", ".join(sorted(present)),
+                "" if layer else "; choose a layer with --layer"))
+        with OpenEXR.File(path, separate_channels=True) as f:
             channels = f.channels()
-            prefix = layer + "." if layer else ""
-            names = [prefix + c for c in "RGB"]
-            missing = [n for n in names if n not in channels]
-            if missing:
-                sys.exit("%s: no channel %s (channels: %s)%s" % (
-                    path, ", ".join(missing), ", ".join(sorted(channels)),
-                    "" if layer else "; choose a layer with --layer"))
             return np.stack([channels[n].pixels.astype(np.float32) for n in names], axis=-1)
-    except (OSError, RuntimeError, KeyError, ValueError) as e:
+    except (OSError, RuntimeError, KeyError, ValueError, AttributeError) as e:
         sys.exit("%s: cannot read the EXR: %s" % (path, e))
 
 
