@@ -268,7 +268,7 @@ def child_main(args, bpy, mathutils):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     ap.add_argument("--reference", default="bench/mitsuba/reference.exr",
                     help="converged reference .exr (size x size)")
     ap.add_argument("--also-reference", action="append", metavar="PATH",

@@ -149,7 +149,7 @@ def annotate_accuracy(directory, results, mode, src=None):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     ap.add_argument("reference", help="converged reference .exr")
     ap.add_argument("images", nargs="+", help="EXR files or directories of them")
     ap.add_argument("--csv", help="output CSV (default: flip.csv in the first directory given, "
