@@ -593,7 +593,7 @@ pub fn render_preview<L: Layout>(
                     None => stats.nonfinite += 1,
                     Some(clamped) => stats.clamped += u64::from(clamped),
                 }
-                fill_block(&mut rows.sum, centre, width, bx..bx + cols, lines);
+                fill_block(rows.sum, centre, width, bx..bx + cols, lines);
                 if let Some((albedo, normal)) = &mut rows.features {
                     fill_block(albedo, centre, width, bx..bx + cols, lines);
                     fill_block(normal, centre, width, bx..bx + cols, lines);
