@@ -248,7 +248,8 @@ mod tests {
         // Raw: 0.1 after 1 s, 0.05 after 4 s: the line 0.1 / √t.
         // Denoised: 1 spp, 0.05 after 0.5 s (raw line there: 0.1 / √0.5 = 0.1414, worse);
         // 2 spp, 0.08 after 1 s (raw 0.1, worse); 4 spp, 0.08 after 2 s (raw 0.0707, better:
-        // the crossover); 8 spp, 0.01 after 4 s (raw 0.05, worse again, but after the first).
+        // the crossover); 8 spp, 0.01 after 4 s (raw 0.05, worse); 16 spp, 0.05 after 8 s (raw
+        // 0.0354, better: a crossover too, but not the first).
         // The raw line reaches 0.08 at t = (0.1 / 0.08)² = 1.5625 s.
         let rows = [
             row(false, 1, 1.0, 0.1),
@@ -257,6 +258,7 @@ mod tests {
             row(true, 2, 1.0, 0.08),
             row(true, 4, 2.0, 0.08),
             row(true, 8, 4.0, 0.01),
+            row(true, 16, 8.0, 0.05),
         ];
         let (spp, error, denoised, raw) = at(crossover(
             Method::Mis,
