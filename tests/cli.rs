@@ -314,8 +314,8 @@ fn render_denoise_writes_the_denoised_colour_beside_the_raw_one_and_the_features
     assert_eq!(
         names,
         [
-            "B", "G", "R", "albedo.B", "albedo.G", "albedo.R", "normal.B", "normal.G",
-            "normal.R", "raw.B", "raw.G", "raw.R"
+            "B", "G", "R", "albedo.B", "albedo.G", "albedo.R", "normal.B", "normal.G", "normal.R",
+            "raw.B", "raw.G", "raw.R"
         ]
     );
     // The raw layer is the image a render without the denoiser writes, to the bit; the colour
@@ -331,7 +331,14 @@ fn denoise_and_aov_are_refused_where_they_cannot_apply_before_rendering() {
     let dir = temp_dir("cli-denoise-refused");
     let png = dir.join("x.png");
     assert_refused(
-        &rondo(&["render", text(&cornell()), "-o", text(&png), "--aov", "albedo"]),
+        &rondo(&[
+            "render",
+            text(&cornell()),
+            "-o",
+            text(&png),
+            "--aov",
+            "albedo",
+        ]),
         "only an .exr holds",
     );
     let partial = dir.join("p.exr");
@@ -367,7 +374,14 @@ fn merge_denoise_denoises_merged_partials_into_a_png_and_refuses_an_exr() {
     let mut parts = Vec::new();
     for range in ["0..2", "2..4"] {
         let part = dir.join(format!("{}.exr", range.replace("..", "-")));
-        let args = ["render", text(&scene), "-o", text(&part), "--samples", range];
+        let args = [
+            "render",
+            text(&scene),
+            "-o",
+            text(&part),
+            "--samples",
+            range,
+        ];
         let out = rondo(&[&args[..], &size[..]].concat());
         assert!(out.status.success(), "{}", stderr(&out));
         parts.push(part);
@@ -385,7 +399,10 @@ fn merge_denoise_denoises_merged_partials_into_a_png_and_refuses_an_exr() {
     let raw = dir.join("raw.png");
     let out = rondo(&["merge", text(&parts[0]), text(&parts[1]), "-o", text(&raw)]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let (a, b) = (image::open(&png).expect("png"), image::open(&raw).expect("png"));
+    let (a, b) = (
+        image::open(&png).expect("png"),
+        image::open(&raw).expect("png"),
+    );
     assert_eq!(a.width(), 32);
     assert_ne!(a.to_rgb8().into_raw(), b.to_rgb8().into_raw(), "denoised");
     let exr = dir.join("merged.exr");

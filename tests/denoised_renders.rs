@@ -63,7 +63,10 @@ fn the_denoiser_cuts_the_cornell_boxs_4_spp_error_threefold_and_leaves_a_converg
     let noisy = render(&scene, 128, 4, 7);
     let raw = lamp_out_rmse(&noisy.colour, &reference);
     let clean = lamp_out_rmse(&denoised(&noisy), &reference);
-    eprintln!("Cornell 128², 4 spp: raw {raw:.5}, denoised {clean:.5} ({:.1}×)", raw / clean);
+    eprintln!(
+        "Cornell 128², 4 spp: raw {raw:.5}, denoised {clean:.5} ({:.1}×)",
+        raw / clean
+    );
     assert!(clean * 3.0 <= raw, "raw {raw}, denoised {clean}");
 
     // The reference itself, denoised: relative MSE (Σ(d − r)² / Σr²) below 1 %.
@@ -77,7 +80,10 @@ fn the_denoiser_cuts_the_cornell_boxs_4_spp_error_threefold_and_leaves_a_converg
             ((d - r).length_squared(), r.length_squared())
         })
         .fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
-    eprintln!("converged image changed by {:.4} % relative MSE", 100.0 * num / den);
+    eprintln!(
+        "converged image changed by {:.4} % relative MSE",
+        100.0 * num / den
+    );
     assert!(num < 0.01 * den, "relative MSE {}", num / den);
 }
 
@@ -126,6 +132,10 @@ fn the_same_render_denoises_to_the_same_bits() {
     let b = render(&scene, 64, 2, 1);
     assert_eq!(a, b, "renders are deterministic");
     let (da, db) = (denoised(&a), denoised(&b));
-    assert!(da.iter().zip(&db).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)));
+    assert!(
+        da.iter()
+            .zip(&db)
+            .all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits))
+    );
     assert_ne!(da, a.colour, "the denoiser changed the image");
 }

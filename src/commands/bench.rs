@@ -232,7 +232,11 @@ pub fn accuracy(options: &rondo::bench::accuracy::AccuracyOptions) -> Result<()>
             "{:>5} {:>11}{} {:>6} spp  {:9.4} s  rmse {:.4e}  rel_mse {:.4e}  mae {:.4e}  lamp-out rmse {:.4e}",
             r.method.to_string(),
             r.sampler.to_string(),
-            if r.denoised { " + denoiser" } else { "           " },
+            if r.denoised {
+                " + denoiser"
+            } else {
+                "           "
+            },
             r.spp,
             r.seconds,
             r.metrics.rmse,
@@ -248,7 +252,10 @@ pub fn accuracy(options: &rondo::bench::accuracy::AccuracyOptions) -> Result<()>
         options
             .keep_images
             .as_ref()
-            .map_or(String::new(), |d| format!(" and the images in {}", d.display()))
+            .map_or(String::new(), |d| format!(
+                " and the images in {}",
+                d.display()
+            ))
     );
     Ok(())
 }

@@ -638,8 +638,7 @@ impl Watch {
             None if self.denoise_sink.is_some() => Denoising::Viewer,
             None => Denoising::Off,
         };
-        self.renderer
-            .set_features(self.denoising != Denoising::Off);
+        self.renderer.set_features(self.denoising != Denoising::Off);
         if let Some(worker) = &self.denoiser {
             worker.cancel();
         }

@@ -298,7 +298,10 @@ impl Report {
             Self::Warning { message } => format!("warning: {message}"),
             Self::Denoised(d) => {
                 let wrote = d.wrote.as_ref().map_or(String::new(), |p| {
-                    format!(", wrote {}", p.file_name().unwrap_or_default().to_string_lossy())
+                    format!(
+                        ", wrote {}",
+                        p.file_name().unwrap_or_default().to_string_lossy()
+                    )
                 });
                 format!(
                     "reload {}: denoised {} spp in {} ({}), {} after the save{wrote}",
