@@ -7,7 +7,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use common::{scenes_dir, temp_dir};
+use common::{exr_channels, scenes_dir, temp_dir};
 use image::Rgb32FImage;
 use rondo::metrics::{Image, REL_EPSILON, compare, lamp_out_rmse};
 
@@ -212,17 +212,6 @@ fn bench_accuracy_smoke_run_writes_its_csv_chart_and_summary() {
     ]);
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("nope.exr"));
-}
-
-/// The channels of an EXR file and their values, by name.
-fn exr_channels(path: &Path) -> std::collections::BTreeMap<String, Vec<f32>> {
-    let image = exr::prelude::read_all_flat_layers_from_file(path).expect("an EXR");
-    image.layer_data[0]
-        .channel_data
-        .list
-        .iter()
-        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
-        .collect()
 }
 
 #[test]

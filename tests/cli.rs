@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::Duration;
 
-use common::{scenes_dir, temp_dir, wait_or_kill, write_scene};
+use common::{exr_channels, scenes_dir, temp_dir, wait_or_kill, write_scene};
 
 /// Longer than any command here needs by orders of magnitude: only guards against a hang (a
 /// command that renders 10⁶ samples per pixel before looking at its output path).
@@ -280,20 +280,6 @@ fn a_range_render_reports_the_samples_it_rendered() {
     assert!(rays + 0.01 >= samples, "{err}");
 }
 
-/// The channels of an EXR file and their values, by name.
-fn exr_channels(path: &Path) -> std::collections::BTreeMap<String, Vec<f32>> {
-    let image = exr::prelude::read_all_flat_layers_from_file(path).expect("an EXR");
-    image.layer_data[0]
-        .channel_data
-        .list
-        .iter()
-        .map(|c| {
-            let values = c.sample_data.values_as_f32().collect();
-            (c.name.to_string(), values)
-        })
-        .collect()
-}
-
 #[test]
 fn render_denoise_writes_the_denoised_colour_beside_the_raw_one_and_the_features() {
     if common::denoiser().is_none() {
@@ -415,4 +401,32 @@ fn merge_denoise_denoises_merged_partials_into_a_png_and_refuses_an_exr() {
         "--denoise",
     ]);
     assert_refused(&out, "an .exr merge is a partial of the raw sums");
+}
+
+#[test]
+fn a_scenes_denoise_setting_asks_for_the_denoised_image_and_no_denoise_overrides_it() {
+    if common::denoiser().is_none() {
+        return;
+    }
+    let dir = temp_dir("cli-denoise-setting");
+    let source = std::fs::read_to_string(cornell()).expect("cornell.ron");
+    let source = source.replacen(
+        "settings: Settings(",
+        "settings: Settings(denoise: true, ",
+        1,
+    );
+    assert!(source.contains("denoise: true"));
+    let scene = write_scene(&dir, "scene.ron", &source);
+    let size = ["--spp", "1", "--width", "24", "--height", "24"];
+    let (on, off) = (dir.join("on.exr"), dir.join("off.exr"));
+    let out = rondo(&[&["render", text(&scene), "-o", text(&on)], &size[..]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let args = ["render", text(&scene), "-o", text(&off), "--no-denoise"];
+    let out = rondo(&[&args[..], &size[..]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        exr_channels(&on).contains_key("raw.R"),
+        "denoised, raw kept"
+    );
+    assert!(!exr_channels(&off).contains_key("raw.R"), "not denoised");
 }

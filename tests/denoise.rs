@@ -11,27 +11,13 @@ use std::path::Path;
 use std::process::Command;
 use std::sync::atomic::AtomicBool;
 
+use common::denoiser;
 use rondo::denoise::{DenoiseError, DenoiseInput, Denoiser, Quality};
 
 const WIDTH: u32 = 128;
 const HEIGHT: u32 = 128;
 /// Side of the albedo's constant blocks, in pixels.
 const BLOCK: u32 = 16;
-
-/// The shared denoiser, or `None` (test skipped) when the library is not available and not
-/// required.
-fn denoiser() -> Option<&'static Denoiser> {
-    match Denoiser::shared() {
-        Ok(d) => Some(d),
-        Err(e) if std::env::var("RONDO_REQUIRE_OIDN").is_ok_and(|v| v == "1") => {
-            panic!("RONDO_REQUIRE_OIDN=1 but {e}")
-        }
-        Err(e) => {
-            eprintln!("skipped: {e}");
-            None
-        }
-    }
-}
 
 /// A small deterministic generator (SplitMix64), uniform in [0, 1).
 struct Rng(u64);

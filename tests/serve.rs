@@ -812,21 +812,6 @@ fn a_huge_error_is_cut_in_the_event_stream() {
     assert!(source.ends_with(CUT));
 }
 
-/// Whether Open Image Denoise is found (as rondo finds it); without it the tests that need it
-/// pass after saying so, unless `RONDO_REQUIRE_OIDN=1` (CI), when they fail.
-fn denoiser_available() -> bool {
-    match rondo::denoise::Denoiser::shared() {
-        Ok(_) => true,
-        Err(e) if std::env::var("RONDO_REQUIRE_OIDN").is_ok_and(|v| v == "1") => {
-            panic!("RONDO_REQUIRE_OIDN=1 but {e}")
-        }
-        Err(e) => {
-            eprintln!("skipped: {e}");
-            false
-        }
-    }
-}
-
 /// The header `[width, height, reload, samples]` and the floats of a raw float image.
 fn raw_floats(body: &[u8]) -> ([u32; 4], Vec<f32>) {
     assert_eq!(&body[..8], b"RONDOF32");
@@ -936,7 +921,7 @@ fn the_newest_denoised_pass_is_served_with_its_albedo_and_normal() {
 
 #[test]
 fn watch_serve_denoises_each_pass_for_the_viewer() {
-    if !denoiser_available() {
+    if common::denoiser().is_none() {
         return;
     }
     let rondo = Rondo::start("denoised", &scene(RED, 32, 4), &[]);
@@ -980,7 +965,7 @@ fn watch_serve_denoises_each_pass_for_the_viewer() {
 
 #[test]
 fn watch_denoise_writes_the_denoised_output_and_the_viewer_shows_it() {
-    if !denoiser_available() {
+    if common::denoiser().is_none() {
         return;
     }
     let rondo = Rondo::start(

@@ -579,6 +579,25 @@ pub fn curve_name(method: Method, sampler: SamplerKind) -> String {
     format!("{method} {sampler}")
 }
 
+/// A row of the `mis`, Sobol' curve with every error metric at `rmse`, for the tests of the
+/// chart and the summary.
+#[cfg(test)]
+pub(crate) fn test_row(denoised: bool, spp: u32, seconds: f64, rmse: f64) -> AccuracyRow {
+    AccuracyRow {
+        method: Method::Mis,
+        sampler: SamplerKind::Sobol,
+        spp,
+        seed: 0,
+        seconds,
+        metrics: ErrorMetrics {
+            rmse,
+            ..Default::default()
+        },
+        lamp_out_rmse: rmse,
+        denoised,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -586,16 +605,7 @@ mod tests {
     fn row(method: Method, seconds: f64, rmse: f64) -> AccuracyRow {
         AccuracyRow {
             method,
-            sampler: SamplerKind::Sobol,
-            spp: 1,
-            seed: 0,
-            seconds,
-            metrics: ErrorMetrics {
-                rmse,
-                ..Default::default()
-            },
-            lamp_out_rmse: rmse,
-            denoised: false,
+            ..test_row(false, 1, seconds, rmse)
         }
     }
 

@@ -186,7 +186,6 @@ pub fn short(v: f64) -> String {
 mod tests {
     use super::*;
     use crate::bench::accuracy::MethodFit;
-    use crate::metrics::ErrorMetrics;
 
     #[test]
     fn axis_labels_keep_three_significant_digits() {
@@ -199,19 +198,7 @@ mod tests {
 
     #[test]
     fn denoised_renders_are_a_dashed_curve_without_a_slope() {
-        let row = |denoised: bool, spp: u32, seconds: f64, rmse: f64| AccuracyRow {
-            method: Method::Mis,
-            sampler: SamplerKind::Sobol,
-            spp,
-            seed: 0,
-            seconds,
-            metrics: ErrorMetrics {
-                rmse,
-                ..Default::default()
-            },
-            lamp_out_rmse: rmse,
-            denoised,
-        };
+        let row = crate::bench::accuracy::test_row;
         let fit = MethodFit {
             method: Method::Mis,
             sampler: SamplerKind::Sobol,

@@ -209,23 +209,8 @@ fn denoised_markdown(report: &AccuracyReport) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::metrics::ErrorMetrics;
 
-    fn row(denoised: bool, spp: u32, seconds: f64, rmse: f64) -> AccuracyRow {
-        AccuracyRow {
-            method: Method::Mis,
-            sampler: SamplerKind::Sobol,
-            spp,
-            seed: 0,
-            seconds,
-            metrics: ErrorMetrics {
-                rmse,
-                ..Default::default()
-            },
-            lamp_out_rmse: rmse,
-            denoised,
-        }
-    }
+    use crate::bench::accuracy::test_row as row;
 
     fn close(a: f64, b: f64) -> bool {
         (a - b).abs() <= 1e-9 * b.abs().max(1.0)

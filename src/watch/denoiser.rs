@@ -21,6 +21,25 @@ use crate::denoise::{DenoiseError, Denoiser, Quality};
 use crate::denoised::FilmImages;
 use crate::layers::{Layer, write_layers};
 
+/// Passes of fewer samples than this (but the last) are denoised at OIDN's fast quality, the
+/// rest at its high quality. On the Cornell box at 512², beside a running pass, a fast denoise
+/// takes about half the 0.8–0.9 s of a high one, which brings the first denoised image within a
+/// second of the save; from 8 spp on a pass takes longer than a high-quality denoise, and the
+/// high quality's error is lower (0.0043 against 0.0050 at 8 spp; BENCHMARKS.md).
+pub const HIGH_QUALITY_FROM_SPP: u32 = 8;
+
+/// What a watch denoises, from `--denoise` / `--no-denoise` or the scene's `denoise`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) enum Denoising {
+    /// Nothing.
+    #[default]
+    Off,
+    /// The passes the viewer shows; the output file stays raw.
+    Viewer,
+    /// The viewer's passes and the output file.
+    Output,
+}
+
 /// A denoised pass, as the viewer gets it.
 #[derive(Clone, Debug)]
 pub struct DenoisedFrame {

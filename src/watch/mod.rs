@@ -77,7 +77,6 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender};
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use crate::app::Renderer;
@@ -89,14 +88,16 @@ mod error;
 mod files;
 mod options;
 mod report;
+mod session;
 
-pub use denoiser::{DenoiseSink, Denoised, DenoisedFrame};
-use denoiser::{DenoiseWorker, WorkerNews};
+pub use denoiser::{DenoiseSink, Denoised, DenoisedFrame, HIGH_QUALITY_FROM_SPP};
+use denoiser::{DenoiseWorker, Denoising, WorkerNews};
 pub use error::WatchError;
 pub use files::*;
 use files::{IDLE_POLL, REPORTS_CLOSE};
 pub use options::WatchOptions;
 pub use report::*;
+pub use session::WatchSession;
 
 // ------------------------------------------------------------------------------------------------
 // The loop: events → Renderer.
@@ -284,25 +285,6 @@ pub struct Watch {
     denoising: Denoising,
     /// The denoise thread, started with the first pass to denoise.
     denoiser: Option<DenoiseWorker>,
-}
-
-/// Passes of fewer samples than this (but the last) are denoised at OIDN's fast quality, the
-/// rest at its high quality. On the Cornell box at 512², beside a running pass, a fast denoise
-/// takes about half the 0.8–0.9 s of a high one, which brings the first denoised image within a
-/// second of the save; from 8 spp on a pass takes longer than a high-quality denoise, and the
-/// high quality's error is lower (0.0043 against 0.0050 at 8 spp; BENCHMARKS.md).
-pub const HIGH_QUALITY_FROM_SPP: u32 = 8;
-
-/// What a watch denoises, from `--denoise` / `--no-denoise` or the scene's `denoise`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-enum Denoising {
-    /// Nothing.
-    #[default]
-    Off,
-    /// The passes the viewer shows; the output file stays raw.
-    Viewer,
-    /// The viewer's passes and the output file.
-    Output,
 }
 
 impl Watch {
@@ -767,83 +749,6 @@ impl Watch {
         if let Some((reload, saved)) = denoise {
             self.denoise_pass(reload, saved);
         }
-    }
-}
-
-/// A [`Watch`] running on its own thread, reporting through a channel: the in-process API for
-/// tests and tools. Dropping it stops the loop.
-pub struct WatchSession {
-    stop: StopHandle,
-    reports: Receiver<Report>,
-    thread: Option<JoinHandle<()>>,
-}
-
-impl WatchSession {
-    /// Starts watching (the scene's directory is watched before this returns) and rendering.
-    pub fn start(options: WatchOptions) -> Result<Self, WatchError> {
-        let watch = Watch::new(options)?;
-        let stop = watch.stop_handle();
-        let (tx, reports) = mpsc::channel();
-        let thread = std::thread::Builder::new()
-            .name("rondo-watch".into())
-            .spawn(move || {
-                watch.run(move |r| {
-                    let _ = tx.send(r);
-                })
-            })?;
-        Ok(Self {
-            stop,
-            reports,
-            thread: Some(thread),
-        })
-    }
-
-    /// The next report, waiting at most `timeout`.
-    pub fn next_report(&self, timeout: Duration) -> Option<Report> {
-        self.reports.recv_timeout(timeout).ok()
-    }
-
-    /// Waits at most `timeout` for a report matching `predicate` and returns it; on timeout,
-    /// returns every report seen meanwhile (for the failure message).
-    pub fn wait_for(
-        &self,
-        timeout: Duration,
-        mut predicate: impl FnMut(&Report) -> bool,
-    ) -> Result<Report, Vec<Report>> {
-        let deadline = Instant::now() + timeout;
-        let mut seen = Vec::new();
-        loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match self.reports.recv_timeout(left) {
-                Ok(r) if predicate(&r) => return Ok(r),
-                Ok(r) => seen.push(r),
-                Err(_) => return Err(seen),
-            }
-        }
-    }
-
-    /// A handle that stops the session from elsewhere.
-    pub fn stop_handle(&self) -> StopHandle {
-        self.stop.clone()
-    }
-
-    /// Stops the loop and waits for its thread.
-    pub fn stop(mut self) -> Result<(), WatchError> {
-        self.shutdown()
-    }
-
-    fn shutdown(&mut self) -> Result<(), WatchError> {
-        self.stop.stop();
-        match self.thread.take() {
-            Some(t) => t.join().map_err(|_| WatchError::Panicked),
-            None => Ok(()),
-        }
-    }
-}
-
-impl Drop for WatchSession {
-    fn drop(&mut self) {
-        let _ = self.shutdown();
     }
 }
 

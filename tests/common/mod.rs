@@ -204,3 +204,14 @@ pub fn denoiser() -> Option<&'static rondo::denoise::Denoiser> {
         }
     }
 }
+
+/// The channels of an EXR file's first layer and their values, by name.
+pub fn exr_channels(path: &Path) -> std::collections::BTreeMap<String, Vec<f32>> {
+    let image = exr::prelude::read_all_flat_layers_from_file(path).expect("an EXR");
+    image.layer_data[0]
+        .channel_data
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .collect()
+}
