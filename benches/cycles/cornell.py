@@ -231,6 +231,17 @@ def read_exr(bpy, path):
         bpy.data.images.remove(img)
 
 
+def read_rgb_channels(path):
+    """The R, G, B channels of an EXR by name, with the `OpenEXR` bindings: rondo's denoised
+    EXRs carry more channels (`raw.R`, …) beside them, which Blender's image loader does not
+    read."""
+    import OpenEXR
+
+    with OpenEXR.File(path, separate_channels=True) as f:
+        channels = f.channels()
+        return np.stack([channels[c].pixels.astype(np.float32) for c in "RGB"], axis=-1)
+
+
 def red_on_left(img):
     """The orientation check of the Mitsuba script: the red wall (more red than green) on the
     left, the green one on the right."""
@@ -239,12 +250,13 @@ def red_on_left(img):
     return left[..., 0].mean() > left[..., 1].mean() and right[..., 1].mean() > right[..., 0].mean()
 
 
-def rondo_render(rondo, scene_path, spp, seed, out, size, max_depth):
-    """rondo, method mis and its default sampler; returns its own render time (from its log),
-    the process wall time and the process CPU time."""
+def rondo_render(rondo, scene_path, spp, seed, out, size, max_depth, denoise=False):
+    """rondo, method mis and its default sampler (with `denoise`, `--denoise`: Open Image
+    Denoise guided by albedo and normal); returns its own time (render, plus the denoise when
+    denoised, from its log), the process wall time and the process CPU time."""
     cmd = [rondo, "render", scene_path, "-o", out, "--spp", str(spp), "--seed", str(seed),
            "--width", str(size), "--height", str(size), "--max-depth", str(max_depth),
-           "--method", "mis"]
+           "--method", "mis"] + (["--denoise"] if denoise else [])
     cpu = cpu_seconds(resource.RUSAGE_CHILDREN)
     t = time.perf_counter()
     p = subprocess.run(cmd, capture_output=True, text=True)
@@ -255,7 +267,13 @@ def rondo_render(rondo, scene_path, spp, seed, out, size, max_depth):
     m = re.search(r"spp, ([0-9.]+) s,", p.stderr)
     if not m:
         sys.exit("cannot read rondo's time from: %s" % p.stderr)
-    return float(m.group(1)), wall, cpu
+    own = float(m.group(1))
+    if denoise:
+        d = re.search(r"denoised in ([0-9.]+) s", p.stderr)
+        if not d:
+            sys.exit("cannot read rondo's denoise time from: %s" % p.stderr)
+        own += float(d.group(1))
+    return own, wall, cpu
 
 
 def child_main(args, bpy, mathutils):
@@ -366,7 +384,7 @@ def main():
     rows = []
 
     def record(renderer, spp, mode, seed, seconds, cpu, process, path):
-        img = read_exr(bpy, path)
+        img = read_rgb_channels(path) if renderer == "rondo" else read_exr(bpy, path)
         m = metrics(img, ref)
         others = [metrics(img, r)[3] for _, r in extra]
         rows.append((renderer, spp, mode, seed, seconds, cpu, process, m[0], m[3], others))
@@ -400,11 +418,13 @@ def main():
                 best = min(times)
                 record("cycles", spp, mode, seed, best[0], best[1], process, out)
         if args.rondo:
-            for seed in seeds:
-                out = os.path.join(tmp, "rondo.exr")
-                t, wall, cpu = rondo_render(args.rondo, args.scene, spp, seed, out, args.size,
-                                            args.max_depth)
-                record("rondo", spp, "raw", seed, t, cpu, wall, out)
+            for mode in modes:
+                for seed in seeds:
+                    out = os.path.join(tmp, "rondo.exr")
+                    t, wall, cpu = rondo_render(args.rondo, args.scene, spp, seed, out,
+                                                args.size, args.max_depth,
+                                                denoise=mode == "denoised")
+                    record("rondo", spp, mode, seed, t, cpu, wall, out)
 
     path = os.path.join(args.out, "cycles.csv")
     with open(path, "w", newline="") as f:

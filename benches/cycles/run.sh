@@ -21,5 +21,5 @@ if [ ! -x "$VENV/bin/python" ]; then
   fi
   "$PY" -m venv "$VENV"
 fi
-"$VENV/bin/pip" install --quiet "bpy==${BPY_VERSION:-5.2.3}" numpy
+"$VENV/bin/pip" install --quiet "bpy==${BPY_VERSION:-5.2.3}" numpy "OpenEXR>=3.3"
 exec "$VENV/bin/python" benches/cycles/cornell.py "$@"
