@@ -262,7 +262,7 @@ pub enum Report {
         /// What.
         message: String,
     },
-    /// A pass was denoised (see [`super::denoiser`]): shown in the viewer, and written if the
+    /// A pass was denoised (see [`super::Watch::set_denoise_sink`]): shown in the viewer, and written if the
     /// output is denoised.
     Denoised(super::denoiser::Denoised),
 }
