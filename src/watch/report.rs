@@ -262,8 +262,8 @@ pub enum Report {
         /// What.
         message: String,
     },
-    /// A pass was denoised (see [`super::Watch::set_denoise_sink`]): shown in the viewer, and written if the
-    /// output is denoised.
+    /// A pass was denoised (see [`super::Watch::set_denoise_sink`]): shown in the viewer, and
+    /// written if the output is denoised.
     Denoised(super::denoiser::Denoised),
 }
 
