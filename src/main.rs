@@ -1,20 +1,18 @@
 //! The `rondo` command line.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
 use rondo::cli::EXIT_INPUT;
-use rondo::scene::format::{MAX_DEPTH, MAX_SPP, Method};
-use rondo::shading::sampler::SamplerKind;
+use rondo::scene::format::MAX_SPP;
 
 mod commands;
 
-use commands::args::{
-    RenderArgs, at_least_one_u32, at_most_u32, image_path, png_path, thread_count, workload_names,
-};
-use commands::{bench, check, diff, farm, merge, render, watch};
+use commands::args::{RenderArgs, at_least_one_u32, at_most_u32, image_path, png_path};
+use commands::bench_command::BenchCommand;
+use commands::{bench_command, check, diff, farm, merge, render, watch};
 
 #[derive(Parser)]
 #[command(
@@ -152,133 +150,6 @@ enum FarmCommand {
     },
 }
 
-#[derive(Subcommand)]
-enum BenchCommand {
-    /// Build time and peak memory of N placements of one mesh (each count in its own process).
-    Instances {
-        /// The mesh to place.
-        #[arg(long, default_value = "scenes/meshes/bunny.obj")]
-        mesh: PathBuf,
-        /// Placement counts.
-        #[arg(long, value_delimiter = ',', default_value = "1,10,100,1000")]
-        counts: Vec<usize>,
-        /// Copy every placement's triangles into the scene BVH instead of instancing (to compare).
-        #[arg(long)]
-        flatten: bool,
-        /// Run one count in this process and print its CSV line (used by the parent run).
-        #[arg(long, hide = true)]
-        single: Option<usize>,
-    },
-    /// Render a scene several times and report samples/s and rays/s (median of the runs).
-    Render {
-        /// Scene file (.ron).
-        #[arg(default_value = "scenes/cornell.ron")]
-        scene: PathBuf,
-        /// Number of timed runs.
-        #[arg(long, default_value_t = 5)]
-        runs: usize,
-        #[command(flatten)]
-        options: RenderArgs,
-    },
-    /// SoA against AoS (and SoA with SIMD lanes): leaf kernel, traversal, render and extraction
-    /// throughput over primitive counts; writes layout.csv, layout.md and layout.svg.
-    Layout {
-        /// Output directory.
-        #[arg(long, default_value = "bench/layout")]
-        out: PathBuf,
-        /// Largest primitive count.
-        #[arg(long, default_value_t = 1_000_000)]
-        max_count: usize,
-        /// Interleaved rounds per point (at most 7 above 10⁴ primitives, 5 above 10⁵).
-        #[arg(long, default_value_t = 9)]
-        reps: usize,
-        /// Tiny sizes and two rounds: checks that the command works; measures nothing.
-        #[arg(long)]
-        smoke: bool,
-        /// Run only this workload (kernel, traverse, render, extract, pack); repeatable.
-        #[arg(long = "workload", value_parser = workload_names())]
-        workloads: Vec<String>,
-    },
-    /// Error against a reference image as a function of render time, for each light-transport
-    /// method and sampler over a sweep of spp (renders interleaved); writes accuracy.csv,
-    /// accuracy.svg (log-log RMSE against time), accuracy_relative.svg, accuracy_lamp_out.svg
-    /// and summary.md (equal-time comparison) in --out.
-    Accuracy {
-        /// Scene file (.ron).
-        scene: PathBuf,
-        /// Reference image (.exr, e.g. `rondo render SCENE -o ref.exr --spp 4096`); the renders
-        /// take its size. Make it with a seed below --seed (the scene's default 0 is fine).
-        #[arg(long)]
-        reference: PathBuf,
-        /// Output directory.
-        #[arg(long, default_value = "bench/acc")]
-        out: PathBuf,
-        /// Samples per pixel of the sweep, comma-separated.
-        #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32,64", value_parser = at_most_u32(MAX_SPP))]
-        spp_list: Vec<u32>,
-        /// Methods compared, comma-separated.
-        #[arg(long, value_delimiter = ',', default_value = "naive,nee,mis")]
-        methods: Vec<Method>,
-        /// Samplers compared with every method, comma-separated.
-        #[arg(long, value_delimiter = ',', default_value = "sobol")]
-        samplers: Vec<SamplerKind>,
-        /// Rays per path, camera ray included (overrides the scene).
-        #[arg(long, value_parser = at_most_u32(MAX_DEPTH))]
-        max_depth: Option<u32>,
-        /// Worker threads (default: all cores).
-        #[arg(long, value_parser = thread_count())]
-        threads: Option<usize>,
-        /// First seed of the sweep (render k uses seed + k).
-        #[arg(long, default_value_t = rondo::bench::accuracy::DEFAULT_SEED)]
-        seed: u64,
-        /// Also measure every render denoised (Open Image Denoise, albedo and normal): its
-        /// time is the render with the feature buffers plus the denoise, wall clock. Drawn
-        /// dashed; summary.md says from which error on the raw render is the better choice.
-        #[arg(long)]
-        denoise: bool,
-        /// Write every image there as <method>_<sampler>_<spp>spp[_denoised].exr (a denoised
-        /// one with the layer `raw`), named in accuracy.csv's `image` column for
-        /// benches/flip/flip.py.
-        #[arg(long, value_name = "DIR")]
-        keep_images: Option<PathBuf>,
-    },
-    /// Load, first image and `check` of generated scenes over sizes, stage by stage.
-    Load {
-        /// Scene kinds (flat, unnamed, materials, meshes, textures, placements, prefab, tiles).
-        #[arg(
-            long,
-            value_delimiter = ',',
-            default_value = "flat,unnamed,materials,meshes,textures,placements,prefab,tiles"
-        )]
-        kinds: Vec<String>,
-        /// Sizes (what grows in each kind).
-        #[arg(
-            long,
-            value_delimiter = ',',
-            default_value = "1000,10000,100000,1000000"
-        )]
-        sizes: Vec<usize>,
-        /// Also time watch mode on the flat scene of this size (cold start, one-entity edits).
-        #[arg(long)]
-        watch: Option<usize>,
-    },
-    /// Latency of `watch`: from a saved edit to the first and to the full-quality image, for a
-    /// material edit and a geometry edit of the Cornell box (edited in a temporary copy).
-    Watch {
-        /// Scene file (.ron): the Cornell box, or a scene with the same red material and tall box.
-        #[arg(default_value = "scenes/cornell.ron")]
-        scene: PathBuf,
-        /// Edits per kind.
-        #[arg(long, default_value_t = 5)]
-        runs: usize,
-        /// Samples per pixel of the first pass.
-        #[arg(long, default_value_t = 1, value_parser = at_least_one_u32())]
-        first_spp: u32,
-        #[command(flatten)]
-        options: RenderArgs,
-    },
-}
-
 /// Parses the command line (clap exits with status 2 on a usage error) and runs it; any other
 /// error exits with status 1.
 fn main() {
@@ -295,6 +166,7 @@ fn main() {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Check { scene } => check::run(&scene),
+        Command::Bench { what } => bench_command::run(what),
         Command::Render {
             scene,
             output,
@@ -302,14 +174,7 @@ fn run(cli: Cli) -> Result<()> {
             resume,
             aov,
             options,
-        } => {
-            let part = match (samples, resume) {
-                (Some(range), _) => Some(rondo::farm::Samples::Range(range)),
-                (None, Some(path)) => Some(rondo::farm::Samples::Resume(path)),
-                (None, None) => None,
-            };
-            render::run(&scene, &output, &options, &aov, part)
-        }
+        } => render::run(&scene, &output, &options, &aov, samples, resume),
         Command::Merge {
             inputs,
             output,
@@ -344,74 +209,11 @@ fn run(cli: Cli) -> Result<()> {
             },
             &options,
         ),
-        Command::Bench {
-            what:
-                BenchCommand::Instances {
-                    mesh,
-                    counts,
-                    flatten,
-                    single,
-                },
-        } => bench::instances(&mesh, &counts, flatten, single),
-        Command::Bench {
-            what:
-                BenchCommand::Render {
-                    scene,
-                    runs,
-                    options,
-                },
-        } => bench::render(&scene, runs, &options),
-        Command::Bench {
-            what:
-                BenchCommand::Layout {
-                    out,
-                    max_count,
-                    reps,
-                    smoke,
-                    workloads,
-                },
-        } => bench::layout(out, max_count, reps, smoke, workloads),
-        Command::Bench {
-            what:
-                BenchCommand::Load {
-                    kinds,
-                    sizes,
-                    watch,
-                },
-        } => rondo::bench::load::main(&kinds, &sizes, watch).map_err(anyhow::Error::msg),
         Command::Diff {
             image,
             reference,
             error_image,
         } => diff::run(&image, &reference, error_image.as_deref()),
-        Command::Bench {
-            what:
-                BenchCommand::Accuracy {
-                    scene,
-                    reference,
-                    out,
-                    spp_list,
-                    methods,
-                    samplers,
-                    max_depth,
-                    threads,
-                    seed,
-                    denoise,
-                    keep_images,
-                },
-        } => bench::accuracy(&rondo::bench::accuracy::AccuracyOptions {
-            scene,
-            reference,
-            out,
-            spp_list,
-            methods,
-            samplers,
-            threads,
-            max_depth,
-            seed,
-            denoise,
-            keep_images,
-        }),
         Command::Watch {
             scene,
             output,
@@ -419,23 +221,6 @@ fn run(cli: Cli) -> Result<()> {
             allow_host,
             first_spp,
             options,
-        } => {
-            let mut watch_options = options.watch_options(
-                &scene,
-                output.as_deref().unwrap_or(Path::new("")),
-                first_spp,
-            )?;
-            watch_options.output = output;
-            watch::run(watch_options, serve, allow_host)
-        }
-        Command::Bench {
-            what:
-                BenchCommand::Watch {
-                    scene,
-                    runs,
-                    first_spp,
-                    options,
-                },
-        } => bench::watch(&scene, runs, first_spp, &options),
+        } => watch::run(&scene, output, first_spp, &options, serve, allow_host),
     }
 }

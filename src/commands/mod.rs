@@ -2,6 +2,7 @@
 
 pub mod args;
 pub mod bench;
+pub mod bench_command;
 pub mod check;
 pub mod diff;
 pub mod farm;

@@ -1,6 +1,7 @@
 //! `rondo render`: one image, a sample range or a resumed partial, and its summary line.
 
-use std::path::Path;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
@@ -19,9 +20,15 @@ pub fn run(
     output: &Path,
     options: &RenderArgs,
     aov: &[Aov],
-    part: Option<rondo::farm::Samples>,
+    samples: Option<Range<u32>>,
+    resume: Option<PathBuf>,
 ) -> Result<()> {
     check_output_file(output)?;
+    let part = match (samples, resume) {
+        (Some(range), _) => Some(rondo::farm::Samples::Range(range)),
+        (None, Some(path)) => Some(rondo::farm::Samples::Resume(path)),
+        (None, None) => None,
+    };
     if !aov.is_empty() && OutputKind::from_path(output) != Some(OutputKind::Exr) {
         bail!(
             "{}: --aov writes layers, which only an .exr holds",

@@ -1,18 +1,27 @@
 //! `rondo watch`: the live loop, printed and optionally served.
 
+use std::path::{Path, PathBuf};
+
 use anyhow::Result;
 
+use super::args::RenderArgs;
 use rondo::cli::check_output_file;
-use rondo::watch::{Watch, WatchOptions};
+use rondo::watch::Watch;
 
 /// `rondo watch`: runs until Ctrl-C, one line per reload on stderr; with `serve`, also serves
 /// the live viewer, which shows each pass denoised too. `--denoise` needs the denoiser: it is
 /// loaded before anything else, so that a missing library is an error, not a warning later.
 pub fn run(
-    options: WatchOptions,
+    scene: &Path,
+    output: Option<PathBuf>,
+    first_spp: u32,
+    args: &RenderArgs,
     serve: Option<Option<String>>,
     allowed_hosts: Vec<String>,
 ) -> Result<()> {
+    let mut options =
+        args.watch_options(scene, output.as_deref().unwrap_or(Path::new("")), first_spp)?;
+    options.output = output;
     if let Some(output) = &options.output {
         check_output_file(output)?;
     }

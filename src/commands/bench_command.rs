@@ -1,0 +1,199 @@
+//! `rondo bench …`: the benchmarks' argument types and their dispatch (their bodies are in
+//! [`super::bench`]).
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Subcommand;
+
+use rondo::scene::format::{MAX_DEPTH, MAX_SPP, Method};
+use rondo::shading::sampler::SamplerKind;
+
+use super::args::{RenderArgs, at_least_one_u32, at_most_u32, thread_count, workload_names};
+
+#[derive(Subcommand)]
+pub enum BenchCommand {
+    /// Build time and peak memory of N placements of one mesh (each count in its own process).
+    Instances {
+        /// The mesh to place.
+        #[arg(long, default_value = "scenes/meshes/bunny.obj")]
+        mesh: PathBuf,
+        /// Placement counts.
+        #[arg(long, value_delimiter = ',', default_value = "1,10,100,1000")]
+        counts: Vec<usize>,
+        /// Copy every placement's triangles into the scene BVH instead of instancing (to compare).
+        #[arg(long)]
+        flatten: bool,
+        /// Run one count in this process and print its CSV line (used by the parent run).
+        #[arg(long, hide = true)]
+        single: Option<usize>,
+    },
+    /// Render a scene several times and report samples/s and rays/s (median of the runs).
+    Render {
+        /// Scene file (.ron).
+        #[arg(default_value = "scenes/cornell.ron")]
+        scene: PathBuf,
+        /// Number of timed runs.
+        #[arg(long, default_value_t = 5)]
+        runs: usize,
+        #[command(flatten)]
+        options: RenderArgs,
+    },
+    /// SoA against AoS (and SoA with SIMD lanes): leaf kernel, traversal, render and extraction
+    /// throughput over primitive counts; writes layout.csv, layout.md and layout.svg.
+    Layout {
+        /// Output directory.
+        #[arg(long, default_value = "bench/layout")]
+        out: PathBuf,
+        /// Largest primitive count.
+        #[arg(long, default_value_t = 1_000_000)]
+        max_count: usize,
+        /// Interleaved rounds per point (at most 7 above 10⁴ primitives, 5 above 10⁵).
+        #[arg(long, default_value_t = 9)]
+        reps: usize,
+        /// Tiny sizes and two rounds: checks that the command works; measures nothing.
+        #[arg(long)]
+        smoke: bool,
+        /// Run only this workload (kernel, traverse, render, extract, pack); repeatable.
+        #[arg(long = "workload", value_parser = workload_names())]
+        workloads: Vec<String>,
+    },
+    /// Error against a reference image as a function of render time, for each light-transport
+    /// method and sampler over a sweep of spp (renders interleaved); writes accuracy.csv,
+    /// accuracy.svg (log-log RMSE against time), accuracy_relative.svg, accuracy_lamp_out.svg
+    /// and summary.md (equal-time comparison) in --out.
+    Accuracy {
+        /// Scene file (.ron).
+        scene: PathBuf,
+        /// Reference image (.exr, e.g. `rondo render SCENE -o ref.exr --spp 4096`); the renders
+        /// take its size. Make it with a seed below --seed (the scene's default 0 is fine).
+        #[arg(long)]
+        reference: PathBuf,
+        /// Output directory.
+        #[arg(long, default_value = "bench/acc")]
+        out: PathBuf,
+        /// Samples per pixel of the sweep, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32,64", value_parser = at_most_u32(MAX_SPP))]
+        spp_list: Vec<u32>,
+        /// Methods compared, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "naive,nee,mis")]
+        methods: Vec<Method>,
+        /// Samplers compared with every method, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "sobol")]
+        samplers: Vec<SamplerKind>,
+        /// Rays per path, camera ray included (overrides the scene).
+        #[arg(long, value_parser = at_most_u32(MAX_DEPTH))]
+        max_depth: Option<u32>,
+        /// Worker threads (default: all cores).
+        #[arg(long, value_parser = thread_count())]
+        threads: Option<usize>,
+        /// First seed of the sweep (render k uses seed + k).
+        #[arg(long, default_value_t = rondo::bench::accuracy::DEFAULT_SEED)]
+        seed: u64,
+        /// Also measure every render denoised (Open Image Denoise, albedo and normal): its
+        /// time is the render with the feature buffers plus the denoise, wall clock. Drawn
+        /// dashed; summary.md says from which error on the raw render is the better choice.
+        #[arg(long)]
+        denoise: bool,
+        /// Write every image there as <method>_<sampler>_<spp>spp[_denoised].exr (a denoised
+        /// one with the layer `raw`), named in accuracy.csv's `image` column for
+        /// benches/flip/flip.py.
+        #[arg(long, value_name = "DIR")]
+        keep_images: Option<PathBuf>,
+    },
+    /// Load, first image and `check` of generated scenes over sizes, stage by stage.
+    Load {
+        /// Scene kinds (flat, unnamed, materials, meshes, textures, placements, prefab, tiles).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "flat,unnamed,materials,meshes,textures,placements,prefab,tiles"
+        )]
+        kinds: Vec<String>,
+        /// Sizes (what grows in each kind).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "1000,10000,100000,1000000"
+        )]
+        sizes: Vec<usize>,
+        /// Also time watch mode on the flat scene of this size (cold start, one-entity edits).
+        #[arg(long)]
+        watch: Option<usize>,
+    },
+    /// Latency of `watch`: from a saved edit to the first and to the full-quality image, for a
+    /// material edit and a geometry edit of the Cornell box (edited in a temporary copy).
+    Watch {
+        /// Scene file (.ron): the Cornell box, or a scene with the same red material and tall box.
+        #[arg(default_value = "scenes/cornell.ron")]
+        scene: PathBuf,
+        /// Edits per kind.
+        #[arg(long, default_value_t = 5)]
+        runs: usize,
+        /// Samples per pixel of the first pass.
+        #[arg(long, default_value_t = 1, value_parser = at_least_one_u32())]
+        first_spp: u32,
+        #[command(flatten)]
+        options: RenderArgs,
+    },
+}
+
+/// Runs one benchmark.
+pub fn run(what: BenchCommand) -> Result<()> {
+    match what {
+        BenchCommand::Instances {
+            mesh,
+            counts,
+            flatten,
+            single,
+        } => super::bench::instances(&mesh, &counts, flatten, single),
+        BenchCommand::Render {
+            scene,
+            runs,
+            options,
+        } => super::bench::render(&scene, runs, &options),
+        BenchCommand::Layout {
+            out,
+            max_count,
+            reps,
+            smoke,
+            workloads,
+        } => super::bench::layout(out, max_count, reps, smoke, workloads),
+        BenchCommand::Load {
+            kinds,
+            sizes,
+            watch,
+        } => rondo::bench::load::main(&kinds, &sizes, watch).map_err(anyhow::Error::msg),
+        BenchCommand::Accuracy {
+            scene,
+            reference,
+            out,
+            spp_list,
+            methods,
+            samplers,
+            max_depth,
+            threads,
+            seed,
+            denoise,
+            keep_images,
+        } => super::bench::accuracy(&rondo::bench::accuracy::AccuracyOptions {
+            scene,
+            reference,
+            out,
+            spp_list,
+            methods,
+            samplers,
+            threads,
+            max_depth,
+            seed,
+            denoise,
+            keep_images,
+        }),
+        BenchCommand::Watch {
+            scene,
+            runs,
+            first_spp,
+            options,
+        } => super::bench::watch(&scene, runs, first_spp, &options),
+    }
+}
