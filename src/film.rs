@@ -162,6 +162,12 @@ pub fn linear_to_srgb(c: f32) -> f32 {
     }
 }
 
+/// The 8-bit sRGB value of a linear channel, clamped to [0, 1] (what a `.png` stores).
+#[inline]
+pub fn srgb8_channel(c: f32) -> u8 {
+    (linear_to_srgb(c.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8
+}
+
 /// Output file kinds, chosen by extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OutputKind {
@@ -186,6 +192,11 @@ impl OutputKind {
 /// The fixed-point shift of the normal feature buffer: normals are unit vectors, so the shift of
 /// radiance 1.
 pub const NORMAL_SHIFT: i32 = DEFAULT_SHIFT;
+
+/// The fixed point of [`NORMAL_SHIFT`], made once rather than per sample.
+const NORMAL_FIXED: FixedPoint = FixedPoint {
+    scale: (1u64 << NORMAL_SHIFT) as f64,
+};
 
 /// The feature buffers (AOVs) a denoiser is guided by: per pixel, the exact sums of each
 /// sample's albedo and shading normal at the first hit that is not a perfect mirror or glass
@@ -226,8 +237,10 @@ impl Features {
     /// The mean normal of every pixel (`count` samples): not renormalised, so shorter where a
     /// pixel's samples see surfaces facing different ways, and zero where they see the sky.
     pub fn normal_mean(&self, count: u64) -> Vec<Vec3> {
-        let fixed = FixedPoint::new(NORMAL_SHIFT);
-        self.normal.iter().map(|s| fixed.mean(s, count)).collect()
+        self.normal
+            .iter()
+            .map(|s| NORMAL_FIXED.mean(s, count))
+            .collect()
     }
 }
 
@@ -267,7 +280,7 @@ impl FilmBand<'_> {
             && features.normal.is_finite()
         {
             clamped |= albedo[i].add(features.albedo, fixed);
-            clamped |= normal[i].add(features.normal, FixedPoint::new(NORMAL_SHIFT));
+            clamped |= normal[i].add(features.normal, NORMAL_FIXED);
         }
         if !l.is_finite() {
             return None;
@@ -411,7 +424,7 @@ pub fn srgb8(width: u32, height: u32, sum: &[Pixel], count: u64, fixed: FixedPoi
     let data = sum
         .iter()
         .flat_map(|s| fixed.mean(s, count).to_array())
-        .map(|c| (linear_to_srgb(c.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8)
+        .map(srgb8_channel)
         .collect();
     RgbImage::from_raw(width, height, data).expect("film size matches its pixels")
 }

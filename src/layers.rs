@@ -9,7 +9,7 @@ use std::str::FromStr;
 use glam::Vec3;
 use image::{ImageFormat, RgbImage};
 
-use crate::film::{OutputKind, linear_to_srgb};
+use crate::film::{OutputKind, srgb8_channel};
 
 /// A feature buffer written as a layer of an `.exr` output.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -56,7 +56,7 @@ pub fn srgb8_of(width: u32, height: u32, pixels: &[Vec3]) -> RgbImage {
     let data = pixels
         .iter()
         .flat_map(|p| p.to_array())
-        .map(|c| (linear_to_srgb(c.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8)
+        .map(srgb8_channel)
         .collect();
     RgbImage::from_raw(width, height, data).expect("one value per pixel")
 }

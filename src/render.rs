@@ -156,7 +156,7 @@ pub fn trace_path<L: Layout, S: Sampler>(
     sampler: &mut S,
     stats: &mut TraceStats,
 ) -> Vec3 {
-    trace_path_with(Sse, view, ray, sampler, stats).0
+    trace_path_with(Sse, view, ray, sampler, stats, false).0
 }
 
 /// [`trace_path`] with the BVHs' box tests as wide as `lanes`, and the path's features for the
@@ -164,7 +164,8 @@ pub fn trace_path<L: Layout, S: Sampler>(
 /// hit that is not a perfect mirror or glass ([`Material::is_specular`]), the albedo tinted by
 /// the specular bounces before it; the background as albedo (and a zero normal) if the path
 /// leaves the scene first; zero if it ends first. They use no random numbers, so the radiance is
-/// the same whether they are collected or not.
+/// the same whether they are collected or not; without `collect` (a film without feature
+/// buffers) they are not computed and come back zero.
 #[inline(always)]
 fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     lanes: W,
@@ -172,6 +173,7 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     mut ray: Ray,
     sampler: &mut S,
     stats: &mut TraceStats,
+    collect: bool,
 ) -> (Vec3, FeatureSample) {
     let mut radiance = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
@@ -180,7 +182,9 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     // Point and BSDF density of the previous vertex, if it was one that sampled lights.
     let mut previous: Option<(Vec3, f32)> = None;
     let sample_lights = view.method != Method::Naive && !view.lights.is_empty();
-    let mut features: Option<FeatureSample> = None;
+    // Collected once, at the first hit that is not a perfect mirror or glass; `Some` at once
+    // when not collected.
+    let mut features = (!collect).then(FeatureSample::default);
     for depth in 0..view.max_depth {
         stats.rays += 1;
         let Some(hit) = view.geometry.intersect_with(lanes, &ray, f32::INFINITY) else {
@@ -530,6 +534,7 @@ impl<L: Layout, S: PixelSampler> Kernel for Band<'_, L, S> {
     fn run<W: Lanes>(mut self, lanes: W) -> TraceStats {
         let (width, height) = self.size;
         let mut stats = TraceStats::default();
+        let collect = self.pixels.features.is_some();
         for offset in 0..self.pixels.sum.len() {
             let index = self.first + offset;
             let (x, y) = (
@@ -542,7 +547,7 @@ impl<L: Layout, S: PixelSampler> Kernel for Band<'_, L, S> {
                 let j = sampler.next_2d();
                 let ray = self.view.camera.ray(x + j.x, y + j.y, width, height);
                 let (l, features) =
-                    trace_path_with(lanes, self.view, ray, &mut sampler, &mut stats);
+                    trace_path_with(lanes, self.view, ray, &mut sampler, &mut stats, collect);
                 match self.pixels.add(offset, l, &features, self.fixed) {
                     None => stats.nonfinite += 1,
                     Some(clamped) => stats.clamped += u64::from(clamped),
@@ -576,6 +581,7 @@ pub fn render_preview<L: Layout>(
             if cancel.load(Ordering::Relaxed) {
                 return stats;
             }
+            let collect = rows.features.is_some();
             let lines = rows.sum.len() / width;
             let cy = band * block + lines / 2;
             for bx in (0..width).step_by(block) {
@@ -586,7 +592,7 @@ pub fn render_preview<L: Layout>(
                 let ray =
                     view.camera
                         .ray(cx as f32 + jx, cy as f32 + jy, width as u32, height as u32);
-                let (l, features) = trace_path_with(Sse, view, ray, &mut rng, &mut stats);
+                let (l, features) = trace_path_with(Sse, view, ray, &mut rng, &mut stats, collect);
                 // The block's centre pixel gets the sample; the rest of the block copies it.
                 let centre = (lines / 2) * width + cx;
                 match rows.add(centre, l, &features, fixed) {
