@@ -138,8 +138,8 @@ def scanline(pixels, width):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("-o", "--output", default=os.path.join(
-        os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scenes", "textures", "sky.hdr"))
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    ap.add_argument("-o", "--output", default=os.path.join(root, "scenes", "textures", "sky.hdr"))
     ap.add_argument("--width", type=int, default=1024, help="pixels (height = width / 2)")
     ap.add_argument("--sun-direction", default="-0.6,0.65,-0.45",
                     help="x,y,z from the scene towards the sun (any length)")

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Mitsuba 3 side by side for scenes/envmap.ron (the environment map): sets up the virtual
+# environment as benches/mitsuba/run.sh does, builds rondo, writes scenes/textures/sky.hdr if
+# missing, and runs benches/mitsuba/envmap.py, which makes its converged reference
+# (bench/mitsuba/envmap_reference.exr, 4096 spp ldsampler) on first use.
+#
+#   benches/mitsuba/envmap.sh [--spp-list 4,16,64] [--mean-spp 1024] [--mitsuba-only] ...
+#
+# Environment: MITSUBA_VENV (default ~/.cache/rondo-mitsuba-venv), DRJIT_LIBLLVM_PATH (default:
+# the newest libLLVM found; Dr.Jit 1.5 needs LLVM >= 19, see run.sh).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+VENV="${MITSUBA_VENV:-$HOME/.cache/rondo-mitsuba-venv}"
+if [ ! -x "$VENV/bin/python" ]; then
+  python3 -m venv "$VENV"
+fi
+"$VENV/bin/pip" install --quiet mitsuba numpy
+if [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
+  newest="$(ls /usr/lib/x86_64-linux-gnu/libLLVM.so.* /usr/lib/llvm-*/lib/libLLVM.so.* 2>/dev/null \
+    | sort -V | tail -n 1 || true)"
+  if [ -n "$newest" ]; then export DRJIT_LIBLLVM_PATH="$newest"; fi
+fi
+echo "DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-(unset: Dr.Jit searches itself)}"
+if [ ! -f scenes/textures/sky.hdr ]; then
+  python3 scripts/make-sky.py
+fi
+case " $* " in
+  *" --mitsuba-only "*) ;;
+  *) cargo build --release --quiet ;;
+esac
+exec "$VENV/bin/python" benches/mitsuba/envmap.py "$@"
