@@ -9,9 +9,9 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{SystemCondition, common_conditions::resource_changed};
 
 use crate::ecs::resources::{
-    Accumulation, ActiveCamera, ChangeSummary, Counters, MaterialTable, Output, OwnerMaterials,
-    PackedGeometry, PassPlan, PendingScene, Preview, RenderControl, RenderSettings, SceneVersion,
-    Timings,
+    Accumulation, ActiveCamera, ActiveSky, ChangeSummary, Counters, MaterialTable, Output,
+    OwnerMaterials, PackedGeometry, PassPlan, PendingScene, Preview, RenderControl, RenderSettings,
+    SceneVersion, Timings,
 };
 use crate::ecs::sets::RenderSystems;
 use crate::film::Film;
@@ -93,9 +93,12 @@ impl Renderer {
             direction: glam::Vec3::Z,
             up: glam::Vec3::Y,
             fov: 40.0,
+            aperture: 0.0,
+            focus_distance: 1.0,
         }));
         world.init_resource::<RenderSettings>();
         world.init_resource::<MaterialTable>();
+        world.init_resource::<ActiveSky>();
         world.init_resource::<SceneVersion>();
         world.init_resource::<PackedGeometry>();
         world.init_resource::<OwnerMaterials>();
@@ -135,6 +138,7 @@ impl Renderer {
                 assign_materials.run_if(
                     resource_changed::<PackedGeometry>
                         .or_eager(resource_changed::<MaterialTable>)
+                        .or_eager(resource_changed::<ActiveSky>)
                         .or_eager(material_refs_changed),
                 ),
             )
@@ -240,7 +244,7 @@ impl Renderer {
             .map_err(|m| SceneError::at(path, None, m))?;
         let info = LoadInfo {
             dependencies: scene.dependencies.clone(),
-            settings: scene.settings,
+            settings: scene.settings.clone(),
         };
         self.submit(scene);
         Ok(info)
@@ -316,7 +320,7 @@ impl Renderer {
 
     /// The current settings.
     pub fn settings(&self) -> SettingsDesc {
-        self.world.resource::<RenderSettings>().0
+        self.world.resource::<RenderSettings>().0.clone()
     }
 
     /// The output status (images written, last write error).

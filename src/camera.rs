@@ -1,10 +1,18 @@
-//! The pinhole camera: position, view direction, up vector and vertical field of view.
+//! The camera: position, view direction, up vector and vertical field of view; a pinhole, or a
+//! thin lens with an aperture and a focus distance.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use crate::geometry::ray::Ray;
+use crate::shading::sampling::concentric_disk;
 
-/// A pinhole camera. Image x grows to the right of the view, image y downwards.
+/// A pinhole or thin-lens camera. Image x grows to the right of the view, image y downwards.
+///
+/// The thin lens (pbrt-v4 §5.2.3) is a disk of radius `lens_radius` around the eye,
+/// perpendicular to the view: every ray through a film position passes through the point the
+/// pinhole ray of that position meets on the plane of focus (perpendicular to the view, at
+/// `focus_distance` along it), so that plane is sharp, and a point at depth `z` is spread over a
+/// disk of radius `lens_radius · |1 − focus_distance / z|` on it (the circle of confusion).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     /// Eye position.
@@ -14,6 +22,10 @@ pub struct Camera {
     up: Vec3,
     /// `tan(fov / 2)`.
     half_height: f32,
+    /// Radius of the lens; 0 for a pinhole.
+    lens_radius: f32,
+    /// Distance of the plane of focus along the view direction.
+    focus_distance: f32,
 }
 
 impl Camera {
@@ -30,7 +42,41 @@ impl Camera {
             right,
             up,
             half_height: (0.5 * fov_degrees.to_radians()).tan(),
+            lens_radius: 0.0,
+            focus_distance: 1.0,
         }
+    }
+
+    /// The camera with a thin lens of radius `lens_radius` ≥ 0 (0 keeps the pinhole) focused at
+    /// `focus_distance` > 0 along the view.
+    pub fn with_lens(self, lens_radius: f32, focus_distance: f32) -> Self {
+        Self {
+            lens_radius,
+            focus_distance,
+            ..self
+        }
+    }
+
+    /// Whether rays start on a lens of non-zero radius (and so need a lens sample).
+    #[inline]
+    pub fn has_lens(&self) -> bool {
+        self.lens_radius > 0.0
+    }
+
+    /// The ray through film position `(x, y)` (as [`Camera::ray`]) from lens position `u` ∈
+    /// [0, 1)², mapped onto the lens disk (concentric mapping); the pinhole ray if there is no
+    /// lens.
+    #[inline]
+    pub fn lens_ray(&self, x: f32, y: f32, width: u32, height: u32, u: Vec2) -> Ray {
+        let pinhole = self.ray(x, y, width, height);
+        if !self.has_lens() {
+            return pinhole;
+        }
+        let d = pinhole.direction;
+        let focus = self.position + d * (self.focus_distance / d.dot(self.forward));
+        let disk = self.lens_radius * concentric_disk(u);
+        let origin = self.position + disk.x * self.right + disk.y * self.up;
+        Ray::new(origin, (focus - origin).normalize())
     }
 
     /// The ray through film position `(x, y)` in pixels (continuous; (0,0) is the top-left corner
@@ -57,6 +103,29 @@ mod tests {
         // Top edge centre: 45° up.
         let top = cam.ray(50.0, 0.0, 100, 100).direction;
         assert!((top - Vec3::new(0.0, 1.0, 1.0).normalize()).length() < 1e-6);
+    }
+
+    #[test]
+    fn lens_rays_meet_on_the_plane_of_focus_and_leave_from_the_lens() {
+        let cam = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0).with_lens(0.5, 4.0);
+        let pin = cam.ray(30.0, 70.0, 100, 100);
+        let focus = pin.direction * (4.0 / pin.direction.z);
+        for u in [
+            Vec2::new(0.1, 0.9),
+            Vec2::new(0.7, 0.2),
+            Vec2::new(0.5, 0.5),
+        ] {
+            let r = cam.lens_ray(30.0, 70.0, 100, 100, u);
+            assert!(r.origin.z.abs() < 1e-6 && r.origin.length() <= 0.5 + 1e-6);
+            let t = (4.0 - r.origin.z) / r.direction.z;
+            assert!((r.origin + t * r.direction - focus).length() < 1e-5);
+        }
+        let pinhole = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0);
+        assert!(!pinhole.has_lens());
+        assert_eq!(
+            pinhole.lens_ray(3.0, 4.0, 10, 10, Vec2::splat(0.3)),
+            pinhole.ray(3.0, 4.0, 10, 10)
+        );
     }
 
     #[test]

@@ -26,6 +26,7 @@ pub mod render;
 pub mod scene;
 pub mod serve;
 pub mod shading;
+pub mod sky;
 pub mod systems;
 pub mod watch;
 

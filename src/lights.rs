@@ -15,6 +15,10 @@
 //! Infinite planes are never light-sampled: their emission is only found by BSDF sampling, at
 //! full weight.
 //!
+//! The distant lights of the scene's [`Sky`] (an environment map, a sun) follow the emitters in
+//! the table, with their power as the scene receives it ([`DistantLight::power`]); a sample of
+//! one is a direction ([`DistantSample`]), and a path that leaves the scene finds them.
+//!
 //! The selection table holds cumulative counts out of 2²⁴, the resolution of the random numbers
 //! (`Rng::next_f32`): an emitter's probability is its count / 2²⁴, exactly the frequency with
 //! which a 24-bit `u_select` picks it, within 2⁻²⁴ of its share of the power (the running sum is
@@ -32,6 +36,7 @@ use crate::shading::sampling::{
     cone_one_minus_cos, sample_sphere_cone, sample_spherical_triangle, triangle_solid_angle,
 };
 use crate::shading::texture::Texture;
+use crate::sky::{DistantLight, Sky};
 
 /// Marks a primitive slot that is not an emitter.
 const NONE: u32 = u32::MAX;
@@ -57,6 +62,27 @@ struct Emitter {
     /// A sphere's centre, or the centroid of a triangle's world-space vertices: where the
     /// choice of strategy measures the distance from.
     centroid: Vec3,
+}
+
+/// A light sample: a point on an emitter or a direction towards a distant light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Sampled {
+    /// A point on a surface emitter.
+    Surface(LightSample),
+    /// A direction towards a distant light.
+    Distant(DistantSample),
+}
+
+/// A direction sampled towards a distant light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DistantSample {
+    /// Unit direction towards the light.
+    pub direction: Vec3,
+    /// Radiance the light sends along it.
+    pub radiance: Vec3,
+    /// Probability density of the direction per steradian, selection included: what
+    /// [`LightSet::distant_pdf`] gives for it.
+    pub pdf: f32,
 }
 
 /// A point sampled on an emitter.
@@ -105,6 +131,8 @@ pub struct LightSet {
     /// Emitter index of triangle 0 of each instance slot (its triangles follow in order), or
     /// `NONE` if the instance does not emit.
     instance_emitter: Vec<u32>,
+    /// The distant lights: entries `emitters.len() + k` of the table.
+    distant: Vec<DistantLight>,
 }
 
 /// Mean of a texture's colour, estimated from a few texture coordinates (exact for constants).
@@ -145,6 +173,17 @@ impl LightSet {
         geometry: &Geometry<L>,
         materials: &[Material],
         owner_material: &[u32],
+    ) -> Self {
+        Self::build_with_sky(geometry, materials, owner_material, &Sky::default())
+    }
+
+    /// [`LightSet::build`] with the distant lights of `sky`, whose power is measured on the
+    /// bounding sphere of the finite geometry (radius 1 if there is none).
+    pub fn build_with_sky<L: Layout>(
+        geometry: &Geometry<L>,
+        materials: &[Material],
+        owner_material: &[u32],
+        sky: &Sky,
     ) -> Self {
         let power_of = |owner: u32| -> Option<(u32, f32)> {
             let m = *owner_material.get(owner as usize)?;
@@ -203,6 +242,18 @@ impl LightSet {
                 add(&mut set, Emitter::triangle(kind, i, v, material), power);
             }
         }
+        let distant = sky.lights();
+        if !distant.is_empty() {
+            let radius = geometry.finite_bounds().map_or(1.0, |(lo, hi)| {
+                let r = 0.5 * (hi - lo).length();
+                if r > 0.0 && r.is_finite() { r } else { 1.0 }
+            });
+            for light in &distant {
+                let p = f64::from(light.power(radius));
+                powers.push(if p > 0.0 && p.is_finite() { p } else { 0.0 });
+            }
+        }
+        set.distant = distant;
         let total: f64 = powers.iter().sum();
         if !(total > 0.0 && total.is_finite()) {
             // Emitters with zero power (or none at all): nothing worth sampling.
@@ -210,6 +261,7 @@ impl LightSet {
                 sphere_emitter: vec![NONE; set.sphere_emitter.len()],
                 triangle_emitter: vec![NONE; set.triangle_emitter.len()],
                 instance_emitter: vec![NONE; set.instance_emitter.len()],
+                distant: set.distant,
                 ..Self::default()
             };
         }
@@ -229,12 +281,39 @@ impl LightSet {
 
     /// Whether there is nothing to sample.
     pub fn is_empty(&self) -> bool {
-        self.emitters.is_empty()
+        self.cdf.is_empty()
     }
 
-    /// Number of emitters.
+    /// Number of emitters (distant lights not included).
     pub fn len(&self) -> usize {
         self.emitters.len()
+    }
+
+    /// The brightest radiance (any channel) the distant lights send.
+    pub fn sky_max_radiance(&self) -> f32 {
+        self.distant
+            .iter()
+            .map(|d| match d {
+                DistantLight::Environment(e) => e.strength * e.map.max(),
+                DistantLight::Sun(s) => s.disk_radiance().max_element(),
+            })
+            .fold(0.0, f32::max)
+    }
+
+    /// The distant lights, in the order [`LightSet::distant_pdf`] numbers them.
+    pub fn distant(&self) -> &[DistantLight] {
+        &self.distant
+    }
+
+    /// Density per steradian with which [`LightSet::sample`] gives direction `d` towards
+    /// distant light `k` (selection included); 0 if it is never sampled there.
+    #[inline]
+    pub fn distant_pdf(&self, k: usize, d: Vec3) -> f32 {
+        let pmf = self.selection_pmf(self.emitters.len() + k);
+        if pmf == 0.0 {
+            return 0.0;
+        }
+        pmf * self.distant[k].pdf(d)
     }
 
     /// Probability that [`LightSet::select`] picks emitter `k` (0 for an index out of range).
@@ -322,11 +401,12 @@ impl LightSet {
         }
     }
 
-    /// Samples a point seen from shading point `p_ref`: `u_select` picks the emitter, `u` the
-    /// point on it. The two come from separate sampler dimensions: rescaling the remainder of
-    /// `u_select` within the emitter's share into a point coordinate leaves an emitter with a
-    /// count of c out of 2²⁴ only c distinct values (a lone triangle lamp would always give
-    /// one edge).
+    /// Samples a light seen from shading point `p_ref`: `u_select` picks it, `u` the point on
+    /// it (or the direction towards a distant one); `jitter()` is asked for two more numbers
+    /// only by a light that needs them (a map's texel). The numbers come from separate sampler
+    /// dimensions: rescaling the remainder of `u_select` within the emitter's share into a point
+    /// coordinate leaves an emitter with a count of c out of 2²⁴ only c distinct values (a lone
+    /// triangle lamp would always give one edge).
     #[inline(always)]
     pub fn sample<L: Layout>(
         &self,
@@ -334,9 +414,24 @@ impl LightSet {
         p_ref: Vec3,
         u_select: f32,
         u: Vec2,
-    ) -> Option<LightSample> {
+        jitter: impl FnOnce() -> Vec2,
+    ) -> Option<Sampled> {
         let (k, pmf) = self.select(u_select)?;
-        let e = self.emitters[k];
+        let Some(&e) = self.emitters.get(k) else {
+            let d = k - self.emitters.len();
+            let light = self.distant.get(d)?;
+            let direction = light.sample(u, jitter)?;
+            // Value and density from the direction itself, as a path that leaves the scene
+            // along it is weighed.
+            let pdf = pmf * light.pdf(direction);
+            return (pdf > 0.0).then(|| {
+                Sampled::Distant(DistantSample {
+                    direction,
+                    radiance: light.radiance(direction),
+                    pdf,
+                })
+            });
+        };
         let i = e.index as usize;
         let strategy = Self::strategy(geometry, &e, p_ref);
         let (p, n, uv, err) = match e.kind {
@@ -385,14 +480,14 @@ impl LightSet {
             }
             HitKind::Plane => return None,
         };
-        Some(LightSample {
+        Some(Sampled::Surface(LightSample {
             p,
             n,
             uv,
             material: e.material,
             pdf: pmf * Self::density(&e, strategy, p_ref, p, n),
             err,
-        })
+        }))
     }
 
     /// Density per steradian with which [`LightSet::sample`], called at `p_ref`, picks the
@@ -435,6 +530,19 @@ impl LightSet {
 mod tests {
     use super::*;
     use crate::geometry::packed::Primitive;
+
+    /// Surface emitters never ask for the second pair of numbers.
+    fn no_jitter() -> Vec2 {
+        unreachable!("only a map's texel needs a jitter")
+    }
+
+    /// The surface point of a sample.
+    fn surface(s: Option<Sampled>) -> LightSample {
+        match s {
+            Some(Sampled::Surface(s)) => s,
+            other => panic!("expected a surface sample, got {other:?}"),
+        }
+    }
 
     fn light(intensity: f32) -> Material {
         Material::Light {
@@ -505,14 +613,13 @@ mod tests {
         let mut rng = crate::shading::rng::Rng::new(1, 2);
         let p_ref = Vec3::new(0.5, 0.5, 3.0);
         for _ in 0..1000 {
-            let s = set
-                .sample(
-                    &g,
-                    p_ref,
-                    rng.next_f32(),
-                    Vec2::new(rng.next_f32(), rng.next_f32()),
-                )
-                .expect("sample");
+            let s = surface(set.sample(
+                &g,
+                p_ref,
+                rng.next_f32(),
+                Vec2::new(rng.next_f32(), rng.next_f32()),
+                no_jitter,
+            ));
             if s.p.x > 2.0 {
                 assert!(((s.p - Vec3::new(5.0, 0.0, 0.0)).length() - 0.5).abs() < 1e-5);
             } else {
@@ -580,15 +687,15 @@ mod tests {
         for i in 0..n {
             for j in 0..n {
                 let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
-                let s = set.sample(&g, p_ref, dim, u).expect("sample");
+                let s = surface(set.sample(&g, p_ref, dim, u, no_jitter));
                 assert!(s.p.z.abs() < 1e-6, "picked the lamp, not the triangle");
                 mean += s.p / (n * n) as f32;
             }
         }
         let centroid = Vec3::new(1.0 / 3.0, 1.0 / 3.0, 0.0);
         assert!((mean - centroid).length() < 0.01, "mean {mean}");
-        let a = set.sample(&g, p_ref, dim, Vec2::new(0.1, 0.5)).expect("a");
-        let b = set.sample(&g, p_ref, dim, Vec2::new(0.9, 0.5)).expect("b");
+        let a = surface(set.sample(&g, p_ref, dim, Vec2::new(0.1, 0.5), no_jitter));
+        let b = surface(set.sample(&g, p_ref, dim, Vec2::new(0.9, 0.5), no_jitter));
         assert!((a.p - b.p).length() > 0.1, "{} and {}", a.p, b.p);
     }
 
@@ -603,6 +710,9 @@ mod tests {
         )]);
         let set = LightSet::build(&g, &[light(1.0)], &[0]);
         assert!(set.is_empty());
-        assert!(set.sample(&g, Vec3::ONE, 0.5, Vec2::splat(0.5)).is_none());
+        assert!(
+            set.sample(&g, Vec3::ONE, 0.5, Vec2::splat(0.5), no_jitter)
+                .is_none()
+        );
     }
 }

@@ -13,8 +13,8 @@ use crate::film::{FeatureSample, Film, FilmBand, FixedPoint, Pixel};
 use crate::geometry::layout::{DefaultLayout, Layout, SphereStore, TriangleStore};
 use crate::geometry::packed::{Geometry, Hit, HitKind, LayoutKind, Surface};
 use crate::geometry::ray::{Ray, gamma, spawn_origin};
-use crate::lights::LightSet;
-use crate::scene::format::Method;
+use crate::lights::{LightSet, Sampled};
+use crate::scene::format::{MAX_DEPTH, Method};
 use crate::shading::material::{Material, Scatter};
 use crate::shading::rng::Rng;
 use crate::shading::sampler::{IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};
@@ -83,7 +83,10 @@ pub struct Cancelled;
 const ROULETTE_DEPTH: u32 = 3;
 
 /// The sampler's dimension layout: dimension 0 is the pixel position; bounce `b` then owns
-/// dimensions `1 + b·BOUNCE_DIMENSIONS + k` with `k` one of the offsets below.
+/// dimensions `1 + b·BOUNCE_DIMENSIONS + k` with `k` one of the offsets below. Past the bounces
+/// of the deepest path a scene may ask for, from [`EXTRA_DIMENSION`], come the dimensions added
+/// later ([`LENS_DIMENSION`], [`TEXEL_DIMENSION`]): adding them moved no earlier dimension, so
+/// a scene that does not use them renders exactly as before.
 pub const BOUNCE_DIMENSIONS: u32 = 5;
 /// The choice of an emitter for next-event estimation (1D).
 pub const LIGHT_CHOICE_DIMENSION: u32 = 0;
@@ -93,6 +96,13 @@ pub const LIGHT_POINT_DIMENSION: u32 = 1;
 pub const BSDF_DIMENSION: u32 = 2;
 /// Russian roulette (1D).
 pub const ROULETTE_DIMENSION: u32 = 4;
+/// The first dimension past every bounce of a path of [`MAX_DEPTH`] rays.
+pub const EXTRA_DIMENSION: u32 = 1 + MAX_DEPTH * BOUNCE_DIMENSIONS;
+/// The position on the lens (2D), drawn only by a camera with an aperture.
+pub const LENS_DIMENSION: u32 = EXTRA_DIMENSION;
+/// Bounce `b`'s position within an environment map's texel (2D) at `TEXEL_DIMENSION + b`, drawn
+/// only when next-event estimation picked the map.
+pub const TEXEL_DIMENSION: u32 = EXTRA_DIMENSION + 1;
 
 /// Veach's power heuristic (β = 2) weight of a strategy with density `a` against one with `b`.
 #[inline]
@@ -188,9 +198,32 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     for depth in 0..view.max_depth {
         stats.rays += 1;
         let Some(hit) = view.geometry.intersect_with(lanes, &ray, f32::INFINITY) else {
-            radiance += throughput * view.background;
+            let mut seen = view.background;
+            let mut light = view.background;
+            for (k, distant) in view.lights.distant().iter().enumerate() {
+                let emitted = distant.radiance(ray.direction);
+                if emitted == Vec3::ZERO {
+                    continue;
+                }
+                seen += emitted;
+                let weight = match previous {
+                    Some((_, pdf_bsdf)) if sample_lights => {
+                        let pdf_light = view.lights.distant_pdf(k, ray.direction);
+                        if pdf_light == 0.0 {
+                            1.0
+                        } else if view.method == Method::Nee {
+                            0.0
+                        } else {
+                            power_heuristic(pdf_bsdf, pdf_light)
+                        }
+                    }
+                    _ => 1.0,
+                };
+                light += emitted * weight;
+            }
+            radiance += throughput * light;
             features.get_or_insert(FeatureSample {
-                albedo: throughput / eta_scale * view.background,
+                albedo: throughput / eta_scale * seen,
                 normal: Vec3::ZERO,
             });
             break;
@@ -383,20 +416,55 @@ fn direct_light<L: Layout, W: Lanes>(
         material,
         ..
     } = vertex;
-    // The emitter from its own dimension, the point from the next.
+    // The emitter from its own dimension, the point from the next (a map's texel, then the
+    // position within it from one of the extra dimensions).
     let u_select = sampler.next_1d();
     sampler.seek(vertex.dimension + LIGHT_POINT_DIMENSION);
     let u = sampler.next_2d();
-    let Some(light) = view.lights.sample(view.geometry, s.p, u_select, u) else {
+    let bounce = (vertex.dimension - 1) / BOUNCE_DIMENSIONS;
+    let jitter = || {
+        sampler.seek(TEXEL_DIMENSION + bounce);
+        sampler.next_2d()
+    };
+    let Some(sampled) = view.lights.sample(view.geometry, s.p, u_select, u, jitter) else {
         return Vec3::ZERO;
     };
-    let to_light = light.p - s.p;
-    let dist2 = to_light.length_squared();
-    if dist2.is_nan() || dist2 <= 0.0 {
-        return Vec3::ZERO;
-    }
-    let wi = to_light / dist2.sqrt();
-    let emitted = view.materials[light.material as usize].emitted(wi, light.n, light.uv);
+    // The direction to the light, what it sends along it, its density, and the shadow ray's
+    // origin, direction and length.
+    let (wi, emitted, pdf_light, shadow) = match sampled {
+        Sampled::Surface(light) => {
+            let to_light = light.p - s.p;
+            let dist2 = to_light.length_squared();
+            if dist2.is_nan() || dist2 <= 0.0 {
+                return Vec3::ZERO;
+            }
+            let wi = to_light / dist2.sqrt();
+            let emitted = view.materials[light.material as usize].emitted(wi, light.n, light.uv);
+            // Shadow ray between the two offset points, so neither surface can block it.
+            let from = spawn(s.p, s.n, err, wi).origin;
+            let to_side = if wi.dot(light.n) < 0.0 {
+                light.n
+            } else {
+                -light.n
+            };
+            let span = spawn_origin(light.p, to_side, light.err) - from;
+            let length = span.length();
+            if length.is_nan() || length <= 0.0 {
+                return Vec3::ZERO;
+            }
+            (
+                wi,
+                emitted,
+                light.pdf,
+                (Ray::new(from, span / length), length),
+            )
+        }
+        Sampled::Distant(light) => {
+            let wi = light.direction;
+            let shadow = spawn(s.p, s.n, err, wi);
+            (wi, light.radiance, light.pdf, (shadow, f32::INFINITY))
+        }
+    };
     if emitted == Vec3::ZERO {
         return Vec3::ZERO;
     }
@@ -411,27 +479,12 @@ fn direct_light<L: Layout, W: Lanes>(
     if f_cos == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    let pdf_light = light.pdf;
     if !(pdf_light > 0.0 && pdf_light.is_finite()) {
         return Vec3::ZERO;
     }
-    // Shadow ray between the two offset points, so neither surface can block it.
-    let from = spawn(s.p, s.n, err, wi).origin;
-    let to_side = if wi.dot(light.n) < 0.0 {
-        light.n
-    } else {
-        -light.n
-    };
-    let to = spawn_origin(light.p, to_side, light.err);
-    let span = to - from;
-    let length = span.length();
     stats.rays += 1;
-    if length.is_nan()
-        || length <= 0.0
-        || view
-            .geometry
-            .occluded_with(lanes, &Ray::new(from, span / length), length)
-    {
+    let (shadow_ray, length) = shadow;
+    if view.geometry.occluded_with(lanes, &shadow_ray, length) {
         return Vec3::ZERO;
     }
     let weight = if view.method == Method::Mis {
@@ -514,6 +567,28 @@ fn render_pass_with<L: Layout, S: PixelSampler>(
     Ok(stats)
 }
 
+/// The camera ray of one sample of pixel `(x, y)` of an image of `size`: the position in the
+/// pixel from dimension 0, and for a camera with a lens the position on it from
+/// [`LENS_DIMENSION`] (a pinhole draws nothing more, so its renders are what they always were).
+#[inline(always)]
+fn camera_ray(
+    camera: &Camera,
+    x: f32,
+    y: f32,
+    size: (u32, u32),
+    sampler: &mut impl Sampler,
+) -> Ray {
+    let j = sampler.next_2d();
+    let (fx, fy) = (x + j.x, y + j.y);
+    if camera.has_lens() {
+        sampler.seek(LENS_DIMENSION);
+        let u = sampler.next_2d();
+        camera.lens_ray(fx, fy, size.0, size.1, u)
+    } else {
+        camera.ray(fx, fy, size.0, size.1)
+    }
+}
+
 /// Samples `samples` of the pixels of one band, whose first pixel has index `first`, added to
 /// their sums: the work of a pass that [`Isa::run`] compiles once per instruction set.
 struct Band<'a, L: Layout, S> {
@@ -532,7 +607,7 @@ impl<L: Layout, S: PixelSampler> Kernel for Band<'_, L, S> {
 
     #[inline(always)]
     fn run<W: Lanes>(mut self, lanes: W) -> TraceStats {
-        let (width, height) = self.size;
+        let width = self.size.0;
         let mut stats = TraceStats::default();
         let collect = self.pixels.features.is_some();
         for offset in 0..self.pixels.sum.len() {
@@ -544,8 +619,7 @@ impl<L: Layout, S: PixelSampler> Kernel for Band<'_, L, S> {
             let mut pixel = S::for_pixel(self.seed, index as u64);
             for sample in self.samples.clone() {
                 let mut sampler = pixel.start_sample(sample);
-                let j = sampler.next_2d();
-                let ray = self.view.camera.ray(x + j.x, y + j.y, width, height);
+                let ray = camera_ray(self.view.camera, x, y, self.size, &mut sampler);
                 let (l, features) =
                     trace_path_with(lanes, self.view, ray, &mut sampler, &mut stats, collect);
                 match self.pixels.add(offset, l, &features, self.fixed) {
@@ -588,10 +662,8 @@ pub fn render_preview<L: Layout>(
                 let cols = block.min(width - bx);
                 let cx = bx + cols / 2;
                 let mut rng = Rng::for_sample(seed, (cy * width + cx) as u64, 0);
-                let (jx, jy) = (rng.next_f32(), rng.next_f32());
-                let ray =
-                    view.camera
-                        .ray(cx as f32 + jx, cy as f32 + jy, width as u32, height as u32);
+                let size = (width as u32, height as u32);
+                let ray = camera_ray(view.camera, cx as f32, cy as f32, size, &mut rng);
                 let (l, features) = trace_path_with(Sse, view, ray, &mut rng, &mut stats, collect);
                 // The block's centre pixel gets the sample; the rest of the block copies it.
                 let centre = (lines / 2) * width + cx;

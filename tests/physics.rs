@@ -14,13 +14,21 @@ use rondo::camera::Camera;
 use rondo::ecs::components::MeshData;
 use rondo::geometry::instance::MeshBlas;
 use rondo::geometry::packed::{Geometry, HitKind, Primitive};
-use rondo::lights::LightSet;
+use rondo::lights::{LightSample, LightSet, Sampled};
 use rondo::render::{SceneView, render_pass};
 use rondo::scene::format::Method;
 use rondo::shading::material::Material;
 use rondo::shading::rng::Rng;
 use rondo::shading::texture::Texture;
 use rondo::{Film, Overrides};
+
+/// The surface point of a light sample (these scenes have no distant lights).
+fn surface(s: Sampled) -> Option<LightSample> {
+    match s {
+        Sampled::Surface(s) => Some(s),
+        Sampled::Distant(_) => None,
+    }
+}
 
 fn lamp(intensity: f32) -> Material {
     Material::Light {
@@ -103,7 +111,9 @@ fn estimate_irradiance(
                     p,
                     rng.next_f32(),
                     Vec2::new(rng.next_f32(), rng.next_f32()),
+                    || unreachable!("surface emitters need no jitter"),
                 )
+                .and_then(surface)
                 .expect("a light sample");
             let wi = (s.p - p).normalize();
             let (kind, index) = hit(&s.p);
@@ -178,7 +188,9 @@ fn sphere_lights_are_sampled_in_their_visible_cone() {
                     p,
                     rng.next_f32(),
                     Vec2::new(rng.next_f32(), rng.next_f32()),
+                    || unreachable!("surface emitters need no jitter"),
                 )
+                .and_then(surface)
                 .expect("sample");
             assert!(
                 s.n.dot(p - s.p) >= -1e-4,

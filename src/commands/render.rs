@@ -54,7 +54,7 @@ pub fn run(
         None => None,
     };
     let s = match &part {
-        Some(p) => p.settings,
+        Some(p) => p.settings.clone(),
         None => r.load(scene)?.settings,
     };
     let denoise = part.is_none() && options.denoise().or(s.denoise).unwrap_or(false);

@@ -18,6 +18,7 @@ use crate::render::TraceStats;
 use crate::scene::format::{CameraDesc, SettingsDesc};
 use crate::scene::load::LoadedScene;
 use crate::shading::material::Material;
+use crate::sky::Sky;
 
 /// A freshly loaded scene waiting for [`crate::systems::apply_scene`].
 #[derive(Resource, Default)]
@@ -28,8 +29,12 @@ pub struct PendingScene(pub Option<LoadedScene>);
 pub struct ActiveCamera(pub CameraDesc);
 
 /// Image and sampling settings of the current scene.
-#[derive(Resource, Clone, Copy, Debug, PartialEq, Default)]
+#[derive(Resource, Clone, Debug, PartialEq, Default)]
 pub struct RenderSettings(pub SettingsDesc);
+
+/// The distant lights of the current scene (environment map and sun).
+#[derive(Resource, Clone, Debug, PartialEq, Default)]
+pub struct ActiveSky(pub Sky);
 
 /// Materials of the current scene by name.
 #[derive(Resource, Clone, Debug, PartialEq, Default)]
@@ -93,6 +98,8 @@ pub struct ChangeSummary {
     pub camera: bool,
     /// Whether the settings changed.
     pub settings: bool,
+    /// Whether the distant lights changed (their settings, or the environment map's file).
+    pub sky: bool,
     /// Whether entities kept by the reload changed their order in the scene (geometry is packed
     /// in scene order, so this rebuilds the BVH).
     pub reordered: bool,

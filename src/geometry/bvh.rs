@@ -139,6 +139,12 @@ impl<F: FnMut(Range<usize>, &mut f32) -> bool> Leaf for F {
 pub type Bounds = (Vec3, Vec3);
 
 impl Bvh {
+    /// The box around everything in the tree (its root's), or `None` for an empty tree.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let b = self.bvh.nodes.first()?.aabb();
+        Some((b.min.into(), b.max.into()))
+    }
+
     /// Builds a BVH over primitive boxes. Returns it with `order`: slot `i` of the BVH holds
     /// input primitive `order[i]`, so the caller must permute its primitive arrays by `order`.
     pub fn build(bounds: &[Bounds]) -> (Self, Vec<u32>) {

@@ -217,6 +217,11 @@ impl InstanceSet {
         self.instances.is_empty()
     }
 
+    /// The box around every instance, or `None` if there are none.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        self.tlas.bounds()
+    }
+
     /// The instance in slot `i`.
     pub fn get(&self, i: usize) -> &Instance {
         &self.instances[i]

@@ -511,6 +511,19 @@ impl<L: Layout> Geometry<L> {
         best
     }
 
+    /// The box around every finite primitive (spheres, triangles, instances; planes are
+    /// infinite), or `None` if there is none.
+    pub fn finite_bounds(&self) -> Option<(Vec3, Vec3)> {
+        [
+            self.sphere_bvh.bounds(),
+            self.triangle_bvh.bounds(),
+            self.instances.bounds(),
+        ]
+        .into_iter()
+        .flatten()
+        .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
+    }
+
     /// Whether anything blocks `ray` before `t_max`.
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {

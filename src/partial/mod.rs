@@ -198,7 +198,11 @@ pub fn image_settings(settings: &SettingsDesc, tracing: Tracing) -> String {
         method,
         sampler,
         denoise: _,
-    } = *settings;
+        // The environment's and the sun's parameters are in the scene file's text, and the
+        // map's pixels in its file: both are dependencies, hashed by `image_hash`.
+        environment: _,
+        sun: _,
+    } = settings;
     let Tracing {
         roulette,
         instancing,

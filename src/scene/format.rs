@@ -143,7 +143,7 @@ pub struct SceneDesc {
     pub entities: Vec<EntityDesc>,
 }
 
-/// `Camera(position, look_at | direction, up, fov)`.
+/// `Camera(position, look_at | direction, up, fov, aperture, focus_distance | focus_on)`.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Camera", try_from = "RawCamera")]
 pub struct CameraDesc {
@@ -155,6 +155,12 @@ pub struct CameraDesc {
     pub up: Vec3,
     /// Vertical field of view in degrees, in (0, 180).
     pub fov: f32,
+    /// Radius of the thin lens in scene units; 0 (the default) is a pinhole.
+    pub aperture: f32,
+    /// Distance of the plane of focus along the view direction, > 0: `focus_distance`, or the
+    /// depth of `focus_on`, or by default that of `look_at` (1 for a pinhole given a
+    /// `direction`, where it does not matter).
+    pub focus_distance: f32,
 }
 
 #[derive(Deserialize)]
@@ -167,6 +173,9 @@ struct RawCamera {
     up: V3,
     #[serde(default = "default_fov")]
     fov: Real,
+    aperture: Option<NonNegative>,
+    focus_distance: Option<Positive>,
+    focus_on: Option<V3>,
 }
 
 fn default_up() -> V3 {
@@ -216,11 +225,44 @@ impl TryFrom<RawCamera> for CameraDesc {
                 number(fov)
             ));
         }
+        let aperture = raw.aperture.map_or(0.0, |a| a.0);
+        // Depth along the view, in f64: coordinates up to 1e9 square without overflow.
+        let depth = |p: Vec3| {
+            (p - raw.position.0)
+                .as_dvec3()
+                .dot(direction.as_dvec3().normalize()) as f32
+        };
+        let focus_distance = match (raw.focus_distance, raw.focus_on, raw.look_at) {
+            (Some(_), Some(_), _) => {
+                return Err("give `focus_distance` or `focus_on`, not both".into());
+            }
+            (Some(d), None, _) => d.0,
+            (None, Some(p), _) => {
+                let d = depth(p.0);
+                if !(d > 0.0 && d.is_finite()) {
+                    return Err(format!(
+                        "focus_on {} is not in front of the camera",
+                        vector(p.0)
+                    ));
+                }
+                d
+            }
+            (None, None, Some(at)) => depth(at.0),
+            (None, None, None) if aperture > 0.0 => {
+                return Err(
+                    "a camera with an aperture and a `direction` needs `focus_distance` or `focus_on`"
+                        .into(),
+                );
+            }
+            (None, None, None) => 1.0,
+        };
         Ok(Self {
             position: raw.position.0,
             direction,
             up,
             fov,
+            aperture,
+            focus_distance,
         })
     }
 }
@@ -277,9 +319,9 @@ impl std::fmt::Display for Method {
     }
 }
 
-/// `Settings(width, height, spp, max_depth, background, seed, method, sampler, denoise)`; every
-/// field optional.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+/// `Settings(width, height, spp, max_depth, background, environment, sun, seed, method, sampler,
+/// denoise)`; every field optional.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Settings", try_from = "RawSettings")]
 pub struct SettingsDesc {
     /// Image width in pixels.
@@ -290,8 +332,12 @@ pub struct SettingsDesc {
     pub spp: u32,
     /// Rays per path, camera ray included (1 = emitters only).
     pub max_depth: u32,
-    /// Radiance of rays that miss everything.
+    /// Radiance of rays that miss everything (without an `environment`).
     pub background: Vec3,
+    /// An environment map lighting the scene from all around, instead of `background`.
+    pub environment: Option<EnvironmentDesc>,
+    /// A sun.
+    pub sun: Option<SunDesc>,
     /// Random seed.
     pub seed: u64,
     /// Light-transport method.
@@ -312,6 +358,8 @@ impl Default for SettingsDesc {
             spp: 64,
             max_depth: 8,
             background: Vec3::ZERO,
+            environment: None,
+            sun: None,
             seed: 0,
             method: Method::Mis,
             sampler: SamplerKind::default(),
@@ -328,6 +376,8 @@ struct RawSettings {
     spp: Option<Count>,
     max_depth: Option<Count>,
     background: Option<Color>,
+    environment: Option<EnvironmentDesc>,
+    sun: Option<SunDesc>,
     seed: Option<u64>,
     method: Option<Method>,
     sampler: Option<SamplerKind>,
@@ -344,13 +394,128 @@ impl TryFrom<RawSettings> for SettingsDesc {
             spp: raw.spp.map_or(d.spp, |c| c.0),
             max_depth: raw.max_depth.map_or(d.max_depth, |c| c.0),
             background: raw.background.map_or(d.background, |c| c.0),
+            environment: raw.environment,
+            sun: raw.sun,
             seed: raw.seed.unwrap_or(d.seed),
             method: raw.method.unwrap_or(d.method),
             sampler: raw.sampler.unwrap_or(d.sampler),
             denoise: raw.denoise,
         };
+        if s.environment.is_some() && raw.background.is_some() {
+            return Err("give `background` or `environment`, not both".into());
+        }
         s.validate()?;
         Ok(s)
+    }
+}
+
+/// `Environment(path, strength, rotate)`: an equirectangular map of linear radiance (OpenEXR
+/// or Radiance `.hdr`) around the scene; the convention is in [`crate::sky::environment`].
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(
+    deny_unknown_fields,
+    rename = "Environment",
+    try_from = "RawEnvironment"
+)]
+pub struct EnvironmentDesc {
+    /// The map's file, relative to the scene file.
+    pub path: String,
+    /// Scale of the map's radiance, ≥ 0.
+    pub strength: f32,
+    /// Rotation of the map in degrees about x, then y, then z, as a `Transform`'s.
+    pub rotate: Vec3,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename = "Environment")]
+struct RawEnvironment {
+    path: String,
+    strength: Option<NonNegative>,
+    rotate: Option<V3>,
+}
+
+impl TryFrom<RawEnvironment> for EnvironmentDesc {
+    type Error = String;
+    fn try_from(raw: RawEnvironment) -> Result<Self, String> {
+        Ok(Self {
+            path: raw.path,
+            strength: raw.strength.map_or(1.0, |s| s.0),
+            rotate: raw.rotate.map_or(Vec3::ZERO, |r| r.0),
+        })
+    }
+}
+
+impl EnvironmentDesc {
+    /// Rotation from the map's space to the world's.
+    pub fn world_from_map(&self) -> Mat3 {
+        TransformDesc {
+            rotate: self.rotate,
+            ..TransformDesc::default()
+        }
+        .rotation()
+    }
+}
+
+/// `Sun(direction, angular_diameter, irradiance | radiance, colour)`: a distant disk.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Sun", try_from = "RawSun")]
+pub struct SunDesc {
+    /// Direction from the scene towards the sun, non-zero (any length).
+    pub direction: Vec3,
+    /// Angular diameter of the disk in degrees, in (0, 90]; 0.53 by default (the real sun).
+    pub angular_diameter: f32,
+    /// Radiance of the disk: `colour` × `radiance`, or the radiance that makes irradiance
+    /// `colour` × `irradiance` on a plane facing the sun.
+    pub radiance: Vec3,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename = "Sun")]
+struct RawSun {
+    direction: V3,
+    angular_diameter: Option<Positive>,
+    irradiance: Option<NonNegative>,
+    radiance: Option<NonNegative>,
+    colour: Option<Color>,
+}
+
+impl TryFrom<RawSun> for SunDesc {
+    type Error = String;
+    fn try_from(raw: RawSun) -> Result<Self, String> {
+        let d = raw.direction.0;
+        let unit = d / d.abs().max_element().max(f32::MIN_POSITIVE);
+        if d == Vec3::ZERO || !unit.length_squared().is_normal() {
+            return Err(format!(
+                "sun: `direction` must be non-zero (got {})",
+                vector(d)
+            ));
+        }
+        let diameter = raw.angular_diameter.map_or(0.53, |a| a.0);
+        if diameter > 90.0 {
+            return Err(format!(
+                "sun: angular_diameter must be in (0, 90] degrees (got {})",
+                number(diameter)
+            ));
+        }
+        let colour = raw.colour.map_or(Vec3::ONE, |c| c.0);
+        let radiance = match (raw.irradiance, raw.radiance) {
+            (Some(e), None) => {
+                crate::sky::Sun::radiance_for_irradiance(colour * e.0, diameter.to_radians())
+            }
+            (None, Some(l)) => colour * l.0,
+            (Some(_), Some(_)) => {
+                return Err("sun: give `irradiance` or `radiance`, not both".into());
+            }
+            (None, None) => return Err("sun: `irradiance` or `radiance` is required".into()),
+        };
+        if !radiance.is_finite() {
+            return Err("sun: the radiance is too large to represent".into());
+        }
+        Ok(Self {
+            direction: unit.normalize(),
+            angular_diameter: diameter,
+            radiance,
+        })
     }
 }
 
@@ -620,9 +785,16 @@ impl Default for TransformDesc {
 impl TransformDesc {
     /// `parent_from_object = T · R · S`, with `R = Rz · Ry · Rx` (x applied first).
     pub fn matrix(&self) -> Affine3A {
+        Affine3A::from_mat3_translation(
+            self.rotation() * Mat3::from_diagonal(self.scale),
+            self.translate,
+        )
+    }
+
+    /// The rotation `R = Rz · Ry · Rx` alone.
+    pub fn rotation(&self) -> Mat3 {
         let r = self.rotate * (std::f32::consts::PI / 180.0);
-        let rotation = Mat3::from_quat(Quat::from_euler(EulerRot::ZYX, r.z, r.y, r.x));
-        Affine3A::from_mat3_translation(rotation * Mat3::from_diagonal(self.scale), self.translate)
+        Mat3::from_quat(Quat::from_euler(EulerRot::ZYX, r.z, r.y, r.x))
     }
 }
 

@@ -19,7 +19,9 @@ use glam::{Affine3A, Vec3};
 use crate::ecs::components::{MeshData, MeshRef, Shape, Transform};
 use crate::shading::material::Material;
 use crate::shading::texture::{ImageTexture, Texture};
+use crate::sky::{EnvironmentLight, Sky, Sun};
 
+pub use super::assets::AssetCache;
 use super::error::{Location, SceneError};
 use super::format::{
     CameraDesc, EntityDesc, MAX_COORDINATE, MaterialDesc, PrefabDesc, SceneDesc, SettingsDesc,
@@ -104,140 +106,8 @@ pub struct LoadedScene {
     pub material_origins: BTreeMap<String, (u32, String)>,
     /// Work counted while loading.
     pub stats: LoadStats,
-}
-
-struct Cached<T> {
-    /// Hash of the file's bytes when it was loaded.
-    hash: u64,
-    value: Arc<T>,
-}
-
-/// Decoded images and meshes by path. Every load reads the file's bytes and decodes them again
-/// only when their hash differs from the cached one: content decides, not the modification time
-/// or the size, which a `cp -p`, a build tool or a `git checkout` on a coarse-mtime file system
-/// can leave unchanged for a different file. An edit to one texture or mesh decodes that file
-/// only; reading and hashing an unchanged file costs about 1 ms per 4 MB (SipHash).
-#[derive(Default)]
-pub struct AssetCache {
-    images: HashMap<PathBuf, Cached<ImageTexture>>,
-    meshes: HashMap<PathBuf, Cached<MeshData>>,
-    decodes: u64,
-    mesh_loads: u64,
-    /// Every asset or prefab path asked for since [`AssetCache::begin_load`], found or not.
-    requested: Vec<PathBuf>,
-    /// The same paths, for O(1) membership (a scene can ask for 10⁵ files).
-    requested_set: HashSet<PathBuf>,
-}
-
-/// The cached value for `path`, or `load(bytes)` when the file is new or its bytes changed.
-fn cached<T>(
-    map: &mut HashMap<PathBuf, Cached<T>>,
-    path: &Path,
-    load: impl FnOnce(&[u8]) -> Result<T, String>,
-) -> Result<(Arc<T>, bool), String> {
-    use std::hash::Hasher;
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read: {e}"))?;
-    if meta.is_dir() {
-        return Err("is a directory, not a file".into());
-    }
-    // A device or a pipe (`/dev/zero`, a FIFO) would be read forever.
-    if !meta.is_file() {
-        return Err("is not a regular file".into());
-    }
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
-    let mut hasher = std::hash::DefaultHasher::new();
-    hasher.write(&bytes);
-    let hash = hasher.finish();
-    if let Some(c) = map.get(path)
-        && c.hash == hash
-    {
-        return Ok((c.value.clone(), false));
-    }
-    let value = Arc::new(load(&bytes)?);
-    map.insert(
-        path.to_path_buf(),
-        Cached {
-            hash,
-            value: value.clone(),
-        },
-    );
-    Ok((value, true))
-}
-
-impl AssetCache {
-    /// Number of image decodes so far.
-    pub fn decodes(&self) -> u64 {
-        self.decodes
-    }
-
-    /// Number of mesh file loads so far.
-    pub fn mesh_loads(&self) -> u64 {
-        self.mesh_loads
-    }
-
-    /// Starts a scene load: forgets the paths asked for by the previous one.
-    pub fn begin_load(&mut self) {
-        self.requested.clear();
-        self.requested_set.clear();
-    }
-
-    /// Records that the load asked for `path` (a texture, a mesh or a prefab), whether or not
-    /// it exists: a failed load still tells a watcher which files could fix it.
-    pub fn note(&mut self, path: &Path) {
-        if !self.requested_set.contains(path) {
-            self.requested_set.insert(path.to_path_buf());
-            self.requested.push(path.to_path_buf());
-        }
-    }
-
-    /// Every texture, mesh or prefab path asked for since [`AssetCache::begin_load`].
-    pub fn requested(&self) -> &[PathBuf] {
-        &self.requested
-    }
-
-    /// The texture at `path`, decoded now or taken from the cache.
-    pub fn texture(&mut self, path: &Path) -> Result<Arc<ImageTexture>, String> {
-        self.note(path);
-        let (value, fresh) = cached(&mut self.images, path, |bytes| decode_image(path, bytes))?;
-        self.decodes += u64::from(fresh);
-        Ok(value)
-    }
-
-    /// The mesh at `path`, read now or taken from the cache.
-    pub fn mesh(&mut self, path: &Path) -> Result<Arc<MeshData>, String> {
-        self.note(path);
-        let (value, fresh) = cached(&mut self.meshes, path, super::mesh::parse_obj)?;
-        self.mesh_loads += u64::from(fresh);
-        Ok(value)
-    }
-}
-
-/// Decodes the image file `path` from its `bytes` (the format from the content, else from the
-/// extension).
-fn decode_image(path: &Path, bytes: &[u8]) -> Result<ImageTexture, String> {
-    let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes));
-    if let Ok(format) = image::ImageFormat::from_path(path) {
-        reader.set_format(format);
-    }
-    let decoded = reader
-        .with_guessed_format()
-        .map_err(|e| format!("cannot read image: {e}"))?
-        .decode()
-        .map_err(|e| format!("cannot decode image: {e}"))?;
-    if decoded.width() == 0 || decoded.height() == 0 {
-        return Err("image is empty".into());
-    }
-    // Float images (EXR) hold linear values; 8/16-bit ones are sRGB-encoded.
-    Ok(match decoded {
-        image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_) => {
-            let linear = decoded.into_rgb32f();
-            ImageTexture::from_linear(linear.width(), linear.height(), linear.as_raw())
-        }
-        other => {
-            let srgb = other.into_rgb8();
-            ImageTexture::from_srgb8(srgb.width(), srgb.height(), srgb.as_raw())
-        }
-    })
+    /// The distant lights of `settings.environment` and `settings.sun`, the map loaded.
+    pub sky: Sky,
 }
 
 /// Parses scene source text. RON's `implicit_some` is on, so optional fields are written bare.
@@ -377,6 +247,7 @@ pub fn load_scene(path: &Path, assets: &mut AssetCache) -> Result<LoadedScene, S
         x.materials.insert(name.clone(), material);
         scope.insert(name.clone(), name.clone());
     }
+    let sky = x.sky(&file, &desc.settings)?;
     x.expand(&file, &desc.entities, &scope, Affine3A::IDENTITY, "")?;
     x.unique_names()?;
     Ok(LoadedScene {
@@ -390,6 +261,7 @@ pub fn load_scene(path: &Path, assets: &mut AssetCache) -> Result<LoadedScene, S
         origins: x.origins,
         material_origins: x.material_origins,
         stats: x.stats,
+        sky,
     })
 }
 
@@ -399,6 +271,34 @@ impl Expander<'_> {
             self.seen.insert(path.to_path_buf());
             self.dependencies.push(path.to_path_buf());
         }
+    }
+
+    /// The sky of the scene `file`'s settings: its environment map loaded (a dependency)
+    /// through the cache, its sun placed.
+    fn sky(&mut self, file: &SourceFile, settings: &SettingsDesc) -> Result<Sky, SceneError> {
+        let environment = match &settings.environment {
+            None => None,
+            Some(env) => {
+                let full = file.dir().join(&env.path);
+                self.depend(&full);
+                let map = self.assets.environment(&full).map_err(|e| {
+                    file.error(
+                        Anchor::Quoted(&env.path),
+                        None,
+                        format!("settings.environment: {}: {e}", full.display()),
+                    )
+                })?;
+                Some(EnvironmentLight {
+                    map,
+                    strength: env.strength,
+                    world_from_map: env.world_from_map(),
+                })
+            }
+        };
+        let sun = settings
+            .sun
+            .map(|s| Sun::new(s.direction, s.angular_diameter.to_radians(), s.radiance));
+        Ok(Sky { environment, sun })
     }
 
     /// Builds material `name` of `file`, loading its textures; records where it is defined

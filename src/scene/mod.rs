@@ -19,6 +19,7 @@
 //!
 //! The full format is documented in `scenes/README.md`.
 
+mod assets;
 pub mod check;
 pub mod error;
 pub mod format;

@@ -652,6 +652,7 @@ pub fn changed_text(c: &ChangeSummary) -> String {
         (c.materials, "materials"),
         (c.camera, "camera"),
         (c.settings, "settings"),
+        (c.sky, "sky"),
         (c.reordered, "order"),
     ]
     .into_iter()

@@ -6,7 +6,8 @@ use bevy_ecs::prelude::*;
 
 use crate::ecs::components::{EntityName, MaterialRef, SceneOrder, Shape, Transform};
 use crate::ecs::resources::{
-    ActiveCamera, ChangeSummary, MaterialTable, PendingScene, RenderSettings, SceneVersion,
+    ActiveCamera, ActiveSky, ChangeSummary, MaterialTable, PendingScene, RenderSettings,
+    SceneVersion,
 };
 
 /// The components a reload compares and writes.
@@ -34,6 +35,7 @@ pub fn apply_scene(
     mut camera: ResMut<ActiveCamera>,
     mut settings: ResMut<RenderSettings>,
     mut materials: ResMut<MaterialTable>,
+    mut sky: ResMut<ActiveSky>,
     mut version: ResMut<SceneVersion>,
     mut summary: ResMut<ChangeSummary>,
 ) {
@@ -86,6 +88,7 @@ pub fn apply_scene(
     report.camera = camera.set_if_neq(ActiveCamera(scene.camera));
     report.settings = settings.set_if_neq(RenderSettings(scene.settings));
     report.materials = materials.set_if_neq(MaterialTable(scene.materials));
+    report.sky = sky.set_if_neq(ActiveSky(scene.sky));
     if version.0 == 0 || !report.is_empty() {
         version.0 += 1;
     }

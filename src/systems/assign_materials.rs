@@ -3,7 +3,7 @@
 use bevy_ecs::prelude::*;
 
 use crate::ecs::components::MaterialRef;
-use crate::ecs::resources::{Counters, MaterialTable, OwnerMaterials, PackedGeometry};
+use crate::ecs::resources::{ActiveSky, Counters, MaterialTable, OwnerMaterials, PackedGeometry};
 use crate::lights::LightSet;
 
 /// Run condition: a `MaterialRef` was added or changed.
@@ -11,12 +11,13 @@ pub fn material_refs_changed(changed: Query<(), Changed<MaterialRef>>) -> bool {
     !changed.is_empty()
 }
 
-/// Rebuilds [`OwnerMaterials`] and the light set: linear in entities and primitives, and never
+/// Rebuilds [`OwnerMaterials`] and the light set (the sky's distant lights included): linear in entities and primitives, and never
 /// touches the BVH, so a material-only edit costs no geometry build.
 pub fn assign_materials(
     refs: Query<&MaterialRef>,
     packed: Res<PackedGeometry>,
     table: Res<MaterialTable>,
+    sky: Res<ActiveSky>,
     mut out: ResMut<OwnerMaterials>,
     mut counters: ResMut<Counters>,
 ) {
@@ -32,7 +33,7 @@ pub fn assign_materials(
         })
         .collect();
     let materials: Vec<_> = table.0.values().cloned().collect();
-    let lights = LightSet::build(&packed.geometry, &materials, &owner_material);
+    let lights = LightSet::build_with_sky(&packed.geometry, &materials, &owner_material, &sky.0);
     out.set_if_neq(OwnerMaterials {
         materials,
         owner_material,

@@ -62,12 +62,16 @@ pub fn render_frame(
     mut timings: ResMut<Timings>,
     mut relaid: Local<LayoutCache>,
 ) {
-    let s = settings.0;
+    let s = &settings.0;
     if version.is_changed() || acc.film.width != s.width || acc.film.height != s.height {
         acc.reset(
             s.width,
             s.height,
-            film_shift(&materials.materials, s.background),
+            film_shift(
+                &materials.materials,
+                s.background
+                    .max(Vec3::splat(materials.lights.sky_max_radiance())),
+            ),
         );
         acc.preview = Preview::Due;
         timings.render = Default::default();
@@ -96,7 +100,8 @@ pub fn render_frame(
         PassPlan::Progressive { .. } => (2 * done).min(s.spp),
     };
     let c = camera.0;
-    let cam = Camera::new(c.position, c.direction, c.up, c.fov);
+    let cam =
+        Camera::new(c.position, c.direction, c.up, c.fov).with_lens(c.aperture, c.focus_distance);
     let start = Instant::now();
     let progress = |rows: u64| {
         if let Some(bar) = &control.progress {

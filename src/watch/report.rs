@@ -139,6 +139,7 @@ impl fmt::Display for ReloadReport {
             (c.materials, "materials"),
             (c.camera, "camera"),
             (c.settings, "settings"),
+            (c.sky, "sky"),
         ] {
             if flag {
                 changed.push(what.to_string());

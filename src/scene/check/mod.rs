@@ -499,6 +499,8 @@ mod tests {
                 direction: Vec3::new(0.0, -2.0, 8.0),
                 up: Vec3::Y,
                 fov: 40.0,
+                aperture: 0.0,
+                focus_distance: 1.0,
             },
             settings: SettingsDesc::default(),
             materials: materials
@@ -518,6 +520,7 @@ mod tests {
             sources: Vec::new(),
             origins: Vec::new(),
             material_origins: BTreeMap::new(),
+            sky: Default::default(),
             stats: Default::default(),
         }
     }

@@ -1,0 +1,138 @@
+//! Light from infinitely far away: an environment map and a sun. No ECS here.
+//!
+//! Both are lights of the emitter table ([`crate::lights::LightSet`]), chosen for next-event
+//! estimation with a probability that follows their power as the scene receives it (π r² of the
+//! scene's bounding sphere times their irradiance, as pbrt-v4 estimates an infinite light's
+//! power), and found by paths that leave the scene, where multiple importance sampling weighs
+//! them against the BSDF.
+
+pub mod environment;
+pub mod sun;
+
+use std::sync::Arc;
+
+use glam::{Mat3, Vec2, Vec3};
+
+pub use environment::EnvironmentMap;
+pub use sun::Sun;
+
+/// An environment map placed in the world.
+#[derive(Clone, Debug)]
+pub struct EnvironmentLight {
+    /// The map and its distribution (shared: built once per load of the file).
+    pub map: Arc<EnvironmentMap>,
+    /// Scale of the map's radiance.
+    pub strength: f32,
+    /// Rotation from map space to world space.
+    pub world_from_map: Mat3,
+}
+
+impl PartialEq for EnvironmentLight {
+    /// The same map (by identity: a reload of an unchanged file shares it) placed alike.
+    fn eq(&self, o: &Self) -> bool {
+        Arc::ptr_eq(&self.map, &o.map)
+            && self.strength == o.strength
+            && self.world_from_map == o.world_from_map
+    }
+}
+
+impl EnvironmentLight {
+    /// Radiance arriving along unit world direction `d`.
+    #[inline]
+    pub fn radiance(&self, d: Vec3) -> Vec3 {
+        self.strength * self.map.radiance(self.world_from_map.transpose() * d)
+    }
+
+    /// Density per steradian of [`EnvironmentLight::sample`] at world direction `d`.
+    #[inline]
+    pub fn pdf(&self, d: Vec3) -> f32 {
+        self.map.pdf(self.world_from_map.transpose() * d)
+    }
+}
+
+/// The distant lights of a scene.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Sky {
+    /// The environment map, if any.
+    pub environment: Option<EnvironmentLight>,
+    /// The sun, if any.
+    pub sun: Option<Sun>,
+}
+
+impl Sky {
+    /// The distant lights, environment first.
+    pub fn lights(&self) -> Vec<DistantLight> {
+        let env = self.environment.clone().map(DistantLight::Environment);
+        env.into_iter()
+            .chain(self.sun.map(DistantLight::Sun))
+            .collect()
+    }
+
+    /// The brightest radiance (any channel) arriving from the sky.
+    pub fn max_radiance(&self) -> f32 {
+        let env = self
+            .environment
+            .as_ref()
+            .map_or(0.0, |e| e.strength * e.map.max());
+        let sun = self.sun.map_or(0.0, |s| s.disk_radiance().max_element());
+        env.max(sun)
+    }
+}
+
+/// One distant light.
+#[derive(Clone, Debug, PartialEq)]
+pub enum DistantLight {
+    /// An environment map.
+    Environment(EnvironmentLight),
+    /// A sun.
+    Sun(Sun),
+}
+
+impl DistantLight {
+    /// Radiance arriving along unit world direction `d`.
+    #[inline]
+    pub fn radiance(&self, d: Vec3) -> Vec3 {
+        match self {
+            Self::Environment(e) => e.radiance(d),
+            Self::Sun(s) => s.radiance(d),
+        }
+    }
+
+    /// Density per steradian with which [`DistantLight::sample`] gives `d`.
+    #[inline]
+    pub fn pdf(&self, d: Vec3) -> f32 {
+        match self {
+            Self::Environment(e) => e.pdf(d),
+            Self::Sun(s) => s.pdf(d),
+        }
+    }
+
+    /// A unit world direction towards the light: `u` picks it (for a map, its texel),
+    /// `jitter()` is asked for a second pair of numbers when one is needed (a map's position
+    /// within the texel). `None` if there is nothing to sample.
+    #[inline]
+    pub fn sample(&self, u: Vec2, jitter: impl FnOnce() -> Vec2) -> Option<Vec3> {
+        match self {
+            Self::Environment(e) => e
+                .map
+                .sample(u, jitter())
+                .map(|d| (e.world_from_map * d).normalize()),
+            Self::Sun(s) => Some(s.sample(u)),
+        }
+    }
+
+    /// Power as the scene receives it, in the emitter table's units (area × radiance, i.e.
+    /// flux / π), for a scene bounded by a sphere of radius `radius`: the flux through the
+    /// sphere's cross-section, π r² × irradiance, over π. For a map, irradiance on a sphere
+    /// averages to π × its mean radiance, so 4π r² × mean (pbrt-v4's estimate).
+    pub fn power(&self, radius: f32) -> f32 {
+        let r2 = radius * radius;
+        match self {
+            Self::Environment(e) if e.map.is_lit() => {
+                4.0 * std::f32::consts::PI * r2 * e.strength * (e.map.mean().element_sum() / 3.0)
+            }
+            Self::Environment(_) => 0.0,
+            Self::Sun(s) => r2 * s.solid_angle() * (s.disk_radiance().element_sum() / 3.0),
+        }
+    }
+}
