@@ -353,6 +353,11 @@ impl Renderer {
         self.assets.mesh_loads()
     }
 
+    /// Number of environment maps decoded and given their distribution by the asset cache.
+    pub fn environment_builds(&self) -> u64 {
+        self.assets.environment_builds()
+    }
+
     /// Number of image decodes by the asset cache.
     pub fn texture_decodes(&self) -> u64 {
         self.assets.decodes()

@@ -580,6 +580,7 @@ impl Watch {
         self.cancel.store(false, Ordering::SeqCst);
         let scene = self.options.scene.clone();
         let decodes = self.renderer.texture_decodes();
+        let environments = self.renderer.environment_builds();
         let before = self.renderer.counters();
         // Read again at once if the load made us watch something new (a directory, or a file the
         // last load did not read): a change to it between the read and the watch would go
@@ -642,6 +643,10 @@ impl Watch {
         self.job = Some(Job {
             report: ReloadReport {
                 textures_decoded: self.renderer.texture_decodes().saturating_sub(decodes),
+                environments_built: self
+                    .renderer
+                    .environment_builds()
+                    .saturating_sub(environments),
                 parse,
                 counters: before,
                 ..ReloadReport::started(number, p.paths.clone(), info.settings.spp)

@@ -28,6 +28,9 @@ pub struct ReloadReport {
     pub materials_synced: bool,
     /// Image textures decoded by the load (unchanged textures come from the cache).
     pub textures_decoded: u64,
+    /// Environment maps decoded and given their distribution by the load (an unchanged map
+    /// comes from the cache).
+    pub environments_built: u64,
     /// Reading, parsing and validating the scene, textures included.
     pub parse: Duration,
     /// Applying the scene to the world and assigning materials (the BVH excluded).
@@ -64,6 +67,7 @@ impl ReloadReport {
             primitives: 0,
             materials_synced: false,
             textures_decoded: 0,
+            environments_built: 0,
             parse: Duration::ZERO,
             ecs: Duration::ZERO,
             bvh: Duration::ZERO,
@@ -157,6 +161,9 @@ impl fmt::Display for ReloadReport {
         }
         if self.textures_decoded > 0 {
             rebuilt.push(format!("{} texture(s) decoded", self.textures_decoded));
+        }
+        if self.environments_built > 0 {
+            rebuilt.push("environment map".into());
         }
         let rebuilt = if rebuilt.is_empty() {
             "nothing".to_string()
