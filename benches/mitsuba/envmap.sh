@@ -25,7 +25,12 @@ if [ ! -f scenes/textures/sky.hdr ]; then
   python3 scripts/make-sky.py
 fi
 case " $* " in
-  *" --mitsuba-only "*) ;;
-  *) cargo build --release --quiet ;;
+  *" --mitsuba-only "*) exec "$VENV/bin/python" benches/mitsuba/envmap.py "$@" ;;
 esac
-exec "$VENV/bin/python" benches/mitsuba/envmap.py "$@"
+cargo build --release --quiet
+# A private copy: target/ is shared, and another build (other features, another checkout's
+# work in progress) may replace target/release/rondo while the comparison runs.
+bin_dir="$(mktemp -d)"
+trap 'rm -rf "$bin_dir"' EXIT
+cp target/release/rondo "$bin_dir/rondo"
+"$VENV/bin/python" benches/mitsuba/envmap.py --rondo "$bin_dir/rondo" "$@"
