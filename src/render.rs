@@ -117,6 +117,29 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     }
 }
 
+/// The weight of emission that a BSDF-sampled ray found, leaving `from` (the vertex's point and
+/// BSDF density, if it sampled lights): 1 if it did not, or if light sampling could not have
+/// produced the ray (`pdf_light(point)` = 0); under NEE 0 (the light sample counted it); under MIS the
+/// power heuristic against the light density.
+#[inline(always)]
+fn emission_weight(
+    method: Method,
+    from: Option<(Vec3, f32)>,
+    pdf_light: impl FnOnce(Vec3) -> f32,
+) -> f32 {
+    let Some((point, pdf_bsdf)) = from else {
+        return 1.0;
+    };
+    let pdf_light = pdf_light(point);
+    if pdf_light == 0.0 {
+        1.0
+    } else if method == Method::Nee {
+        0.0
+    } else {
+        power_heuristic(pdf_bsdf, pdf_light)
+    }
+}
+
 /// Absolute error bound of the hit point `s.p` of `hit`, per component (pbrt-v4, Section 6.8.5):
 /// the point is recomputed from the primitive, so its error scales with the primitive's own
 /// coordinates, not with the ray's travel. Public so tests can spawn rays exactly as the
@@ -206,19 +229,10 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
                     continue;
                 }
                 seen += emitted;
-                let weight = match previous {
-                    Some((_, pdf_bsdf)) if sample_lights => {
-                        let pdf_light = view.lights.distant_pdf(k, ray.direction);
-                        if pdf_light == 0.0 {
-                            1.0
-                        } else if view.method == Method::Nee {
-                            0.0
-                        } else {
-                            power_heuristic(pdf_bsdf, pdf_light)
-                        }
-                    }
-                    _ => 1.0,
-                };
+                let weight =
+                    emission_weight(view.method, previous.filter(|_| sample_lights), |_| {
+                        view.lights.distant_pdf(k, ray.direction)
+                    });
                 light += emitted * weight;
             }
             radiance += throughput * light;
@@ -239,21 +253,11 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         }
         if material.is_emissive() {
             let emitted = material.emitted(ray.direction, s.n, s.uv);
-            let weight = match previous {
-                Some((p_prev, pdf_bsdf)) if sample_lights => {
-                    let pdf_light =
-                        view.lights
-                            .pdf(view.geometry, hit.kind, hit.index, p_prev, s.p, s.n);
-                    if pdf_light == 0.0 {
-                        1.0
-                    } else if view.method == Method::Nee {
-                        0.0
-                    } else {
-                        power_heuristic(pdf_bsdf, pdf_light)
-                    }
-                }
-                _ => 1.0,
-            };
+            let from = previous.filter(|_| sample_lights);
+            let weight = emission_weight(view.method, from, |p_prev| {
+                view.lights
+                    .pdf(view.geometry, hit.kind, hit.index, p_prev, s.p, s.n)
+            });
             radiance += throughput * emitted * weight;
         }
         if depth + 1 == view.max_depth || material.is_emissive() {

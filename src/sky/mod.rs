@@ -136,3 +136,36 @@ impl DistantLight {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_rotated_map_is_read_and_sampled_in_world_space() {
+        // A map lit in one texel around +x (u = 0.25 at the horizon); rotated 90° about y
+        // (x → −z), the light comes from −z, and sampled directions point there.
+        let (w, h) = (16u32, 8u32);
+        let mut pixels = vec![0.0f32; 3 * (w * h) as usize];
+        let texel = (4 * w + 4) as usize;
+        pixels[3 * texel..3 * texel + 3].copy_from_slice(&[5.0; 3]);
+        let map = Arc::new(EnvironmentMap::from_linear(w, h, &pixels).expect("map"));
+        let rotation = Mat3::from_rotation_y(std::f32::consts::FRAC_PI_2);
+        let light = DistantLight::Environment(EnvironmentLight {
+            map: map.clone(),
+            strength: 2.0,
+            world_from_map: rotation,
+        });
+        let into_texel = Vec3::new(1.0, -0.1, 0.05).normalize();
+        assert_eq!(map.radiance(into_texel), Vec3::splat(5.0));
+        let world = rotation * into_texel;
+        assert!(world.z < -0.9, "{world}");
+        assert_eq!(light.radiance(world), Vec3::splat(10.0));
+        assert_eq!(light.radiance(into_texel), Vec3::ZERO);
+        assert_eq!(light.pdf(world), map.pdf(into_texel));
+        let d = light
+            .sample(Vec2::new(0.3, 0.6), || Vec2::new(0.5, 0.5))
+            .expect("lit");
+        assert!(d.z < -0.9 && light.pdf(d) > 0.0, "{d}");
+    }
+}
