@@ -183,6 +183,50 @@ fn benches_refuse_an_output_directory_that_is_a_file() {
 }
 
 #[test]
+fn bench_environment_runs_on_a_tiny_map_and_writes_its_table_only_when_asked() {
+    let dir = temp_dir("cli-bench-environment");
+    let args = [
+        "bench",
+        "environment",
+        "--width",
+        "16",
+        "--height",
+        "8",
+        "--runs",
+        "2",
+    ];
+    let out = rondo(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let table = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        table.contains("Environment map 16×8, median (min) of 2 runs"),
+        "{table}"
+    );
+    // One row per format, each holding the bound of 16 bytes per texel.
+    for format in ["| exr |", "| hdr |"] {
+        let row = table.lines().find(|l| l.starts_with(format));
+        assert!(row.is_some_and(|r| r.contains("| 16.00 |")), "{table}");
+    }
+    let out_dir = dir.join("out");
+    let out = rondo(&[&args[..], &["--out", text(&out_dir)]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let written = std::fs::read_to_string(out_dir.join("environment.md")).expect("table written");
+    assert!(
+        written.contains("| exr |") && written.contains("| hdr |"),
+        "{written}"
+    );
+    assert_eq!(
+        std::fs::read_dir(&dir).expect("list").count(),
+        1,
+        "wrote elsewhere"
+    );
+    let file = dir.join("file");
+    std::fs::write(&file, "").expect("write");
+    let out = rondo(&[&args[..], &["--out", text(&file)]].concat());
+    assert_refused(&out, "is not a directory");
+}
+
+#[test]
 fn a_missing_diff_input_says_its_cause_once() {
     let dir = temp_dir("cli-diff-missing");
     let b = png(&dir, "b.png", [0, 0]);

@@ -5,6 +5,7 @@ pub mod accuracy;
 pub mod accuracy_chart;
 pub mod accuracy_summary;
 pub mod chart;
+pub mod environment;
 pub mod instances;
 pub mod layout;
 pub mod load;

@@ -1,4 +1,5 @@
-//! `rondo bench …`: the benchmark drivers (layout, instances, render, watch, accuracy).
+//! `rondo bench …`: the benchmark drivers (layout, instances, render, watch, accuracy,
+//! environment).
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -33,6 +34,15 @@ pub fn layout(
         options.out.display()
     );
     Ok(())
+}
+
+/// `rondo bench environment`: checks the output directory, if any, before measuring.
+pub fn environment(width: u32, height: u32, runs: usize, out: Option<&Path>) -> Result<()> {
+    if let Some(dir) = out {
+        check_output_dir(dir)?;
+    }
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    rondo::bench::environment::main(width, height, runs, out, &command).map_err(anyhow::Error::msg)
 }
 
 /// `rondo bench instances`: one child process per count, so each reports its own peak memory.

@@ -101,6 +101,22 @@ pub enum BenchCommand {
         #[arg(long, value_name = "DIR")]
         keep_images: Option<PathBuf>,
     },
+    /// Load time and memory of a generated environment map (OpenEXR and Radiance .hdr): read
+    /// and decode, building the distribution, and the whole load; prints a Markdown table.
+    Environment {
+        /// Map width in texels.
+        #[arg(long, default_value_t = 4096, value_parser = at_least_one_u32())]
+        width: u32,
+        /// Map height in texels.
+        #[arg(long, default_value_t = 2048, value_parser = at_least_one_u32())]
+        height: u32,
+        /// Number of timed runs (median and minimum reported).
+        #[arg(long, default_value_t = 5)]
+        runs: usize,
+        /// Also write the table to DIR/environment.md.
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+    },
     /// Load, first image and `check` of generated scenes over sizes, stage by stage.
     Load {
         /// Scene kinds (flat, unnamed, materials, meshes, textures, placements, prefab, tiles).
@@ -159,6 +175,12 @@ pub fn run(what: BenchCommand) -> Result<()> {
             smoke,
             workloads,
         } => super::bench::layout(out, max_count, reps, smoke, workloads),
+        BenchCommand::Environment {
+            width,
+            height,
+            runs,
+            out,
+        } => super::bench::environment(width, height, runs, out.as_deref()),
         BenchCommand::Load {
             kinds,
             sizes,

@@ -105,6 +105,16 @@ impl AssetCache {
         Ok(value)
     }
 
+    /// The environment map file `path` decoded from its `bytes` to its width, height and
+    /// linear RGB floats, without its distribution: the first half of
+    /// [`AssetCache::environment`], apart for `rondo bench environment`.
+    pub fn decode_environment_pixels(
+        path: &Path,
+        bytes: &[u8],
+    ) -> Result<(u32, u32, Vec<f32>), String> {
+        decode_environment_pixels(path, bytes)
+    }
+
     /// Starts a scene load: forgets the paths asked for by the previous one.
     pub fn begin_load(&mut self) {
         self.requested.clear();
@@ -171,9 +181,16 @@ fn decode_image(path: &Path, bytes: &[u8]) -> Result<ImageTexture, String> {
 }
 
 /// Decodes the environment map `path` (OpenEXR or Radiance `.hdr`, linear radiance) from its
-/// `bytes` and builds its distribution. The decoder's limits refuse a map of more than
-/// [`crate::sky::environment::MAX_TEXELS`] texels before it allocates them.
+/// `bytes` and builds its distribution.
 fn decode_environment(path: &Path, bytes: &[u8]) -> Result<EnvironmentMap, String> {
+    let (width, height, pixels) = decode_environment_pixels(path, bytes)?;
+    EnvironmentMap::from_linear_vec(width, height, pixels)
+}
+
+/// Decodes the environment map `path` from its `bytes` to its width, height and linear RGB
+/// floats (row-major from the top row). The decoder's limits refuse a map of more than
+/// [`crate::sky::environment::MAX_TEXELS`] texels before it allocates them.
+fn decode_environment_pixels(path: &Path, bytes: &[u8]) -> Result<(u32, u32, Vec<f32>), String> {
     let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes));
     if let Ok(format) = image::ImageFormat::from_path(path) {
         reader.set_format(format);
@@ -202,6 +219,5 @@ fn decode_environment(path: &Path, bytes: &[u8]) -> Result<EnvironmentMap, Strin
             crate::sky::environment::MAX_TEXELS
         ));
     }
-    let rgb = decoded.into_rgb32f();
-    EnvironmentMap::from_linear(width, height, rgb.as_raw())
+    Ok((width, height, decoded.into_rgb32f().into_raw()))
 }

@@ -62,8 +62,8 @@ pub fn luminance(c: Vec3) -> f32 {
 pub struct EnvironmentMap {
     width: u32,
     height: u32,
-    /// Linear RGB radiance, row-major from row 0 (up).
-    texels: Vec<[f32; 3]>,
+    /// Linear RGB radiance, three floats per texel, row-major from row 0 (up).
+    texels: Vec<f32>,
     /// Per row: the cumulative counts of its first `width − 1` columns, then the marginal
     /// cumulative count through the row.
     counts: Vec<u32>,
@@ -113,6 +113,40 @@ impl EnvironmentMap {
     /// (`3 · width · height` values). Refuses an empty or oversized map and a texel that is
     /// not finite; negative values (filtering ringing in some tools) are read as 0.
     pub fn from_linear(width: u32, height: u32, pixels: &[f32]) -> Result<Self, String> {
+        Self::check_size(width, height, pixels.len())?;
+        Self::from_linear_vec(width, height, pixels.to_vec())
+    }
+
+    /// [`EnvironmentMap::from_linear`] taking the floats by value: they become the map's
+    /// texels in place (no copy of the map), validated and clamped rows in parallel.
+    pub fn from_linear_vec(width: u32, height: u32, mut pixels: Vec<f32>) -> Result<Self, String> {
+        Self::check_size(width, height, pixels.len())?;
+        let w = width as usize;
+        // The first texel that is not finite, in row-major order; negative values become 0.
+        let bad = pixels
+            .par_chunks_mut(3 * w)
+            .enumerate()
+            .filter_map(|(y, row)| {
+                let mut first = None;
+                for (k, v) in row.iter_mut().enumerate() {
+                    if !v.is_finite() {
+                        first = first.or(Some(k / 3));
+                    }
+                    *v = v.max(0.0);
+                }
+                first.map(|x| (y, x))
+            })
+            .min();
+        if let Some((y, x)) = bad {
+            return Err(format!(
+                "texel ({x}, {y}) of the environment map is not finite"
+            ));
+        }
+        Ok(Self::build(width, height, pixels))
+    }
+
+    /// Refuses an empty or oversized map and a number of floats other than 3 per texel.
+    fn check_size(width: u32, height: u32, len: usize) -> Result<(), String> {
         let texel_count = u64::from(width) * u64::from(height);
         if texel_count == 0 {
             return Err("the environment map is empty".into());
@@ -122,48 +156,35 @@ impl EnvironmentMap {
                 "the environment map has {width}×{height} texels; at most {MAX_TEXELS} are accepted"
             ));
         }
-        if pixels.len() as u64 != 3 * texel_count {
+        if len as u64 != 3 * texel_count {
             return Err(format!(
-                "the environment map has {} values for {width}×{height} RGB texels",
-                pixels.len()
+                "the environment map has {len} values for {width}×{height} RGB texels"
             ));
         }
-        if let Some(k) = pixels.iter().position(|v| !v.is_finite()) {
-            let t = k / 3;
-            return Err(format!(
-                "texel ({}, {}) of the environment map is not finite",
-                t % width as usize,
-                t / width as usize
-            ));
-        }
-        let texels: Vec<[f32; 3]> = pixels
-            .chunks_exact(3)
-            .map(|c| [c[0].max(0.0), c[1].max(0.0), c[2].max(0.0)])
-            .collect();
-        Ok(Self::build(width, height, texels))
+        Ok(())
     }
 
     /// Builds the tables of validated texels (finite, non-negative), rows in parallel.
-    fn build(width: u32, height: u32, texels: Vec<[f32; 3]>) -> Self {
+    fn build(width: u32, height: u32, texels: Vec<f32>) -> Self {
         let w = width as usize;
-        let mut counts = vec![0u32; texels.len()];
+        let mut counts = vec![0u32; texels.len() / 3];
         // Per row: the sum of its luminances and of its radiance (f64, so 4096 columns lose
         // nothing), and the row's conditional table.
         let rows: Vec<(f64, [f64; 3])> = counts
             .par_chunks_mut(w)
-            .zip(texels.par_chunks(w))
+            .zip(texels.par_chunks(3 * w))
             .map(|(row_counts, row)| {
-                let lum = |t: &[f32; 3]| f64::from(luminance(Vec3::from_array(*t)));
-                let sum: f64 = row.iter().map(lum).sum();
+                let lum = |t: &[f32]| f64::from(luminance(Vec3::from_slice(t)));
+                let sum: f64 = row.chunks_exact(3).map(lum).sum();
                 let mut rgb = [0.0f64; 3];
-                for t in row {
+                for t in row.chunks_exact(3) {
                     for c in 0..3 {
                         rgb[c] += f64::from(t[c]);
                     }
                 }
                 let columns = &mut row_counts[..w - 1];
                 if sum > 0.0 {
-                    cumulative(row.iter().map(lum), sum, columns);
+                    cumulative(row.chunks_exact(3).map(lum), sum, columns);
                 } else {
                     // Never picked (its marginal count is 0); uniform for completeness.
                     cumulative(std::iter::repeat_n(1.0, w - 1), w as f64, columns);
@@ -190,10 +211,7 @@ impl EnvironmentMap {
             }
         }
         let mean = Vec3::from_array(mean.map(|m| (m / (4.0 * std::f64::consts::PI)) as f32));
-        let max = texels
-            .par_iter()
-            .map(|t| t[0].max(t[1]).max(t[2]))
-            .reduce(|| 0.0, f32::max);
+        let max = texels.par_iter().copied().reduce(|| 0.0, f32::max);
         Self {
             width,
             height,
@@ -262,7 +280,8 @@ impl EnvironmentMap {
     #[inline]
     pub fn radiance(&self, d: Vec3) -> Vec3 {
         let (row, column) = self.texel_of(d);
-        Vec3::from_array(self.texels[row * self.width as usize + column])
+        let i = 3 * (row * self.width as usize + column);
+        Vec3::from_slice(&self.texels[i..i + 3])
     }
 
     /// Marginal cumulative count through row `i`.
@@ -502,6 +521,25 @@ mod tests {
         assert!(!black.is_lit());
         assert!(black.sample(Vec2::splat(0.5), Vec2::splat(0.5)).is_none());
         assert_eq!(black.pdf(Vec3::Y), 0.0);
+    }
+
+    #[test]
+    fn the_floats_given_by_value_become_the_texels_without_a_copy() {
+        let mut pixels = vec![0.5f32; 3 * 8 * 4];
+        pixels[3 * 9 + 1] = -2.0;
+        let start = pixels.as_ptr();
+        let m = EnvironmentMap::from_linear_vec(8, 4, pixels).expect("valid map");
+        assert_eq!(m.texels.as_ptr(), start, "the map copied its texels");
+        assert_eq!(
+            m.radiance(Vec3::new(0.924, 0.4, -0.383)),
+            Vec3::new(0.5, 0.0, 0.5)
+        );
+        // Rows are validated in parallel; the error still names the first bad texel.
+        let mut pixels = vec![1.0f32; 3 * 8 * 4];
+        pixels[3 * 21] = f32::INFINITY;
+        pixels[3 * 11 + 2] = f32::NAN;
+        let e = EnvironmentMap::from_linear_vec(8, 4, pixels).expect_err("NaN refused");
+        assert!(e.contains("(3, 1)"), "{e}");
     }
 
     #[test]
