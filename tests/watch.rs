@@ -698,3 +698,87 @@ fn issue14_log_a_reorder_says_so_and_an_unchanged_save_keeps_the_image() {
     assert!(r.to_string().contains("no changes"), "{r}");
     assert_eq!(std::fs::read(&f.out).expect("image"), before);
 }
+
+// ------------------------------------------------------------------------------------------------
+// Environment maps (issue 22).
+
+/// Writes a 16 × 8 OpenEXR map whose texel (x, y) has radiance `f(x, y)`.
+fn write_map(path: &Path, f: impl Fn(u32, u32) -> [f32; 3]) {
+    let data: Vec<f32> = (0..8)
+        .flat_map(|y| (0..16).map(move |x| (x, y)))
+        .flat_map(|(x, y)| f(x, y))
+        .collect();
+    image::Rgb32FImage::from_raw(16, 8, data)
+        .expect("buffer size")
+        .save(path)
+        .expect("write map");
+}
+
+/// A camera that sees the environment directly over the top of a diffuse ball it lights.
+fn lit_by_map(strength: f32) -> String {
+    format!(
+        r#"Scene(
+    camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0), fov: 40.0),
+    settings: Settings(width: 32, height: 32, spp: 4, max_depth: 3,
+        environment: Environment(path: "sky.exr", strength: {strength:.1}, rotate: (0, 30, 0))),
+    materials: {{ "ball": Diffuse(albedo: {GREY}) }},
+    entities: [ Entity(name: "ball", material: "ball", shape: Sphere(center: (0, -1, 0), radius: 1)) ],
+)
+"#
+    )
+}
+
+#[test]
+fn editing_only_the_environment_map_rerenders_and_rebuilds_only_the_map() {
+    let on_disk = |f: &Fixture| image::open(&f.out).expect("output image").to_rgb8();
+    // The map is written before the session starts, so that no load sees half a file.
+    let dir = common::temp_dir("watch-envmap");
+    let map = dir.join("sky.exr");
+    write_map(&map, |x, _| [0.2 + 0.1 * x as f32, 0.5, 0.3]);
+    let scene = dir.join("scene.ron");
+    std::fs::write(&scene, lit_by_map(1.0)).expect("write scene");
+    let out = dir.join("out.png");
+    let mut options = WatchOptions::new(&scene, &out);
+    options.threads = Some(2);
+    let session = WatchSession::start(options).expect("start watching");
+    let f = Fixture {
+        dir,
+        scene,
+        out,
+        session: Some(session),
+    };
+    let first = f.rendered();
+    assert_eq!(first.environments_built, 1, "{first}");
+    let before = on_disk(&f);
+    assert!(before == fresh_render(&f.scene));
+
+    // The map alone: the watch follows its file and builds its distribution again.
+    write_map(&map, |_, y| [0.1, 0.3, if y < 4 { 2.0 } else { 0.1 }]);
+    let r = match f.wait(
+        "the render after the map edit",
+        |r| matches!(r, Report::Rendered(r) if r.completed()),
+    ) {
+        Report::Rendered(r) => r,
+        _ => unreachable!(),
+    };
+    assert!(r.trigger.iter().any(|p| p.ends_with("sky.exr")), "{r:?}");
+    assert_eq!(r.environments_built, 1, "{r}");
+    assert!(r.changes.sky && !r.bvh_rebuilt, "{r}");
+    assert!(r.to_string().contains("environment map"), "{r}");
+    let after = on_disk(&f);
+    assert!(after != before, "the map edit left the image as it was");
+    assert!(after == fresh_render(&f.scene), "not the fresh render");
+
+    // The strength alone: the same file, the distribution reused.
+    f.write_scene(&lit_by_map(2.0));
+    let r = f.rendered();
+    assert_eq!(r.environments_built, 0, "{r}");
+    assert!(r.changes.sky, "{r}");
+    assert!(!r.to_string().contains("environment map"), "{r}");
+    let brighter = on_disk(&f);
+    assert!(
+        brighter != after,
+        "the strength edit left the image as it was"
+    );
+    assert!(brighter == fresh_render(&f.scene), "not the fresh render");
+}

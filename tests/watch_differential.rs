@@ -1,6 +1,6 @@
-//! Differential test of live editing: random sequences of edits (scene, prefab, mesh, texture and
-//! directory operations, valid and broken, saved in the ways editors save, with random gaps of
-//! 0–100 ms) are played against a running watch; after each sequence the watch must show what a
+//! Differential test of live editing: random sequences of edits (scene, prefab, mesh, texture,
+//! environment map and directory operations, valid and broken, saved in the ways editors save,
+//! with random gaps of 0–100 ms) are played against a running watch; after each sequence the watch must show what a
 //! fresh render of the files on disk shows: the same pixels, or the same error.
 //!
 //! Renders are deterministic for any pass split, which makes the fresh render an exact oracle.
@@ -35,6 +35,25 @@ const MESHES: [&str; 2] = [
     "v -2 -2 0\nv 2 -2 0\nv 9 3 0\nf 1 2 3\n",
 ];
 const BROKEN_MESH: &str = "v 0 0 0\nf 1 2 9\n";
+
+/// The environment map files in `env/`: OpenEXR and Radiance, each written in its own format.
+const MAP_FILES: [&str; 2] = ["sky.exr", "sky.hdr"];
+/// Map sizes, width × height.
+const MAP_SIZES: [(u32, u32); 3] = [(8, 4), (16, 8), (32, 16)];
+/// Number of texel patterns of [`map_texel`].
+const MAP_PATTERNS: usize = 4;
+
+/// `strength` and `rotate` values of the environment.
+const STRENGTHS: [&str; 3] = ["1.0", "0.4", "2.5"];
+const ROTATIONS: [&str; 3] = ["(0, 0, 0)", "(0, 90, 0)", "(30, -45, 0)"];
+/// `direction`, `angular_diameter` and power of the sun.
+const SUN_DIRECTIONS: [&str; 3] = ["(0.3, 1, -0.2)", "(-1, 0.5, -1)", "(0.2, -0.3, -1)"];
+const SUN_DIAMETERS: [&str; 3] = ["0.53", "5", "20"];
+const SUN_POWERS: [&str; 3] = [
+    "irradiance: 3.0",
+    "radiance: 40.0",
+    "irradiance: 1.5, colour: (1, 0.6, 0.3)",
+];
 
 /// splitmix64: a small seeded generator, enough for test inputs.
 struct Rng(u64);
@@ -72,6 +91,12 @@ struct SceneText {
     swapped: bool,
     /// Samples per pixel (1 or 4).
     spp: u32,
+    /// `settings.environment`, else maybe a `background`.
+    environment: Option<EnvText>,
+    /// A grey `background` (only without an environment).
+    background: bool,
+    /// `settings.sun`.
+    sun: Option<SunText>,
     /// A syntax error (or, if `truncated`, only the first half of the text).
     broken: bool,
     truncated: bool,
@@ -87,6 +112,17 @@ impl SceneText {
             mesh: rng.chance(40),
             swapped: rng.chance(30),
             spp: if rng.chance(20) { 1 } else { 4 },
+            environment: rng.chance(50).then(|| EnvText {
+                file: rng.below(MAP_FILES.len()),
+                strength: rng.below(STRENGTHS.len()),
+                rotate: rng.below(ROTATIONS.len()),
+            }),
+            background: rng.chance(50),
+            sun: rng.chance(35).then(|| SunText {
+                direction: rng.below(SUN_DIRECTIONS.len()),
+                diameter: rng.below(SUN_DIAMETERS.len()),
+                power: rng.below(SUN_POWERS.len()),
+            }),
             broken,
             truncated: broken && rng.chance(50),
         }
@@ -115,10 +151,24 @@ impl SceneText {
         } else {
             "Constant((0.5, 0.5, 0.5))"
         };
+        let mut sky = match (&self.environment, self.background) {
+            (Some(e), _) => format!(
+                r#", environment: Environment(path: "env/{}", strength: {}, rotate: {})"#,
+                MAP_FILES[e.file], STRENGTHS[e.strength], ROTATIONS[e.rotate]
+            ),
+            (None, true) => ", background: (0.3, 0.3, 0.3)".to_string(),
+            (None, false) => String::new(),
+        };
+        if let Some(s) = &self.sun {
+            sky += &format!(
+                ", sun: Sun(direction: {}, angular_diameter: {}, {})",
+                SUN_DIRECTIONS[s.direction], SUN_DIAMETERS[s.diameter], SUN_POWERS[s.power]
+            );
+        }
         let text = format!(
             r#"Scene(
     camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0), fov: 40.0),
-    settings: Settings(width: 32, height: 32, spp: {spp}, max_depth: 3),
+    settings: Settings(width: 32, height: 32, spp: {spp}, max_depth: 3{sky}),
     materials: {{
         "wall": Light(emit: Constant({wall}), intensity: 1.0, two_sided: true),
         "ball": Diffuse(albedo: {albedo}),
@@ -139,6 +189,24 @@ impl SceneText {
             text
         }
     }
+}
+
+/// `settings.environment` of the scene: `env/MAP_FILES[file]` at `STRENGTHS[strength]`,
+/// `ROTATIONS[rotate]`.
+#[derive(Clone, Debug)]
+struct EnvText {
+    file: usize,
+    strength: usize,
+    rotate: usize,
+}
+
+/// `settings.sun` of the scene, as indices into [`SUN_DIRECTIONS`], [`SUN_DIAMETERS`] and
+/// [`SUN_POWERS`].
+#[derive(Clone, Debug)]
+struct SunText {
+    direction: usize,
+    diameter: usize,
+    power: usize,
 }
 
 /// How a file is saved.
@@ -205,7 +273,7 @@ impl Save {
 }
 
 /// The directories the scene's files live in.
-const DIRS: [&str; 3] = ["prefabs", "tex", "meshes"];
+const DIRS: [&str; 4] = ["prefabs", "tex", "meshes", "env"];
 
 /// One edit.
 #[derive(Clone, Debug)]
@@ -220,6 +288,13 @@ enum Op {
     LinkTexture(usize),
     /// `meshes/tri.obj`: one of [`MESHES`], or broken.
     Mesh(Option<usize>, Save),
+    /// `env/MAP_FILES[file]`: new contents.
+    Map(usize, MapBytes, Save),
+    /// `rm env/MAP_FILES[file]`.
+    RemoveMap(usize),
+    /// `linked/real.exr` of a pattern, and `env/sky.exr` made a symlink to it (later in-place
+    /// writes of the map then edit the target, in another directory).
+    LinkMap(usize),
     /// `rm -rf DIR`.
     RemoveDir(usize),
     /// `mkdir DIR` and write its file (a valid one).
@@ -260,6 +335,78 @@ fn png_bytes(colour: Option<usize>) -> Vec<u8> {
     }
 }
 
+/// Contents of a map file.
+#[derive(Clone, Copy, Debug)]
+enum MapBytes {
+    /// Texel pattern `p` of [`map_texel`] at size `MAP_SIZES[s]`: `Valid(p, s)`.
+    Valid(usize, usize),
+    /// Not an image.
+    Garbage,
+    /// The first half of the bytes of `Valid(p, s)`.
+    Truncated(usize, usize),
+}
+
+impl MapBytes {
+    fn random(rng: &mut Rng) -> Self {
+        let (p, s) = (rng.below(MAP_PATTERNS), rng.below(MAP_SIZES.len()));
+        match rng.below(10) {
+            0 => Self::Garbage,
+            1 => Self::Truncated(p, s),
+            _ => Self::Valid(p, s),
+        }
+    }
+}
+
+/// Radiance of texel (x, y) of a `w` × `h` map of pattern `p`: two uniform skies (whose OpenEXR
+/// files are of one size, see `environment_map_swapped_keeping_size_and_mtime`), a gradient, and
+/// a single bright texel.
+fn map_texel(p: usize, x: u32, y: u32, w: u32, h: u32) -> [f32; 3] {
+    match p {
+        0 => [0.8, 0.8, 0.8],
+        // Every channel's float differs from 0.8 in its exponent byte only.
+        1 => [0.2, 0.8, 3.2],
+        2 => [
+            0.2 + 2.0 * x as f32 / w as f32,
+            0.5,
+            1.0 - y as f32 / h as f32,
+        ],
+        _ if (x, y) == (w / 4, h / 3) => [80.0, 60.0, 40.0],
+        _ => [0.05, 0.1, 0.2],
+    }
+}
+
+/// The bytes of map file `MAP_FILES[file]` (OpenEXR or Radiance, by its name) of `contents`.
+fn map_bytes(file: usize, contents: MapBytes) -> Vec<u8> {
+    let (p, s, truncated) = match contents {
+        MapBytes::Garbage => return b"not an environment map".to_vec(),
+        MapBytes::Valid(p, s) => (p, s, false),
+        MapBytes::Truncated(p, s) => (p, s, true),
+    };
+    let (w, h) = MAP_SIZES[s];
+    let texels: Vec<[f32; 3]> = (0..h)
+        .flat_map(|y| (0..w).map(move |x| map_texel(p, x, y, w, h)))
+        .collect();
+    let mut bytes = Vec::new();
+    if MAP_FILES[file].ends_with(".hdr") {
+        let rgb: Vec<image::Rgb<f32>> = texels.into_iter().map(image::Rgb).collect();
+        image::codecs::hdr::HdrEncoder::new(&mut bytes)
+            .encode(&rgb, w as usize, h as usize)
+            .expect("encode hdr");
+    } else {
+        image::Rgb32FImage::from_raw(w, h, texels.concat())
+            .expect("buffer size")
+            .write_to(
+                &mut std::io::Cursor::new(&mut bytes),
+                image::ImageFormat::OpenExr,
+            )
+            .expect("encode exr");
+    }
+    if truncated {
+        bytes.truncate(bytes.len() / 2);
+    }
+    bytes
+}
+
 fn mesh_text(variant: Option<usize>) -> &'static str {
     variant.map_or(BROKEN_MESH, |v| MESHES[v])
 }
@@ -272,6 +419,10 @@ fn dir_file(d: usize, v: usize) -> (&'static str, Vec<u8>) {
             prefab_text(Some(v % COLOURS.len())).into_bytes(),
         ),
         1 => ("ball.png", png_bytes(Some(v % COLOURS.len()))),
+        3 => (
+            MAP_FILES[0],
+            map_bytes(0, MapBytes::Valid(v % MAP_PATTERNS, v % MAP_SIZES.len())),
+        ),
         _ => (
             "tri.obj",
             mesh_text(Some(v % MESHES.len())).as_bytes().to_vec(),
@@ -283,7 +434,7 @@ impl Op {
     fn random(rng: &mut Rng, dir: &Path) -> Self {
         let d = rng.below(DIRS.len());
         let exists = dir.join(DIRS[d]).is_dir();
-        match rng.below(10) {
+        match rng.below(12) {
             0..=2 => Self::Scene(SceneText::random(rng), Save::random(rng)),
             3 => Self::Prefab(
                 (!rng.chance(20)).then(|| rng.below(COLOURS.len())),
@@ -301,6 +452,14 @@ impl Op {
             6 | 7 if !exists => Self::CreateDir(d, rng.below(6)),
             6 => Self::RemoveDir(d),
             7 => Self::ReplaceDir(d, rng.below(6)),
+            8 | 9 => {
+                let file = rng.below(MAP_FILES.len());
+                match rng.below(10) {
+                    0 => Self::RemoveMap(file),
+                    1 => Self::LinkMap(rng.below(MAP_PATTERNS)),
+                    _ => Self::Map(file, MapBytes::random(rng), Save::random(rng)),
+                }
+            }
             _ => Self::Gap(rng.below(101) as u64),
         }
     }
@@ -333,6 +492,23 @@ impl Op {
             Self::Mesh(v, save) => {
                 if let Some(path) = file("meshes", "tri.obj") {
                     save.write(&path, mesh_text(*v).as_bytes());
+                }
+            }
+            Self::Map(f, contents, save) => {
+                if let Some(path) = file("env", MAP_FILES[*f]) {
+                    save.write(&path, &map_bytes(*f, *contents));
+                }
+            }
+            Self::RemoveMap(f) => {
+                let _ = std::fs::remove_file(dir.join("env").join(MAP_FILES[*f]));
+            }
+            Self::LinkMap(p) => {
+                std::fs::create_dir_all(dir.join("linked")).expect("mkdir");
+                let bytes = map_bytes(0, MapBytes::Valid(*p, 1));
+                std::fs::write(dir.join("linked/real.exr"), bytes).expect("write");
+                if let Some(path) = file("env", MAP_FILES[0]) {
+                    let _ = std::fs::remove_file(&path);
+                    std::os::unix::fs::symlink("../linked/real.exr", &path).expect("symlink");
                 }
             }
             Self::RemoveDir(d) => {
@@ -399,6 +575,11 @@ impl Bench {
             let (file, bytes) = dir_file(d, 0);
             std::fs::write(dir.join(sub).join(file), bytes).expect("write");
         }
+        std::fs::write(
+            dir.join("env").join(MAP_FILES[1]),
+            map_bytes(1, MapBytes::Valid(2, 0)),
+        )
+        .expect("write map");
         let text = SceneText {
             wall: 0,
             wall_prefab: true,
@@ -406,6 +587,13 @@ impl Bench {
             mesh: true,
             swapped: false,
             spp: 4,
+            environment: Some(EnvText {
+                file: 0,
+                strength: 0,
+                rotate: 0,
+            }),
+            background: false,
+            sun: None,
             broken: false,
             truncated: false,
         };
@@ -472,6 +660,20 @@ impl Bench {
             }
         }
         Ok(())
+    }
+
+    /// [`Bench::play`], for `ops` that change what a fresh render gives (checked): a watch that
+    /// missed them would still show the old result.
+    fn play_change(&mut self, ops: &[Op]) -> Result<(), String> {
+        let before = fresh(&self.dir.join("scene.ron"));
+        for op in ops {
+            op.apply(&self.dir);
+        }
+        if fresh(&self.dir.join("scene.ron")) == before {
+            return Err(format!("{ops:?} left the fresh render as it was"));
+        }
+        self.reports.clear();
+        self.settle(&format!("after {ops:?}"))
     }
 
     /// Plays `ops`, then waits for the watch to show what a fresh render shows.
@@ -561,6 +763,9 @@ fn scene_text(wall: usize) -> SceneText {
         mesh: false,
         swapped: false,
         spp: 4,
+        environment: None,
+        background: false,
+        sun: None,
         broken: false,
         truncated: false,
     }
@@ -626,4 +831,60 @@ fn regression_broken_then_fixed_within_a_window() {
         Op::Scene(scene_text(1), Save::Split(60)),
     ])
     .unwrap_or_else(|e| panic!("{e}"));
+}
+
+// ------------------------------------------------------------------------------------------------
+// The environment map's file, edited alone: every step changes the fresh render, so a watch that
+// did not follow the file would keep showing the previous result.
+
+#[test]
+fn environment_map_swapped_keeping_size_and_mtime() {
+    // The bench starts lit by `env/sky.exr` of pattern 0 at size 0.
+    let mut b = Bench::new("map-stamp");
+    let path = b.dir.join("env").join(MAP_FILES[0]);
+    let stamp = |p: &Path| {
+        let meta = std::fs::metadata(p).expect("stat");
+        (meta.len(), meta.modified().expect("mtime"))
+    };
+    for pattern in [1, 0] {
+        let before = stamp(&path);
+        b.play_change(&[Op::Map(0, MapBytes::Valid(pattern, 0), Save::KeepMtime)])
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(stamp(&path), before, "the swap kept the size and the mtime");
+    }
+}
+
+#[test]
+fn environment_map_edited_through_a_symlink() {
+    let mut b = Bench::new("map-symlink");
+    b.play_change(&[Op::LinkMap(2)])
+        .unwrap_or_else(|e| panic!("{e}"));
+    b.play_change(&[Op::Map(0, MapBytes::Valid(3, 1), Save::InPlace)])
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(b.dir.join("env").join(MAP_FILES[0]).is_symlink());
+}
+
+#[test]
+fn environment_map_broken_deleted_restored_and_radiance() {
+    let mut b = Bench::new("map-broken");
+    for op in [
+        Op::Map(0, MapBytes::Truncated(2, 2), Save::InPlace),
+        Op::Map(0, MapBytes::Garbage, Save::Rename),
+        Op::RemoveMap(0),
+        Op::Map(0, MapBytes::Valid(2, 2), Save::Recreate),
+    ] {
+        b.play_change(&[op]).unwrap_or_else(|e| panic!("{e}"));
+    }
+    let hdr = SceneText {
+        environment: Some(EnvText {
+            file: 1,
+            strength: 0,
+            rotate: 1,
+        }),
+        ..scene_text(0)
+    };
+    b.play_change(&[Op::Scene(hdr, Save::InPlace)])
+        .unwrap_or_else(|e| panic!("{e}"));
+    b.play_change(&[Op::Map(1, MapBytes::Valid(1, 1), Save::Split(40))])
+        .unwrap_or_else(|e| panic!("{e}"));
 }
