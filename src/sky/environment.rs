@@ -121,6 +121,8 @@ impl EnvironmentMap {
     /// texels in place (no copy of the map), validated and clamped rows in parallel.
     pub fn from_linear_vec(width: u32, height: u32, mut pixels: Vec<f32>) -> Result<Self, String> {
         Self::check_size(width, height, pixels.len())?;
+        // The map holds what it says (`bytes`), not a decoder's spare capacity.
+        pixels.shrink_to_fit();
         let w = width as usize;
         // The first texel that is not finite, in row-major order; negative values become 0.
         let bad = pixels
@@ -169,17 +171,19 @@ impl EnvironmentMap {
         let w = width as usize;
         let mut counts = vec![0u32; texels.len() / 3];
         // Per row: the sum of its luminances and of its radiance (f64, so 4096 columns lose
-        // nothing), and the row's conditional table.
-        let rows: Vec<(f64, [f64; 3])> = counts
+        // nothing), its largest channel, and the row's conditional table.
+        let rows: Vec<(f64, [f64; 3], f32)> = counts
             .par_chunks_mut(w)
             .zip(texels.par_chunks(3 * w))
             .map(|(row_counts, row)| {
                 let lum = |t: &[f32]| f64::from(luminance(Vec3::from_slice(t)));
                 let sum: f64 = row.chunks_exact(3).map(lum).sum();
                 let mut rgb = [0.0f64; 3];
+                let mut max = 0.0f32;
                 for t in row.chunks_exact(3) {
                     for c in 0..3 {
                         rgb[c] += f64::from(t[c]);
+                        max = max.max(t[c]);
                     }
                 }
                 let columns = &mut row_counts[..w - 1];
@@ -189,7 +193,7 @@ impl EnvironmentMap {
                     // Never picked (its marginal count is 0); uniform for completeness.
                     cumulative(std::iter::repeat_n(1.0, w - 1), w as f64, columns);
                 }
-                (sum, rgb)
+                (sum, rgb, max)
             })
             .collect();
         let band = |i: usize| Self::band(height, i);
@@ -205,13 +209,13 @@ impl EnvironmentMap {
         }
         // Mean over the sphere: Σ L · ΔΩ / 4π, with ΔΩ = band(i) · 2π / width per texel.
         let mut mean = [0.0f64; 3];
-        for (i, (_, rgb)) in rows.iter().enumerate() {
+        for (i, (_, rgb, _)) in rows.iter().enumerate() {
             for c in 0..3 {
                 mean[c] += rgb[c] * band(i) * std::f64::consts::TAU / w as f64;
             }
         }
         let mean = Vec3::from_array(mean.map(|m| (m / (4.0 * std::f64::consts::PI)) as f32));
-        let max = texels.par_iter().copied().reduce(|| 0.0, f32::max);
+        let max = rows.iter().fold(0.0f32, |m, r| m.max(r.2));
         Self {
             width,
             height,
@@ -527,9 +531,11 @@ mod tests {
     fn the_floats_given_by_value_become_the_texels_without_a_copy() {
         let mut pixels = vec![0.5f32; 3 * 8 * 4];
         pixels[3 * 9 + 1] = -2.0;
+        pixels[3 * 30 + 2] = 7.0;
         let start = pixels.as_ptr();
         let m = EnvironmentMap::from_linear_vec(8, 4, pixels).expect("valid map");
         assert_eq!(m.texels.as_ptr(), start, "the map copied its texels");
+        assert_eq!(m.max(), 7.0);
         assert_eq!(
             m.radiance(Vec3::new(0.924, 0.4, -0.383)),
             Vec3::new(0.5, 0.0, 0.5)
