@@ -81,7 +81,7 @@ pub struct DistantSample {
     /// Radiance the light sends along it.
     pub radiance: Vec3,
     /// Probability density of the direction per steradian, selection included: what
-    /// [`LightSet::distant_pdf`] gives for it.
+    /// [`LightSet::distant_lookup`] gives for it.
     pub pdf: f32,
 }
 
@@ -300,20 +300,19 @@ impl LightSet {
             .fold(0.0, f32::max)
     }
 
-    /// The distant lights, in the order [`LightSet::distant_pdf`] numbers them.
+    /// The distant lights, in the order [`LightSet::distant_lookup`] numbers them.
     pub fn distant(&self) -> &[DistantLight] {
         &self.distant
     }
 
-    /// Density per steradian with which [`LightSet::sample`] gives direction `d` towards
-    /// distant light `k` (selection included); 0 if it is never sampled there.
+    /// Radiance that distant light `k` sends along direction `d`, and the density per
+    /// steradian with which [`LightSet::sample`] gives `d` towards it (selection included; 0
+    /// if it is never sampled there).
     #[inline]
-    pub fn distant_pdf(&self, k: usize, d: Vec3) -> f32 {
+    pub fn distant_lookup(&self, k: usize, d: Vec3) -> (Vec3, f32) {
         let pmf = self.selection_pmf(self.emitters.len() + k);
-        if pmf == 0.0 {
-            return 0.0;
-        }
-        pmf * self.distant[k].pdf(d)
+        let (radiance, pdf) = self.distant[k].lookup(d);
+        (radiance, pmf * pdf)
     }
 
     /// Probability that [`LightSet::select`] picks emitter `k` (0 for an index out of range).
@@ -423,14 +422,13 @@ impl LightSet {
             let direction = light.sample(u, jitter)?;
             // Value and density from the direction itself, as a path that leaves the scene
             // along it is weighed.
-            let pdf = pmf * light.pdf(direction);
-            return (pdf > 0.0).then(|| {
-                Sampled::Distant(DistantSample {
-                    direction,
-                    radiance: light.radiance(direction),
-                    pdf,
-                })
-            });
+            let (radiance, pdf) = light.lookup(direction);
+            let pdf = pmf * pdf;
+            return (pdf > 0.0).then_some(Sampled::Distant(DistantSample {
+                direction,
+                radiance,
+                pdf,
+            }));
         };
         let i = e.index as usize;
         let strategy = Self::strategy(geometry, &e, p_ref);

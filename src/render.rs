@@ -223,15 +223,15 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         let Some(hit) = view.geometry.intersect_with(lanes, &ray, f32::INFINITY) else {
             let mut seen = view.background;
             let mut light = view.background;
-            for (k, distant) in view.lights.distant().iter().enumerate() {
-                let emitted = distant.radiance(ray.direction);
+            for k in 0..view.lights.distant().len() {
+                let (emitted, pdf_light) = view.lights.distant_lookup(k, ray.direction);
                 if emitted == Vec3::ZERO {
                     continue;
                 }
                 seen += emitted;
                 let weight =
                     emission_weight(view.method, previous.filter(|_| sample_lights), |_| {
-                        view.lights.distant_pdf(k, ray.direction)
+                        pdf_light
                     });
                 light += emitted * weight;
             }

@@ -73,6 +73,10 @@ pub struct EnvironmentMap {
     max: f32,
     /// Whether any texel has luminance > 0 (otherwise there is nothing to sample).
     lit: bool,
+    /// A row's angular height, π / height.
+    row_angle: f32,
+    /// A texel's solid angle over the sine of its row's mid-angle: 2π / width · 2 sin(π / 2h).
+    texel_scale: f32,
 }
 
 /// Cumulative counts out of [`SCALE`] of `weights` (summing to `total` > 0), written to `out`;
@@ -224,6 +228,11 @@ impl EnvironmentMap {
             mean,
             max,
             lit,
+            row_angle: PI / height as f32,
+            texel_scale: (std::f64::consts::TAU / w as f64
+                * 2.0
+                * (std::f64::consts::PI / (2.0 * f64::from(height))).sin())
+                as f32,
         }
     }
 
@@ -284,8 +293,22 @@ impl EnvironmentMap {
     #[inline]
     pub fn radiance(&self, d: Vec3) -> Vec3 {
         let (row, column) = self.texel_of(d);
+        self.texel(row, column)
+    }
+
+    /// Radiance of texel `(row, column)`.
+    #[inline]
+    fn texel(&self, row: usize, column: usize) -> Vec3 {
         let i = 3 * (row * self.width as usize + column);
         Vec3::from_slice(&self.texels[i..i + 3])
+    }
+
+    /// Radiance along direction `d` (map space) and the density with which
+    /// [`EnvironmentMap::sample`] gives it ([`EnvironmentMap::pdf`]), from one texel lookup.
+    #[inline]
+    pub fn lookup(&self, d: Vec3) -> (Vec3, f32) {
+        let (row, column) = self.texel_of(d);
+        (self.texel(row, column), self.texel_pdf(row, column))
     }
 
     /// Marginal cumulative count through row `i`.
@@ -307,27 +330,37 @@ impl EnvironmentMap {
     /// Probability that [`EnvironmentMap::sample`] picks texel `(row, column)`.
     #[inline]
     fn texel_probability(&self, row: usize, column: usize) -> f32 {
-        let before = |f: &dyn Fn(usize) -> u32, k: usize| if k == 0 { 0 } else { f(k - 1) };
-        let m = self.marginal(row) - before(&|i| self.marginal(i), row);
-        let c = self.conditional(row, column) - before(&|j| self.conditional(row, j), column);
+        let m = self.marginal(row) - if row == 0 { 0 } else { self.marginal(row - 1) };
+        let c = self.conditional(row, column)
+            - if column == 0 {
+                0
+            } else {
+                self.conditional(row, column - 1)
+            };
         (f64::from(m) * f64::from(c) / (f64::from(SCALE) * f64::from(SCALE))) as f32
     }
 
     /// Solid angle of a texel of row `row`.
     #[inline]
     fn texel_solid_angle(&self, row: usize) -> f32 {
-        (Self::band(self.height, row) * std::f64::consts::TAU / f64::from(self.width)) as f32
+        self.texel_scale * (self.row_angle * (row as f32 + 0.5)).sin()
+    }
+
+    /// Density per steradian of a direction in texel `(row, column)`.
+    #[inline]
+    fn texel_pdf(&self, row: usize, column: usize) -> f32 {
+        if !self.lit {
+            return 0.0;
+        }
+        self.texel_probability(row, column) / self.texel_solid_angle(row)
     }
 
     /// Density per steradian with which [`EnvironmentMap::sample`] gives direction `d` (map
     /// space): its texel's probability over the texel's solid angle.
     #[inline]
     pub fn pdf(&self, d: Vec3) -> f32 {
-        if !self.lit {
-            return 0.0;
-        }
         let (row, column) = self.texel_of(d);
-        self.texel_probability(row, column) / self.texel_solid_angle(row)
+        self.texel_pdf(row, column)
     }
 
     /// A direction (map space, unit) sampled by the texel distribution: `u` picks the texel
@@ -342,8 +375,11 @@ impl EnvironmentMap {
         let row = pick(h as usize, u.y, |i| self.marginal(i));
         let column = pick(w, u.x, |j| self.conditional(row, j));
         let phi = 2.0 * PI * (column as f32 + jitter.x) / w as f32;
-        let top = (PI * row as f32 / h as f32).cos();
-        let cos_theta = (top - jitter.y * Self::band(h, row) as f32).clamp(-1.0, 1.0);
+        // cos θ uniform over the row's band, from its top edge down by the band's height
+        // (`texel_solid_angle` over the column's 2π / width).
+        let top = (self.row_angle * row as f32).cos();
+        let band = self.texel_solid_angle(row) * w as f32 / (2.0 * PI);
+        let cos_theta = (top - jitter.y * band).clamp(-1.0, 1.0);
         let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
         Some(Vec3::new(
             sin_theta * phi.sin(),

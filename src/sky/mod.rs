@@ -43,10 +43,17 @@ impl EnvironmentLight {
         self.strength * self.map.radiance(self.world_from_map.transpose() * d)
     }
 
-    /// Density per steradian of [`EnvironmentLight::sample`] at world direction `d`.
+    /// Density per steradian of [`DistantLight::sample`] at world direction `d`.
     #[inline]
     pub fn pdf(&self, d: Vec3) -> f32 {
         self.map.pdf(self.world_from_map.transpose() * d)
+    }
+
+    /// Radiance along world direction `d` and its density, from one texel lookup.
+    #[inline]
+    pub fn lookup(&self, d: Vec3) -> (Vec3, f32) {
+        let (radiance, pdf) = self.map.lookup(self.world_from_map.transpose() * d);
+        (self.strength * radiance, pdf)
     }
 }
 
@@ -95,6 +102,17 @@ impl DistantLight {
         match self {
             Self::Environment(e) => e.radiance(d),
             Self::Sun(s) => s.radiance(d),
+        }
+    }
+
+    /// Radiance arriving along unit world direction `d` and the density with which
+    /// [`DistantLight::sample`] gives `d`: [`DistantLight::radiance`] and [`DistantLight::pdf`]
+    /// at the cost of one.
+    #[inline]
+    pub fn lookup(&self, d: Vec3) -> (Vec3, f32) {
+        match self {
+            Self::Environment(e) => e.lookup(d),
+            Self::Sun(s) => (s.radiance(d), s.pdf(d)),
         }
     }
 
