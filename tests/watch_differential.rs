@@ -1,7 +1,9 @@
 //! Differential test of live editing: random sequences of edits (scene, prefab, mesh, texture,
 //! environment map and directory operations, valid and broken, saved in the ways editors save,
-//! with random gaps of 0–100 ms) are played against a running watch; after each sequence the watch must show what a
-//! fresh render of the files on disk shows: the same pixels, or the same error.
+//! with random gaps of 0–100 ms) are played against a running watch; after each sequence the
+//! watch must show what a fresh render of the files on disk shows: the same pixels, or the same
+//! error. The scene is sometimes lit by an environment map (`env/sky.exr` or `env/sky.hdr`) and
+//! a sun.
 //!
 //! Renders are deterministic for any pass split, which makes the fresh render an exact oracle.
 //! The watch runs in-process ([`WatchSession`]) on the real notify watcher: the `rondo watch`
@@ -865,7 +867,7 @@ fn environment_map_edited_through_a_symlink() {
 }
 
 #[test]
-fn environment_map_broken_deleted_restored_and_radiance() {
+fn environment_map_broken_deleted_restored_then_a_radiance_map_edited() {
     let mut b = Bench::new("map-broken");
     for op in [
         Op::Map(0, MapBytes::Truncated(2, 2), Save::InPlace),
