@@ -240,7 +240,9 @@ def main():
     ap.add_argument("--reference", default="bench/mitsuba/envmap_reference.exr")
     ap.add_argument("--reference-spp", type=int, default=4096)
     ap.add_argument("--reference-sampler", default="ldsampler")
-    ap.add_argument("--rondo", default="target/release/rondo")
+    ap.add_argument("--rondo", default=os.environ.get("RONDO_BIN", "target/release/rondo"),
+                    help="the rondo binary (default: $RONDO_BIN, which envmap.sh sets to a "
+                         "private copy of target/release/rondo)")
     ap.add_argument("--spp-list", default="4,16,64")
     ap.add_argument("--mean-spp", type=int, default=1024,
                     help="spp of one more render by each for the mean difference (0: none)")

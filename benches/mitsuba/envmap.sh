@@ -33,4 +33,4 @@ cargo build --release --quiet
 bin_dir="$(mktemp -d)"
 trap 'rm -rf "$bin_dir"' EXIT
 cp target/release/rondo "$bin_dir/rondo"
-"$VENV/bin/python" benches/mitsuba/envmap.py --rondo "$bin_dir/rondo" "$@"
+RONDO_BIN="$bin_dir/rondo" "$VENV/bin/python" benches/mitsuba/envmap.py "$@"
