@@ -15,18 +15,8 @@
 # --variant scalar_rgb (much slower, and the comparison then says so).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-VENV="${MITSUBA_VENV:-$HOME/.cache/rondo-mitsuba-venv}"
+source benches/mitsuba/venv.sh
 REFERENCE="${REFERENCE:-bench/mitsuba/reference.exr}"
-if [ ! -x "$VENV/bin/python" ]; then
-  python3 -m venv "$VENV"
-fi
-"$VENV/bin/pip" install --quiet mitsuba numpy
-if [ -z "${DRJIT_LIBLLVM_PATH:-}" ]; then
-  newest="$(ls /usr/lib/x86_64-linux-gnu/libLLVM.so.* /usr/lib/llvm-*/lib/libLLVM.so.* 2>/dev/null \
-    | sort -V | tail -n 1 || true)"
-  if [ -n "$newest" ]; then export DRJIT_LIBLLVM_PATH="$newest"; fi
-fi
-echo "DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-(unset: Dr.Jit searches itself)}"
 cargo build --release --quiet
 mkdir -p "$(dirname "$REFERENCE")"
 if [ ! -f "$REFERENCE" ]; then
