@@ -542,3 +542,48 @@ fn too_deep_a_nesting_is_named_in_the_users_words() {
         "{e}"
     );
 }
+
+#[test]
+fn an_image_texture_takes_its_filter_and_wrap_and_refuses_unknown_ones() {
+    use rondo::shading::material::Material;
+    use rondo::shading::texture::{Filter, Sampling, Texture, Wrap};
+    let dir = temp_dir("texture-sampling");
+    image::Rgb32FImage::from_raw(2, 2, vec![0.5; 12])
+        .expect("buffer")
+        .save(dir.join("t.exr"))
+        .expect("write texture");
+    let scene = |texture: &str| {
+        write_scene(
+            &dir,
+            "scene.ron",
+            &format!(
+                "{HEADER}    materials: {{\n        \"m\": Diffuse(albedo: {texture}),\n    }},\n)"
+            ),
+        )
+    };
+    let sampling_of = |texture: &str| {
+        let loaded = load_scene(&scene(texture), &mut AssetCache::default()).expect("loads");
+        match &loaded.materials["m"] {
+            Material::Diffuse {
+                albedo: Texture::Image(_, s),
+            } => *s,
+            other => panic!("{other:?}"),
+        }
+    };
+    assert_eq!(sampling_of("Image(path: \"t.exr\")"), Sampling::default());
+    assert_eq!(
+        sampling_of("Image(path: \"t.exr\", filter: Bilinear, wrap: MirroredRepeat)"),
+        Sampling {
+            filter: Filter::Bilinear,
+            wrap: Wrap::MirroredRepeat
+        }
+    );
+    let e = load_scene(
+        &scene("Image(path: \"t.exr\", filter: Trilinear)"),
+        &mut AssetCache::default(),
+    )
+    .expect_err("unknown filter")
+    .to_string();
+    assert_eq!(location(&e).0, 5, "{e}");
+    assert!(e.contains("Trilinear") && e.contains("Bilinear"), "{e}");
+}

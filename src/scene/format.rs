@@ -12,6 +12,7 @@ use serde::{Deserialize, Deserializer};
 use crate::ecs::components::Shape;
 use crate::scene::error::{SceneError, VALUE, number, vector};
 use crate::shading::sampler::SamplerKind;
+use crate::shading::texture::{Filter, Wrap};
 
 /// Parses the RON text `source` of the scene or prefab file `path`. RON's `implicit_some` is on,
 /// so optional fields are written bare. An error names the field at fault and the entity or
@@ -572,10 +573,16 @@ pub enum TextureDesc {
         /// Texture of the other cells.
         odd: Box<TextureDesc>,
     },
-    /// `Image(path: "file.png")`, relative to the scene file.
+    /// `Image(path: "file.png", filter: Nearest, wrap: Clamp)`, relative to the scene file.
     Image {
         /// Path to a PNG file.
         path: String,
+        /// `Nearest` (the default) or `Bilinear`.
+        #[serde(default)]
+        filter: Filter,
+        /// `Clamp` (the default), `Repeat` or `MirroredRepeat`.
+        #[serde(default)]
+        wrap: Wrap,
     },
 }
 

@@ -18,7 +18,7 @@ use glam::{Affine3A, Vec3};
 
 use crate::ecs::components::{MeshData, MeshRef, Shape, Transform};
 use crate::shading::material::Material;
-use crate::shading::texture::{ImageTexture, Texture};
+use crate::shading::texture::{ImageTexture, Sampling, Texture};
 use crate::sky::{EnvironmentLight, Sky, Sun};
 
 pub use super::assets::AssetCache;
@@ -357,18 +357,22 @@ impl Expander<'_> {
                 even: Box::new(self.texture(even, dir)?),
                 odd: Box::new(self.texture(odd, dir)?),
             },
-            TextureDesc::Image { path } => {
+            TextureDesc::Image { path, filter, wrap } => {
                 let full = dir.join(path);
                 self.depend(&full);
+                let sampling = Sampling {
+                    filter: *filter,
+                    wrap: *wrap,
+                };
                 if let Some(image) = self.textures.get(&full) {
-                    return Ok(Texture::Image(image.clone()));
+                    return Ok(Texture::Image(image.clone(), sampling));
                 }
                 let image = self
                     .assets
                     .texture(&full)
                     .map_err(|e| (path.clone(), format!("{}: {e}", full.display())))?;
                 self.textures.insert(full, image.clone());
-                Texture::Image(image)
+                Texture::Image(image, sampling)
             }
         })
     }

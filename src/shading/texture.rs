@@ -3,8 +3,57 @@
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
+use serde::Deserialize;
 
-/// An image decoded to linear RGB, looked up by nearest texel.
+/// How an image texture is read between texel centres.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum Filter {
+    /// The texel the point falls in (the default).
+    #[default]
+    Nearest,
+    /// Bilinear interpolation of the four texels around the point, between texel centres.
+    Bilinear,
+}
+
+/// How an image texture is read outside [0, 1] (glTF's sampler wrap modes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum Wrap {
+    /// The edge texels extend outwards (the default).
+    #[default]
+    Clamp,
+    /// The image tiles.
+    Repeat,
+    /// The image tiles, every other copy mirrored.
+    MirroredRepeat,
+}
+
+/// How an image texture is sampled: its filter and its wrap mode.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Sampling {
+    /// Between texel centres.
+    pub filter: Filter,
+    /// Outside [0, 1].
+    pub wrap: Wrap,
+}
+
+impl Wrap {
+    /// Texel index `i` (any integer) of a row or column of `n` texels, wrapped into `0..n`.
+    #[inline]
+    fn index(self, i: i64, n: usize) -> usize {
+        let n = n as i64;
+        let k = match self {
+            Self::Clamp => i.clamp(0, n - 1),
+            Self::Repeat => i.rem_euclid(n),
+            Self::MirroredRepeat => {
+                let k = i.rem_euclid(2 * n);
+                if k < n { k } else { 2 * n - 1 - k }
+            }
+        };
+        k as usize
+    }
+}
+
+/// An image decoded to linear RGB.
 #[derive(Debug)]
 pub struct ImageTexture {
     width: u32,
@@ -71,6 +120,36 @@ impl ImageTexture {
         let j = (((1.0 - v) * self.height as f32) as usize).min(self.height as usize - 1);
         self.texels[j * self.width as usize + i]
     }
+
+    /// The colour at `uv` sampled as `sampling` says; nearest and clamped is
+    /// [`ImageTexture::lookup`]. Texel `(i, j)` covers `u` in `[i, i + 1) / W` and `v` in
+    /// `(H − j − 1, H − j] / H` (v = 0 is the bottom row); bilinear weights are taken between
+    /// texel centres.
+    #[inline]
+    pub fn sample(&self, uv: Vec2, sampling: Sampling) -> Vec3 {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let texel = |i: i64, j: i64| {
+            let (i, j) = (sampling.wrap.index(i, w), sampling.wrap.index(j, h));
+            self.texels[j * w + i]
+        };
+        // Continuous texel coordinates, rows from the top; non-finite reads as 0.
+        let finite = |x: f32| if x.is_finite() { x } else { 0.0 };
+        let x = finite(uv.x) * w as f32;
+        let y = (1.0 - finite(uv.y)) * h as f32;
+        match (sampling.filter, sampling.wrap) {
+            (Filter::Nearest, Wrap::Clamp) => self.lookup(uv),
+            (Filter::Nearest, _) => texel(x.floor() as i64, y.floor() as i64),
+            (Filter::Bilinear, _) => {
+                let (x, y) = (x - 0.5, y - 0.5);
+                let (i, j) = (x.floor(), y.floor());
+                let (tx, ty) = (x - i, y - j);
+                let (i, j) = (i as i64, j as i64);
+                let top = texel(i, j).lerp(texel(i + 1, j), tx);
+                let bottom = texel(i, j + 1).lerp(texel(i + 1, j + 1), tx);
+                top.lerp(bottom, ty)
+            }
+        }
+    }
 }
 
 /// A colour source.
@@ -87,8 +166,8 @@ pub enum Texture {
         /// Texture of the other cells.
         odd: Box<Texture>,
     },
-    /// An image, shared between materials that use the same file.
-    Image(Arc<ImageTexture>),
+    /// An image, shared between materials that use the same file, and how it is sampled.
+    Image(Arc<ImageTexture>, Sampling),
 }
 
 impl PartialEq for Texture {
@@ -108,7 +187,7 @@ impl PartialEq for Texture {
                     odd: o2,
                 },
             ) => s == s2 && e == e2 && o == o2,
-            (Self::Image(a), Self::Image(b)) => Arc::ptr_eq(a, b),
+            (Self::Image(a, s), Self::Image(b, s2)) => Arc::ptr_eq(a, b) && s == s2,
             _ => false,
         }
     }
@@ -127,7 +206,7 @@ impl Texture {
                     odd.eval(uv)
                 }
             }
-            Self::Image(image) => image.lookup(uv),
+            Self::Image(image, sampling) => image.sample(uv, *sampling),
         }
     }
 
@@ -136,7 +215,7 @@ impl Texture {
         match self {
             Self::Constant(c) => c.abs().max_element(),
             Self::Checker { even, odd, .. } => even.max_channel().max(odd.max_channel()),
-            Self::Image(image) => image.max,
+            Self::Image(image, _) => image.max,
         }
     }
 }
@@ -182,6 +261,66 @@ mod tests {
                 assert_eq!(img.lookup(uv), texel, "uv {uv}");
             }
         }
+    }
+
+    /// A 2×2 image of grey values: top row 0, 1; bottom row 2, 3 (linear).
+    fn grey_2x2() -> ImageTexture {
+        let px: Vec<f32> = [0.0f32, 1.0, 2.0, 3.0]
+            .iter()
+            .flat_map(|&g| [g; 3])
+            .collect();
+        ImageTexture::from_linear(2, 2, &px)
+    }
+
+    #[test]
+    fn bilinear_filtering_interpolates_between_texel_centres() {
+        let img = grey_2x2();
+        let bilinear = |wrap| Sampling {
+            filter: Filter::Bilinear,
+            wrap,
+        };
+        let at = |u: f32, v: f32, wrap| img.sample(Vec2::new(u, v), bilinear(wrap)).x;
+        // Texel centres are exact: (0.25, 0.75) is the top-left texel.
+        assert_eq!(at(0.25, 0.75, Wrap::Clamp), 0.0);
+        assert_eq!(at(0.75, 0.25, Wrap::Clamp), 3.0);
+        // Midway between all four: their mean; between two in a row: their mean.
+        assert!((at(0.5, 0.5, Wrap::Clamp) - 1.5).abs() < 1e-6);
+        assert!((at(0.5, 0.75, Wrap::Clamp) - 0.5).abs() < 1e-6);
+        // At the left edge, clamped: the edge texel; repeated: halfway to the right column.
+        assert!((at(0.0, 0.75, Wrap::Clamp) - 0.0).abs() < 1e-6);
+        assert!((at(0.0, 0.75, Wrap::Repeat) - 0.5).abs() < 1e-6);
+        assert!((at(0.0, 0.75, Wrap::MirroredRepeat) - 0.0).abs() < 1e-6);
+        // The default sampling is the nearest texel, clamped: `lookup`.
+        for uv in [
+            Vec2::new(0.3, 0.9),
+            Vec2::new(-2.0, 5.0),
+            Vec2::new(0.75, 0.1),
+        ] {
+            assert_eq!(img.sample(uv, Sampling::default()), img.lookup(uv));
+        }
+    }
+
+    #[test]
+    fn wrap_modes_tile_and_mirror_outside_the_unit_square() {
+        let img = grey_2x2();
+        let nearest = |wrap| Sampling {
+            filter: Filter::Nearest,
+            wrap,
+        };
+        let at = |u: f32, v: f32, wrap| img.sample(Vec2::new(u, v), nearest(wrap)).x;
+        // Repeat: u + 1 reads the same texel; negative u wraps from the right.
+        assert_eq!(at(1.25, 0.75, Wrap::Repeat), 0.0);
+        assert_eq!(at(-0.25, 0.75, Wrap::Repeat), 1.0);
+        // Mirrored: just past 1 reads the last column again, then the first.
+        assert_eq!(at(1.25, 0.75, Wrap::MirroredRepeat), 1.0);
+        assert_eq!(at(1.75, 0.75, Wrap::MirroredRepeat), 0.0);
+        assert_eq!(at(-0.25, 0.75, Wrap::MirroredRepeat), 0.0);
+        // Clamp: the edge texel.
+        assert_eq!(at(3.0, 0.75, Wrap::Clamp), 1.0);
+        // Rows: v = 1.25 is a quarter above the top; repeat reads the bottom row's texel there.
+        assert_eq!(at(0.25, 1.25, Wrap::Repeat), 2.0);
+        // Non-finite coordinates read as 0: v = 0 is the bottom edge, which repeat wraps to the top.
+        assert_eq!(at(f32::NAN, f32::INFINITY, Wrap::Repeat), 0.0);
     }
 
     #[test]
