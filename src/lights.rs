@@ -1,6 +1,6 @@
 //! Emitters as a sampling distribution, for next-event estimation. No ECS here.
 //!
-//! Every sphere and triangle whose material is a `Light` is an emitter, and so is every triangle
+//! Every sphere and triangle whose material is a `Light` (or an emissive `Pbr`) is an emitter, and so is every triangle
 //! of an emissive instanced mesh (placed through its instance transform, with its area in world
 //! space). One is chosen with probability proportional to its power (area × intensity × mean
 //! emitted colour), then a point on it:
@@ -191,6 +191,11 @@ impl LightSet {
                 Material::Light {
                     emit, intensity, ..
                 } => Some((m, intensity * mean_colour(emit))),
+                pbr @ Material::Pbr {
+                    emissive,
+                    emissive_strength,
+                    ..
+                } if pbr.is_emissive() => Some((m, emissive_strength * mean_colour(emissive))),
                 _ => None,
             }
         };

@@ -260,7 +260,7 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
             });
             radiance += throughput * emitted * weight;
         }
-        if depth + 1 == view.max_depth || material.is_emissive() {
+        if depth + 1 == view.max_depth || !material.scatters() {
             break;
         }
         // Only a vertex the path continues from needs the hit point's error bound.

@@ -88,6 +88,23 @@ impl<'de> Deserialize<'de> for NonNegative {
     }
 }
 
+/// A number in [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UnitInterval(pub f32);
+
+impl<'de> Deserialize<'de> for UnitInterval {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let Real(v) = Real::deserialize(d)?;
+        if !(0.0..=1.0).contains(&v) {
+            return Err(D::Error::custom(format!(
+                "{VALUE} must be between 0 and 1 (got {})",
+                number(v)
+            )));
+        }
+        Ok(Self(v))
+    }
+}
+
 /// A whole number ≥ 1 that fits a `u32`: image sides, samples, path depths.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Count(pub u32);
@@ -627,6 +644,38 @@ pub enum MaterialDesc {
         #[serde(default)]
         two_sided: bool,
     },
+    /// `Pbr(base_color, metallic, roughness, emissive, emissive_strength)`: the glTF 2.0
+    /// metallic–roughness material, with glTF's defaults (base colour 1, metallic 1,
+    /// roughness 1, no emission, strength 1).
+    Pbr {
+        /// Base colour.
+        #[serde(default = "white")]
+        base_color: TextureDesc,
+        /// Metalness in [0, 1].
+        #[serde(default = "unit_one")]
+        metallic: UnitInterval,
+        /// Perceptual roughness in [0, 1]; GGX α = roughness² (at least 0.01²).
+        #[serde(default = "unit_one")]
+        roughness: UnitInterval,
+        /// Emitted colour.
+        #[serde(default = "black")]
+        emissive: TextureDesc,
+        /// Scale of `emissive`.
+        #[serde(default = "one")]
+        emissive_strength: NonNegative,
+    },
+}
+
+fn white() -> TextureDesc {
+    TextureDesc::Constant(Color(Vec3::ONE))
+}
+
+fn black() -> TextureDesc {
+    TextureDesc::Constant(Color(Vec3::ZERO))
+}
+
+fn unit_one() -> UnitInterval {
+    UnitInterval(1.0)
 }
 
 fn zero() -> Real {

@@ -345,6 +345,19 @@ impl Expander<'_> {
                 intensity: intensity.0,
                 two_sided: *two_sided,
             },
+            MaterialDesc::Pbr {
+                base_color,
+                metallic,
+                roughness,
+                emissive,
+                emissive_strength,
+            } => Material::Pbr {
+                base_color: texture(base_color)?,
+                metallic: metallic.0,
+                roughness: roughness.0,
+                emissive: texture(emissive)?,
+                emissive_strength: emissive_strength.0,
+            },
         })
     }
 

@@ -9,6 +9,7 @@ use glam::{Vec2, Vec3};
 use super::microfacet::{
     alpha_from_roughness, cos2_sin2, distribution, lambda, sample_visible_normal, schlick_rgb,
 };
+use super::pbr::Pbr;
 use super::sampler::Sampler;
 use super::sampling::{Frame, cosine_hemisphere, uniform_ball};
 use super::texture::Texture;
@@ -54,6 +55,22 @@ pub enum Material {
         intensity: f32,
         /// Emit from both sides instead of only the side the geometric normal points to.
         two_sided: bool,
+    },
+    /// The glTF 2.0 metallic–roughness material ([`super::pbr`]): a conductor and a dielectric
+    /// (GGX specular over Lambertian base colour) mixed by `metallic`, plus an emission that
+    /// is added to what it reflects, from both sides, and light-sampled like a `Light`'s.
+    Pbr {
+        /// Base colour: the conductor's F0 and the dielectric's diffuse reflectance.
+        base_color: Texture,
+        /// Metalness in [0, 1].
+        metallic: f32,
+        /// Perceptual roughness in [0, 1]; GGX α = roughness², clamped to
+        /// [`super::microfacet::MIN_ROUGHNESS`]².
+        roughness: f32,
+        /// Emitted colour.
+        emissive: Texture,
+        /// Scale of `emissive` (`KHR_materials_emissive_strength`).
+        emissive_strength: f32,
     },
 }
 
@@ -144,15 +161,34 @@ impl GlossyTerms {
 }
 
 impl Material {
-    /// Whether the material emits light.
+    /// Whether the material emits light (a `Light`, or a `Pbr` of non-zero emission).
     pub fn is_emissive(&self) -> bool {
-        matches!(self, Self::Light { .. })
+        match self {
+            Self::Light { .. } => true,
+            Self::Pbr { .. } => self.max_emission() > 0.0,
+            _ => false,
+        }
+    }
+
+    /// Whether a path may continue from the surface: every material but `Light`, which only
+    /// emits.
+    pub fn scatters(&self) -> bool {
+        !matches!(self, Self::Light { .. })
     }
 
     /// Whether next-event estimation applies: the BSDF can be evaluated for any pair of
     /// directions (see [`Material::eval`]).
     pub fn samples_lights(&self) -> bool {
-        matches!(self, Self::Diffuse { .. } | Self::Glossy { .. })
+        matches!(
+            self,
+            Self::Diffuse { .. } | Self::Glossy { .. } | Self::Pbr { .. }
+        )
+    }
+
+    /// The metallic–roughness BRDF of a `Pbr` material at `uv`.
+    #[inline]
+    fn pbr_at(base_color: &Texture, metallic: f32, roughness: f32, uv: Vec2) -> Pbr {
+        Pbr::new(base_color.eval(uv), metallic, roughness)
     }
 
     /// BSDF times the cosine at the surface, and the density [`Material::scatter`] would give,
@@ -185,6 +221,15 @@ impl Material {
                     g.pdf(cos_o),
                 ))
             }
+            Self::Pbr {
+                base_color,
+                metallic,
+                roughness,
+                ..
+            } => {
+                let facing = if d.dot(n) < 0.0 { n } else { -n };
+                Some(Self::pbr_at(base_color, *metallic, *roughness, uv).eval(-d, wi, facing))
+            }
             _ => None,
         }
     }
@@ -209,6 +254,7 @@ impl Material {
             Self::Diffuse { albedo } | Self::Metal { albedo, .. } | Self::Glossy { albedo, .. } => {
                 albedo.eval(uv)
             }
+            Self::Pbr { base_color, .. } => base_color.eval(uv),
             Self::Dielectric { .. } => Vec3::ONE,
             Self::Light { .. } => self.emitted(d, n, uv),
         }
@@ -220,6 +266,11 @@ impl Material {
             Self::Light {
                 emit, intensity, ..
             } => emit.max_channel() * intensity.abs(),
+            Self::Pbr {
+                emissive,
+                emissive_strength,
+                ..
+            } => emissive.max_channel() * emissive_strength.abs(),
             _ => 0.0,
         }
     }
@@ -234,6 +285,11 @@ impl Material {
                 intensity,
                 two_sided,
             } if *two_sided || d.dot(n) < 0.0 => emit.eval(uv) * *intensity,
+            Self::Pbr {
+                emissive,
+                emissive_strength,
+                ..
+            } => emissive.eval(uv) * *emissive_strength,
             _ => Vec3::ZERO,
         }
     }
@@ -317,6 +373,24 @@ impl Material {
                     attenuation: Vec3::splat(scale),
                     pdf: None,
                     radiance_scale: scale,
+                })
+            }
+            Self::Pbr {
+                base_color,
+                metallic,
+                roughness,
+                ..
+            } => {
+                let s = Self::pbr_at(base_color, *metallic, *roughness, uv).sample(
+                    -d,
+                    facing,
+                    sampler.next_2d(),
+                )?;
+                Some(Scatter {
+                    direction: s.wi,
+                    attenuation: s.weight,
+                    pdf: Some(s.pdf),
+                    radiance_scale: 1.0,
                 })
             }
             Self::Light { .. } => None,

@@ -2,6 +2,7 @@
 
 pub mod material;
 pub mod microfacet;
+pub mod pbr;
 pub mod rng;
 pub mod sampler;
 pub mod sampling;

@@ -1,0 +1,394 @@
+//! The glTF 2.0 metallic–roughness BRDF (glTF 2.0 specification, Appendix B): a mix by
+//! `metallic` of a conductor (GGX, height-correlated Smith, Schlick's Fresnel with F0 = base
+//! colour) and a dielectric (`fresnel_mix`: GGX specular weighted by Schlick's Fresnel with
+//! F0 = 0.04, i.e. ior 1.5, over a Lambertian base colour weighted by one minus it); α = roughness².
+//! Both Fresnel terms take `|V·H|`, so the mix is one GGX lobe with F0 = mix(0.04, base, metallic)
+//! plus `(1 − metallic)(1 − F_d) base / π`. No ECS here.
+//!
+//! The spec's `fresnel_mix` is not energy conserving at grazing views: the diffuse part is
+//! attenuated by the Fresnel term at the half vector, not by the specular lobe's albedo, so for a
+//! white base the directional albedo passes 1 towards the horizon (about 1.03 at 60° and 1.29 at
+//! 85° for roughness 0.3, by numerical integration; ≤ 1 up to about 45°). The conductor alone
+//! never gains energy (single-scattering GGX).
+//!
+//! Sampling picks the specular lobe (visible normals, [`sample_visible_normal`]) or the diffuse
+//! lobe (cosine) with a probability that depends on `wo` only ([`Pbr::specular_probability`]), so
+//! the density of a direction is the exact mixture `p·pdf_spec + (1 − p)·pdf_diffuse`, which
+//! next-event estimation and MIS evaluate through [`Pbr::eval`].
+
+use glam::{Vec2, Vec3};
+use std::f32::consts::FRAC_1_PI;
+
+use super::microfacet::{
+    alpha_from_roughness, cos2_sin2, distribution, lambda, sample_visible_normal, schlick_rgb,
+};
+use super::sampling::{Frame, cosine_hemisphere};
+
+/// Reflectance at normal incidence of the dielectric part (ior 1.5).
+pub const DIELECTRIC_F0: f32 = 0.04;
+
+/// The metallic–roughness BRDF at one surface point (textures already looked up).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pbr {
+    /// Base colour: the conductor's F0, the dielectric's diffuse reflectance.
+    pub base_color: Vec3,
+    /// Mix factor in [0, 1]: 0 dielectric, 1 conductor.
+    pub metallic: f32,
+    /// GGX α = roughness², clamped as [`alpha_from_roughness`] does.
+    pub alpha: f32,
+}
+
+/// A sampled direction with its weight `f·cos / pdf` and its density.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PbrSample {
+    /// Unit direction towards the light.
+    pub wi: Vec3,
+    /// `f·cos θi / pdf`.
+    pub weight: Vec3,
+    /// Solid-angle density of `wi` under [`Pbr::sample`].
+    pub pdf: f32,
+}
+
+impl Pbr {
+    /// The BRDF of base colour `base_color`, `metallic` and perceptual `roughness` (both in
+    /// [0, 1]; out-of-range values are clamped).
+    pub fn new(base_color: Vec3, metallic: f32, roughness: f32) -> Self {
+        Self {
+            base_color,
+            metallic: metallic.clamp(0.0, 1.0),
+            alpha: alpha_from_roughness(roughness),
+        }
+    }
+
+    /// F0 of the combined specular lobe: mix(0.04, base colour, metallic) (Schlick's Fresnel is
+    /// linear in F0, so the two lobes' Fresnel-weighted GGX terms add up to this one).
+    #[inline]
+    fn f0(&self) -> Vec3 {
+        Vec3::splat(DIELECTRIC_F0).lerp(self.base_color, self.metallic)
+    }
+
+    /// The diffuse reflectance before the Fresnel weight: `(1 − metallic) · base colour`.
+    #[inline]
+    fn diffuse(&self) -> Vec3 {
+        (1.0 - self.metallic) * self.base_color
+    }
+
+    /// Probability of sampling the specular lobe for a view at cosine `cos_o`: the share of the
+    /// specular lobe's Fresnel at `wo` in the sum of both lobes' rough weights (mean over the
+    /// channels). 1 for a pure conductor or a black base.
+    #[inline]
+    pub fn specular_probability(&self, cos_o: f32) -> f32 {
+        let spec = schlick_rgb(self.f0(), cos_o).element_sum();
+        let fd = schlick_rgb(Vec3::splat(DIELECTRIC_F0), cos_o).x;
+        let diff = (self.diffuse() * (1.0 - fd)).element_sum();
+        if diff <= 0.0 || !diff.is_finite() {
+            1.0
+        } else {
+            (spec / (spec + diff)).clamp(0.0, 1.0)
+        }
+    }
+
+    /// BRDF times `cos θi` and the density of `wi` under [`Pbr::sample`], for unit `wo` (towards
+    /// the viewer) and `wi` (towards the light) about unit normal `n` on the viewer's side. Zero
+    /// when either is below the surface.
+    #[inline]
+    pub fn eval(&self, wo: Vec3, wi: Vec3, n: Vec3) -> (Vec3, f32) {
+        let (cos_o, cos_i) = (wo.dot(n), wi.dot(n));
+        if cos_o <= 0.0 || cos_i <= 0.0 {
+            return (Vec3::ZERO, 0.0);
+        }
+        let t = Terms::new(wo, wi, n, self.alpha);
+        let p_spec = self.specular_probability(cos_o);
+        let (spec_cos, pdf_spec) = self.specular(&t, cos_o);
+        let diff_cos = self.diffuse_term(&t) * cos_i;
+        let pdf = p_spec * pdf_spec + (1.0 - p_spec) * cos_i * FRAC_1_PI;
+        (spec_cos + diff_cos, pdf)
+    }
+
+    /// The specular part of f·cos θi, F D G₂ / (4 cos θo), and its density under visible-normal
+    /// sampling, G₁(wo) D / (4 cos θo).
+    #[inline]
+    fn specular(&self, t: &Terms, cos_o: f32) -> (Vec3, f32) {
+        let f = schlick_rgb(self.f0(), t.cos_oh);
+        let q = t.d / (4.0 * cos_o);
+        (f * (q / (1.0 + t.lo + t.li)), q / (1.0 + t.lo))
+    }
+
+    /// The diffuse BRDF, `(1 − metallic)(1 − F_d(|V·H|)) base / π`.
+    #[inline]
+    fn diffuse_term(&self, t: &Terms) -> Vec3 {
+        let fd = schlick_rgb(Vec3::splat(DIELECTRIC_F0), t.cos_oh).x;
+        self.diffuse() * ((1.0 - fd) * FRAC_1_PI)
+    }
+
+    /// Samples `wi` for unit `wo` about unit normal `n` (the viewer's side) from the uniform
+    /// pair `u`: `u.x` first chooses the lobe, then is rescaled to reuse it. `None` if the
+    /// sampled direction is below the surface (the specular lobe's masked part: absorbed) or has
+    /// no density.
+    #[inline]
+    pub fn sample(&self, wo: Vec3, n: Vec3, u: Vec2) -> Option<PbrSample> {
+        let cos_o = wo.dot(n);
+        if cos_o <= 0.0 {
+            return None;
+        }
+        let frame = Frame::from_normal(n);
+        let p_spec = self.specular_probability(cos_o);
+        let wi = if u.x < p_spec {
+            let u = Vec2::new((u.x / p_spec).min(1.0), u.y);
+            let wo_local = Vec3::new(wo.dot(frame.s), wo.dot(frame.t), cos_o.max(1e-6)).normalize();
+            let h = frame.to_world(sample_visible_normal(wo_local, self.alpha, u));
+            (2.0 * wo.dot(h) * h - wo).normalize()
+        } else {
+            let u = Vec2::new(((u.x - p_spec) / (1.0 - p_spec)).clamp(0.0, 1.0), u.y);
+            frame.to_world(cosine_hemisphere(u)).normalize()
+        };
+        if wi.dot(n) <= 0.0 {
+            return None;
+        }
+        let (f_cos, pdf) = self.eval(wo, wi, n);
+        (pdf > 0.0 && pdf.is_finite()).then(|| PbrSample {
+            wi,
+            weight: f_cos / pdf,
+            pdf,
+        })
+    }
+}
+
+/// The GGX terms of a reflection from `wo` to `wi` about `n`.
+struct Terms {
+    /// D(h) of the half vector.
+    d: f32,
+    /// Smith Λ of `wo` and of `wi`.
+    lo: f32,
+    li: f32,
+    /// `|wo · h|`, for Fresnel.
+    cos_oh: f32,
+}
+
+impl Terms {
+    #[inline]
+    fn new(wo: Vec3, wi: Vec3, n: Vec3, alpha: f32) -> Self {
+        let h = (wo + wi).normalize();
+        let (c2h, s2h) = cos2_sin2(h, n);
+        let (c2o, s2o) = cos2_sin2(wo, n);
+        let (c2i, s2i) = cos2_sin2(wi, n);
+        Self {
+            d: distribution(c2h, s2h, alpha),
+            lo: lambda(c2o, s2o, alpha),
+            li: lambda(c2i, s2i, alpha),
+            cos_oh: wo.dot(h).abs(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shading::rng::Rng;
+    use std::f64::consts::PI;
+
+    /// A direction at polar angle θ (from +z) and azimuth φ.
+    fn dir(theta: f32, phi: f32) -> Vec3 {
+        Vec3::new(
+            theta.sin() * phi.cos(),
+            theta.sin() * phi.sin(),
+            theta.cos(),
+        )
+    }
+
+    /// The materials the tests sweep: (base colour, metallic, roughness).
+    fn materials() -> Vec<Pbr> {
+        let mut out = Vec::new();
+        for (base, metallic) in [
+            (Vec3::ONE, 0.0),
+            (Vec3::new(0.9, 0.5, 0.2), 0.0),
+            (Vec3::new(0.9, 0.5, 0.2), 0.5),
+            (Vec3::ONE, 1.0),
+            (Vec3::new(0.1, 0.7, 0.3), 1.0),
+        ] {
+            for roughness in [0.2, 0.5, 1.0] {
+                out.push(Pbr::new(base, metallic, roughness));
+            }
+        }
+        out
+    }
+
+    /// ∫ pdf(wi) dωi over the hemisphere: the midpoint rule in (t, φ) with cos θ = 1 − t², whose
+    /// steps shrink towards the normal where the narrow lobes of low roughness peak
+    /// (d cos θ = 2t dt).
+    fn pdf_integral(m: &Pbr, wo: Vec3) -> f64 {
+        let (nt, nphi) = (1500, 400);
+        let mut sum = 0.0f64;
+        for i in 0..nt {
+            let t = (i as f64 + 0.5) / nt as f64;
+            let c = 1.0 - t * t;
+            let s = (1.0 - c * c).sqrt();
+            for j in 0..nphi {
+                let phi = (j as f64 + 0.5) / nphi as f64 * 2.0 * PI;
+                let wi = Vec3::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, c as f32);
+                sum += f64::from(m.eval(wo, wi, Vec3::Z).1) * 2.0 * t;
+            }
+        }
+        sum * (1.0 / nt as f64) * (2.0 * PI / nphi as f64)
+    }
+
+    #[test]
+    fn the_brdf_is_reciprocal() {
+        let mut rng = Rng::new(3, 7);
+        for m in materials() {
+            for _ in 0..2000 {
+                let a = dir(
+                    rng.next_f32() * 1.5,
+                    rng.next_f32() * 2.0 * std::f32::consts::PI,
+                );
+                let b = dir(
+                    rng.next_f32() * 1.5,
+                    rng.next_f32() * 2.0 * std::f32::consts::PI,
+                );
+                // f = f·cos / cos.
+                let f_ab = m.eval(a, b, Vec3::Z).0 / b.z;
+                let f_ba = m.eval(b, a, Vec3::Z).0 / a.z;
+                let scale = f_ab.max_element().max(1.0);
+                assert!(
+                    (f_ab - f_ba).abs().max_element() <= 1e-4 * scale,
+                    "{m:?}: f({a}, {b}) = {f_ab} but f({b}, {a}) = {f_ba}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_pdf_integrates_to_at_most_one_and_exactly_to_what_is_not_masked() {
+        for m in materials() {
+            for theta_o in [0.0f32, 0.6, 1.2] {
+                let wo = dir(theta_o, 0.4);
+                let integral = pdf_integral(&m, wo);
+                // Visible-normal sampling sends the masked part of the lobe below the surface:
+                // at most G₁-dependent loss, but never more than 1 in all.
+                assert!(integral <= 1.0 + 2e-3, "{m:?} θo {theta_o}: {integral}");
+                // At normal incidence the specular lobe (chosen with probability p) loses the
+                // reflections about normals more than 45° off, a fraction α²/(1 + α²) of GGX's
+                // D cos (its CDF in tan²θ is tan²θ / (α² + tan²θ)); the diffuse lobe loses none.
+                if theta_o == 0.0 {
+                    let a2 = f64::from(m.alpha).powi(2);
+                    let p = f64::from(m.specular_probability(1.0));
+                    let exact = 1.0 - p * a2 / (1.0 + a2);
+                    assert!(
+                        (integral - exact).abs() < 2e-3,
+                        "{m:?}: {integral} vs {exact}"
+                    );
+                }
+                assert!(integral > 0.3, "{m:?} θo {theta_o}: {integral}");
+            }
+        }
+    }
+
+    #[test]
+    fn sampled_weights_and_densities_match_eval() {
+        let mut rng = Rng::new(9, 1);
+        for m in materials() {
+            let wo = dir(0.7, 1.0);
+            for _ in 0..2000 {
+                let u = Vec2::new(rng.next_f32(), rng.next_f32());
+                let Some(s) = m.sample(wo, Vec3::Z, u) else {
+                    continue;
+                };
+                let (f_cos, pdf) = m.eval(wo, s.wi, Vec3::Z);
+                assert!((pdf - s.pdf).abs() <= 1e-5 * pdf, "{m:?}");
+                assert!((f_cos / pdf - s.weight).abs().max_element() < 1e-4, "{m:?}");
+            }
+        }
+    }
+
+    /// χ² of the sampled directions against the pdf on a (cos θ, φ) grid: expected counts from
+    /// integrating the pdf over each bin numerically; bins expecting fewer than 5 are pooled.
+    #[test]
+    fn sampled_directions_follow_the_pdf_chi_squared() {
+        let (nc, nphi, sub) = (16usize, 16usize, 12usize);
+        let samples = 200_000usize;
+        for m in [
+            Pbr::new(Vec3::ONE, 0.0, 0.5),
+            Pbr::new(Vec3::new(0.9, 0.5, 0.2), 0.3, 0.7),
+            Pbr::new(Vec3::new(0.1, 0.7, 0.3), 1.0, 0.6),
+            Pbr::new(Vec3::splat(0.8), 0.0, 1.0),
+        ] {
+            let wo = dir(0.8, 0.3);
+            let mut observed = vec![0f64; nc * nphi];
+            let mut rng = Rng::new(21, 5);
+            for _ in 0..samples {
+                let u = Vec2::new(rng.next_f32(), rng.next_f32());
+                if let Some(s) = m.sample(wo, Vec3::Z, u) {
+                    let c = s.wi.z.clamp(0.0, 1.0);
+                    let phi = s.wi.y.atan2(s.wi.x).rem_euclid(2.0 * std::f32::consts::PI);
+                    let i = ((c * nc as f32) as usize).min(nc - 1);
+                    let j =
+                        ((phi / (2.0 * std::f32::consts::PI) * nphi as f32) as usize).min(nphi - 1);
+                    observed[i * nphi + j] += 1.0;
+                }
+            }
+            let mut expected = vec![0f64; nc * nphi];
+            for (k, e) in expected.iter_mut().enumerate() {
+                let (i, j) = (k / nphi, k % nphi);
+                let mut sum = 0.0f64;
+                for a in 0..sub {
+                    let c = (i as f64 + (a as f64 + 0.5) / sub as f64) / nc as f64;
+                    let s = (1.0 - c * c).sqrt();
+                    for b in 0..sub {
+                        let phi =
+                            (j as f64 + (b as f64 + 0.5) / sub as f64) / nphi as f64 * 2.0 * PI;
+                        let wi =
+                            Vec3::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, c as f32);
+                        sum += f64::from(m.eval(wo, wi, Vec3::Z).1);
+                    }
+                }
+                let area = (1.0 / nc as f64) * (2.0 * PI / nphi as f64);
+                *e = sum / (sub * sub) as f64 * area * samples as f64;
+            }
+            // Pool the small bins into one.
+            let (mut chi2, mut dof) = (0.0f64, 0usize);
+            let (mut pool_o, mut pool_e) = (0.0f64, 0.0f64);
+            for (o, e) in observed.iter().zip(&expected) {
+                if *e < 5.0 {
+                    pool_o += o;
+                    pool_e += e;
+                } else {
+                    chi2 += (o - e).powi(2) / e;
+                    dof += 1;
+                }
+            }
+            if pool_e >= 5.0 {
+                chi2 += (pool_o - pool_e).powi(2) / pool_e;
+                dof += 1;
+            }
+            // Directions absorbed below the surface are not binned: the expected counts sum to
+            // less than `samples` by the same fraction, so no bin stands for them.
+            let dof = (dof - 1) as f64;
+            // 0.1% critical value by the Wilson–Hilferty approximation (z = 3.09).
+            let z = 3.09;
+            let t = 1.0 - 2.0 / (9.0 * dof) + z * (2.0 / (9.0 * dof)).sqrt();
+            let critical = dof * t * t * t;
+            assert!(
+                chi2 < critical,
+                "{m:?}: χ² = {chi2:.1} over {dof} degrees of freedom (critical {critical:.1})"
+            );
+        }
+    }
+
+    #[test]
+    fn a_white_conductor_reflects_everything_it_does_not_mask() {
+        // Base colour 1, metallic 1: F = 1, so f·cos/pdf = G₂/G₁(wo) ≤ 1, and → 1 as α → 0.
+        let mut rng = Rng::new(5, 8);
+        for roughness in [0.0f32, 0.3, 1.0] {
+            let m = Pbr::new(Vec3::ONE, 1.0, roughness);
+            for _ in 0..5000 {
+                let u = Vec2::new(rng.next_f32(), rng.next_f32());
+                if let Some(s) = m.sample(dir(0.5, 0.0), Vec3::Z, u) {
+                    assert!(s.weight.max_element() <= 1.0 + 1e-5, "{}", s.weight);
+                    if roughness == 0.0 {
+                        assert!((s.weight - Vec3::ONE).abs().max_element() < 1e-5);
+                    }
+                }
+            }
+        }
+    }
+}
