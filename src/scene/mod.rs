@@ -23,6 +23,7 @@ mod assets;
 pub mod check;
 pub mod error;
 pub mod format;
+pub mod gltf;
 pub mod load;
 pub mod locate;
 pub mod mesh;

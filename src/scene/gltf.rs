@@ -1,0 +1,900 @@
+//! glTF 2.0 files (`.gltf` and `.glb`) read into plain data: one [`MeshData`] per primitive, the
+//! default scene's nodes with composed transforms, and the metallic–roughness materials. Nothing
+//! here knows the ECS or the scene format; the scene loader places the result.
+//!
+//! The `gltf` crate parses and validates the JSON (every index in range); the GLB container,
+//! buffers (data URIs, external files through the caller) and accessors (strides, normalised
+//! integers, sparse substitution) are read here, each bounded by the data it reads before it
+//! allocates, so a hostile file is an error, never a panic.
+//!
+//! Supported: triangles (indexed or not; strips and fans converted), `POSITION`, `NORMAL` (flat
+//! shading when absent: [`MeshData::normals`] is `None`), `TEXCOORD_0` (float or normalised
+//! integers), sparse accessors, accessors without a buffer view (zeros), TRS and matrix node
+//! transforms, the metallic–roughness material with its textures, `KHR_materials_emissive_strength`
+//! and `KHR_mesh_quantization`. Skipped with a warning: points and lines, skins, morph targets.
+//! Ignored: cameras, lights, animations, vertex colours, tangents. Any other extension listed in
+//! `extensionsRequired` is an error naming it.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{Affine3A, Mat4, Quat, Vec2, Vec3};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::Mode;
+
+use crate::ecs::components::MeshData;
+
+/// Most triangles (all primitives together) one file may produce.
+pub const MAX_TRIANGLES: usize = 1 << 26;
+/// Most vertices (all primitives together) one file may produce.
+pub const MAX_VERTICES: usize = 1 << 26;
+/// Most elements of an accessor without a buffer view (zeros, perhaps with sparse values): such
+/// an accessor costs nothing in the file, so its size is bounded on its own.
+pub const MAX_ZERO_FILLED: usize = 1 << 22;
+/// Most node instances listed for the default scene (a node reached through several parents
+/// counts once per path).
+pub const MAX_NODE_INSTANCES: usize = 1 << 20;
+/// Deepest node hierarchy followed (deeper nodes, and cycles, are an error).
+pub const MAX_NODE_DEPTH: usize = 256;
+
+/// Extensions that may appear in `extensionsRequired`.
+const SUPPORTED_REQUIRED: &[&str] = &["KHR_materials_emissive_strength", "KHR_mesh_quantization"];
+
+/// A glTF file read into plain data.
+#[derive(Debug, Default)]
+pub struct GltfScene {
+    /// The file's meshes, in file order (indexed by [`GltfNode::mesh`]).
+    pub meshes: Vec<GltfMesh>,
+    /// The nodes of the default scene (or of the first scene if none is marked default), in
+    /// depth-first order. A node reached twice is listed twice.
+    pub nodes: Vec<GltfNode>,
+    /// The file's materials, in file order (indexed by [`GltfPrimitive::material`]).
+    pub materials: Vec<GltfMaterial>,
+    /// The file's images, in file order (indexed by [`GltfTexture::image`]).
+    pub images: Vec<GltfImage>,
+    /// What was skipped or ignored, one sentence each.
+    pub warnings: Vec<String>,
+}
+
+/// A glTF mesh: its triangle primitives (points and lines are left out).
+#[derive(Debug)]
+pub struct GltfMesh {
+    /// The mesh's name in the file.
+    pub name: Option<String>,
+    /// Its triangle primitives. Each is its own [`MeshData`], shared (and instanced) by every
+    /// node that uses the mesh.
+    pub primitives: Vec<GltfPrimitive>,
+}
+
+/// One triangle primitive of a mesh.
+#[derive(Debug)]
+pub struct GltfPrimitive {
+    /// Its geometry, in the mesh's object space.
+    pub data: Arc<MeshData>,
+    /// Index into [`GltfScene::materials`]; `None` for the glTF default material.
+    pub material: Option<usize>,
+}
+
+/// A node of the default scene.
+#[derive(Debug, Clone)]
+pub struct GltfNode {
+    /// The node's index in the file (for names of unnamed nodes).
+    pub index: usize,
+    /// The node's name in the file.
+    pub name: Option<String>,
+    /// Object to file space: the node's transform composed with its ancestors'.
+    pub world_from_node: Affine3A,
+    /// Index into [`GltfScene::meshes`].
+    pub mesh: Option<usize>,
+}
+
+/// How a material's alpha is used.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AlphaMode {
+    /// Alpha is ignored.
+    Opaque,
+    /// Rays pass where alpha is below the cutoff.
+    Mask(f32),
+    /// Blended transparency.
+    Blend,
+}
+
+/// A texture coordinate wrap mode of a sampler.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Wrap {
+    /// Repeat (the default).
+    Repeat,
+    /// Repeat, mirrored every other time.
+    MirroredRepeat,
+    /// Clamp to the edge texel.
+    ClampToEdge,
+}
+
+/// A material's reference to a texture.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GltfTexture {
+    /// Index into [`GltfScene::images`].
+    pub image: usize,
+    /// Which `TEXCOORD_n` set it uses (only set 0 is read).
+    pub texcoord: u32,
+    /// Wrap mode along u.
+    pub wrap_s: Wrap,
+    /// Wrap mode along v.
+    pub wrap_t: Wrap,
+    /// Whether magnification is nearest-texel (`NEAREST`); linear otherwise.
+    pub nearest: bool,
+}
+
+/// An image referenced by a texture.
+#[derive(Debug, Clone, PartialEq)]
+pub enum GltfImage {
+    /// A file, as a path relative to the glTF file's directory (percent-decoded; checked by
+    /// [`relative_uri`]).
+    File(String),
+    /// Image bytes held in the file (a buffer view or a data URI), with their MIME type.
+    Bytes {
+        /// The encoded image.
+        bytes: Vec<u8>,
+        /// Its MIME type, e.g. `image/png`.
+        mime_type: String,
+    },
+}
+
+/// A metallic–roughness material as the file gives it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GltfMaterial {
+    /// The material's name in the file.
+    pub name: Option<String>,
+    /// Linear RGBA base colour factor.
+    pub base_color_factor: [f32; 4],
+    /// Base colour texture (sRGB).
+    pub base_color_texture: Option<GltfTexture>,
+    /// Metallic factor.
+    pub metallic: f32,
+    /// Perceptual roughness factor.
+    pub roughness: f32,
+    /// Metallic (B) and roughness (G) texture (linear).
+    pub metallic_roughness_texture: Option<GltfTexture>,
+    /// Normal map (linear) and its scale.
+    pub normal_texture: Option<(GltfTexture, f32)>,
+    /// Emitted radiance: the emissive factor × `KHR_materials_emissive_strength`.
+    pub emissive: Vec3,
+    /// Emissive texture (sRGB).
+    pub emissive_texture: Option<GltfTexture>,
+    /// Alpha mode.
+    pub alpha_mode: AlphaMode,
+    /// Whether back faces are shaded as front faces.
+    pub double_sided: bool,
+}
+
+/// Reads a glTF file from its `bytes` (`.gltf` JSON or `.glb`); `path` names it in errors.
+/// External buffers are fetched by `load_buffer` with a URI relative to the file's directory,
+/// already checked by [`relative_uri`] (no absolute paths, no `..`, no other schemes).
+pub fn read_gltf(
+    path: &Path,
+    bytes: &[u8],
+    load_buffer: impl FnMut(&str) -> Result<Vec<u8>, String>,
+) -> Result<GltfScene, String> {
+    read(bytes, load_buffer).map_err(|e| format!("glTF {}: {e}", path.display()))
+}
+
+fn read(
+    bytes: &[u8],
+    mut load_buffer: impl FnMut(&str) -> Result<Vec<u8>, String>,
+) -> Result<GltfScene, String> {
+    let (json, blob) = if bytes.starts_with(b"glTF") {
+        split_glb(bytes)?
+    } else {
+        (bytes, None)
+    };
+    let gltf = gltf::Gltf::from_slice_without_validation(json)
+        .map_err(|e| format!("invalid JSON: {e}"))?;
+    let doc = &gltf.document;
+    if let Some(ext) = doc
+        .extensions_required()
+        .find(|e| !SUPPORTED_REQUIRED.contains(e))
+    {
+        return Err(format!("unsupported required extension {ext}"));
+    }
+    validate(doc)?;
+
+    let mut buffers = Vec::new();
+    for buffer in doc.buffers() {
+        let i = buffer.index();
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => blob
+                .map(<[u8]>::to_vec)
+                .ok_or_else(|| format!("buffer {i}: no binary chunk"))?,
+            gltf::buffer::Source::Uri(uri) => match decode_data_uri(uri) {
+                Some(r) => r.map_err(|e| format!("buffer {i}: {e}"))?.0,
+                None => {
+                    let rel = relative_uri(uri).map_err(|e| format!("buffer {i}: {e}"))?;
+                    load_buffer(&rel).map_err(|e| format!("buffer {i} ({rel}): {e}"))?
+                }
+            },
+        };
+        if data.len() < buffer.length() {
+            return Err(format!(
+                "buffer {i}: {} bytes, shorter than its byteLength {}",
+                data.len(),
+                buffer.length()
+            ));
+        }
+        buffers.push(data);
+    }
+
+    let mut scene = GltfScene::default();
+    let mut budget = Budget {
+        vertices: MAX_VERTICES,
+        triangles: MAX_TRIANGLES,
+    };
+    for mesh in doc.meshes() {
+        let mut primitives = Vec::new();
+        for prim in mesh.primitives() {
+            let what = format!("mesh {} primitive {}", mesh.index(), prim.index());
+            match prim.mode() {
+                Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip => {
+                    scene
+                        .warnings
+                        .push(format!("{what}: points and lines are skipped"));
+                    continue;
+                }
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan => {}
+            }
+            if prim.morph_targets().next().is_some() {
+                scene
+                    .warnings
+                    .push(format!("{what}: morph targets are ignored"));
+            }
+            let data =
+                read_primitive(&prim, &buffers, &mut budget).map_err(|e| format!("{what}: {e}"))?;
+            primitives.push(GltfPrimitive {
+                data: Arc::new(data),
+                material: prim.material().index(),
+            });
+        }
+        scene.meshes.push(GltfMesh {
+            name: mesh.name().map(str::to_owned),
+            primitives,
+        });
+    }
+    for image in doc.images() {
+        let i = image.index();
+        scene.images.push(match image.source() {
+            gltf::image::Source::View { view, mime_type } => GltfImage::Bytes {
+                bytes: view_bytes(&view, &buffers)
+                    .map_err(|e| format!("image {i}: {e}"))?
+                    .to_vec(),
+                mime_type: mime_type.to_owned(),
+            },
+            gltf::image::Source::Uri { uri, mime_type } => match decode_data_uri(uri) {
+                Some(r) => {
+                    let (bytes, mime) = r.map_err(|e| format!("image {i}: {e}"))?;
+                    GltfImage::Bytes {
+                        bytes,
+                        mime_type: mime_type.map_or(mime, str::to_owned),
+                    }
+                }
+                None => GltfImage::File(relative_uri(uri).map_err(|e| format!("image {i}: {e}"))?),
+            },
+        });
+    }
+    for m in doc.materials() {
+        scene.materials.push(read_material(&m)?);
+    }
+    let roots = doc.default_scene().or_else(|| doc.scenes().next());
+    if let Some(root) = roots {
+        for node in root.nodes() {
+            walk(&node, Affine3A::IDENTITY, 0, &mut scene)?;
+        }
+    }
+    Ok(scene)
+}
+
+/// Validates the document with the `gltf` crate (so that its accessors never index out of
+/// range), ignoring only its complaint about required extensions rondo supports itself.
+fn validate(doc: &gltf::Document) -> Result<(), String> {
+    use gltf::json::validation::{Error, Validate};
+    let root = doc.as_json();
+    // gltf-json 1.4's validation indexes the accessors with a primitive's POSITION unchecked
+    // (a panic when it is out of range): check those first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            for (semantic, index) in &prim.attributes {
+                if index.value() >= root.accessors.len() {
+                    return Err(format!(
+                        "mesh {m} primitive {p}: {semantic:?} accessor {} does not exist",
+                        index.value()
+                    ));
+                }
+            }
+        }
+    }
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, error| {
+        let path = path().to_string();
+        // Required by the spec for POSITION but unused here (bounds are computed from the
+        // data): files without them are read.
+        let bounds = path.ends_with(".min") || path.ends_with(".max");
+        let required =
+            matches!(error, Error::Unsupported) && path.starts_with("extensionsRequired");
+        if !(bounds || required) {
+            errors.push(format!("{path}: {error}"));
+        }
+    });
+    match errors.first() {
+        None => Ok(()),
+        Some(first) => Err(format!(
+            "invalid: {first}{}",
+            if errors.len() > 1 {
+                format!(" (and {} more errors)", errors.len() - 1)
+            } else {
+                String::new()
+            }
+        )),
+    }
+}
+
+/// Splits a `.glb` into its JSON chunk and its binary chunk, if any.
+fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
+    let word = |at: usize| -> Option<u32> {
+        let b = bytes.get(at..at.checked_add(4)?)?;
+        Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let truncated = || "truncated .glb".to_string();
+    let version = word(4).ok_or_else(truncated)?;
+    if version != 2 {
+        return Err(format!(".glb version {version}, only 2 is read"));
+    }
+    let length = word(8).ok_or_else(truncated)? as usize;
+    if length > bytes.len() {
+        return Err(format!("truncated .glb: {} bytes of {length}", bytes.len()));
+    }
+    let chunk = |at: usize| -> Result<(u32, &[u8], usize), String> {
+        let len = word(at).ok_or_else(truncated)? as usize;
+        let kind = word(at + 4).ok_or_else(truncated)?;
+        let start = at + 8;
+        let end = start
+            .checked_add(len)
+            .filter(|&e| e <= length)
+            .ok_or_else(truncated)?;
+        Ok((kind, &bytes[start..end], end.next_multiple_of(4)))
+    };
+    let (kind, json, next) = chunk(12)?;
+    if kind != 0x4E4F_534A {
+        return Err(".glb: the first chunk is not JSON".into());
+    }
+    let bin = if next + 8 <= length {
+        let (kind, bin, _) = chunk(next)?;
+        (kind == 0x004E_4942).then_some(bin)
+    } else {
+        None
+    };
+    Ok((json, bin))
+}
+
+/// Decodes a `data:` URI (base64 only): `None` if `uri` is not one, else its bytes and MIME type.
+fn decode_data_uri(uri: &str) -> Option<Result<(Vec<u8>, String), String>> {
+    let rest = uri.strip_prefix("data:")?;
+    Some((|| {
+        let (head, data) = rest.split_once(',').ok_or("data URI without a comma")?;
+        let mime = head
+            .strip_suffix(";base64")
+            .ok_or("data URI not in base64")?;
+        Ok((base64(data)?, mime.to_owned()))
+    })())
+}
+
+/// Decodes standard base64 (padding optional).
+fn base64(text: &str) -> Result<Vec<u8>, String> {
+    let digit = |c: u8| -> Result<u32, String> {
+        Ok(match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' | b'-' => 62,
+            b'/' | b'_' => 63,
+            _ => return Err(format!("invalid base64 character {:?}", c as char)),
+        }
+        .into())
+    };
+    let text = text.trim_end_matches('=').as_bytes();
+    let mut out = Vec::with_capacity(text.len() / 4 * 3 + 3);
+    for group in text.chunks(4) {
+        let mut n = 0u32;
+        for (k, &c) in group.iter().enumerate() {
+            n |= digit(c)? << (18 - 6 * k);
+        }
+        let bytes = n.to_be_bytes();
+        match group.len() {
+            1 => return Err("truncated base64".into()),
+            len => out.extend_from_slice(&bytes[1..len]),
+        }
+    }
+    Ok(out)
+}
+
+/// A URI of an external buffer or image as a relative path below the glTF file's directory:
+/// percent-decoded; absolute paths, other schemes, backslashes and `..` components are errors.
+pub fn relative_uri(uri: &str) -> Result<String, String> {
+    let mut bytes = Vec::with_capacity(uri.len());
+    let mut it = uri.bytes();
+    while let Some(b) = it.next() {
+        if b == b'%' {
+            let hex = [it.next(), it.next()];
+            let v = match hex {
+                [Some(h), Some(l)] => std::str::from_utf8(&[h, l])
+                    .ok()
+                    .and_then(|s| u8::from_str_radix(s, 16).ok()),
+                _ => None,
+            };
+            bytes.push(v.ok_or_else(|| format!("bad percent escape in URI {uri:?}"))?);
+        } else {
+            bytes.push(b);
+        }
+    }
+    let path = String::from_utf8(bytes).map_err(|_| format!("URI {uri:?} is not UTF-8"))?;
+    let bad = path.is_empty()
+        || path.starts_with('/')
+        || path.contains('\\')
+        || path.contains(':')
+        || path.split('/').any(|c| c == "..");
+    if bad {
+        return Err(format!(
+            "URI {uri:?} is not a relative path below the file's directory"
+        ));
+    }
+    Ok(path)
+}
+
+/// The bytes of a buffer view, checked against its buffer.
+fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [Vec<u8>]) -> Result<&'b [u8], String> {
+    let buffer = buffers.get(view.buffer().index()).ok_or("missing buffer")?;
+    view.offset()
+        .checked_add(view.length())
+        .and_then(|end| buffer.get(view.offset()..end))
+        .ok_or_else(|| format!("buffer view {} outside its buffer", view.index()))
+}
+
+/// What is left of the file's vertex and triangle allowance.
+struct Budget {
+    vertices: usize,
+    triangles: usize,
+}
+
+/// The size in bytes of one component.
+fn component_size(t: DataType) -> usize {
+    match t {
+        DataType::I8 | DataType::U8 => 1,
+        DataType::I16 | DataType::U16 => 2,
+        DataType::U32 | DataType::F32 => 4,
+    }
+}
+
+/// One component at the start of `b` as a float (normalised integers mapped to [0, 1] or
+/// [-1, 1] as the spec says).
+fn component(b: &[u8], t: DataType, normalized: bool) -> f32 {
+    let n = |v: f32, max: f32| {
+        if normalized { (v / max).max(-1.0) } else { v }
+    };
+    match t {
+        DataType::I8 => n(f32::from(b[0] as i8), 127.0),
+        DataType::U8 => n(f32::from(b[0]), 255.0),
+        DataType::I16 => n(f32::from(i16::from_le_bytes([b[0], b[1]])), 32767.0),
+        DataType::U16 => n(f32::from(u16::from_le_bytes([b[0], b[1]])), 65535.0),
+        DataType::U32 => n(
+            u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
+            4_294_967_295.0,
+        ),
+        DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+    }
+}
+
+/// An unsigned integer component at the start of `b` (`t` is `U8`, `U16` or `U32`).
+fn uint(b: &[u8], t: DataType) -> u32 {
+    match t {
+        DataType::U8 => u32::from(b[0]),
+        DataType::U16 => u32::from(u16::from_le_bytes([b[0], b[1]])),
+        _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+    }
+}
+
+/// A strided run of `count` elements of `size` bytes starting `offset` bytes into a view.
+fn elements(
+    bytes: &[u8],
+    offset: usize,
+    stride: usize,
+    size: usize,
+    count: usize,
+) -> Option<impl Iterator<Item = &[u8]>> {
+    if count > 0 {
+        let last = (count - 1).checked_mul(stride)?.checked_add(offset)?;
+        bytes.get(last..last.checked_add(size)?)?;
+    }
+    Some((0..count).map(move |i| &bytes[offset + i * stride..offset + i * stride + size]))
+}
+
+/// Reads accessor `acc` as `count × dims` floats, sparse substitution applied.
+fn read_floats(acc: &gltf::Accessor, dims: usize, buffers: &[Vec<u8>]) -> Result<Vec<f32>, String> {
+    let i = acc.index();
+    if acc.dimensions().multiplicity() != dims {
+        return Err(format!(
+            "accessor {i}: {:?}, expected {dims} components",
+            acc.dimensions()
+        ));
+    }
+    let t = acc.data_type();
+    let csize = component_size(t);
+    let size = csize * dims;
+    let count = acc.count();
+    let mut out = Vec::new();
+    let read_elem = |e: &[u8], out: &mut Vec<f32>| {
+        for k in 0..dims {
+            out.push(component(&e[k * csize..], t, acc.normalized()));
+        }
+    };
+    match acc.view() {
+        Some(view) => {
+            let bytes = view_bytes(&view, buffers).map_err(|e| format!("accessor {i}: {e}"))?;
+            let stride = view.stride().unwrap_or(size).max(size);
+            let items = elements(bytes, acc.offset(), stride, size, count).ok_or_else(|| {
+                format!(
+                    "accessor {i}: {count} elements outside buffer view {}",
+                    view.index()
+                )
+            })?;
+            out.reserve_exact(count * dims);
+            for e in items {
+                read_elem(e, &mut out);
+            }
+        }
+        None => {
+            if count > MAX_ZERO_FILLED {
+                return Err(format!(
+                    "accessor {i}: {count} elements without a buffer view, more than {MAX_ZERO_FILLED}"
+                ));
+            }
+            out.resize(count * dims, 0.0);
+        }
+    }
+    if let Some(sparse) = acc.sparse() {
+        let n = sparse.count();
+        let idx = sparse.indices();
+        let it = match idx.index_type() {
+            gltf::accessor::sparse::IndexType::U8 => DataType::U8,
+            gltf::accessor::sparse::IndexType::U16 => DataType::U16,
+            gltf::accessor::sparse::IndexType::U32 => DataType::U32,
+        };
+        let isize = component_size(it);
+        let ibytes =
+            view_bytes(&idx.view(), buffers).map_err(|e| format!("accessor {i} sparse: {e}"))?;
+        let indices = elements(ibytes, idx.offset(), isize, isize, n)
+            .ok_or_else(|| format!("accessor {i}: sparse indices outside their buffer view"))?;
+        let vals = sparse.values();
+        let vbytes =
+            view_bytes(&vals.view(), buffers).map_err(|e| format!("accessor {i} sparse: {e}"))?;
+        let values = elements(vbytes, vals.offset(), size, size, n)
+            .ok_or_else(|| format!("accessor {i}: sparse values outside their buffer view"))?;
+        for (ib, vb) in indices.zip(values) {
+            let target = uint(ib, it) as usize;
+            if target >= count {
+                return Err(format!(
+                    "accessor {i}: sparse index {target} out of range (count {count})"
+                ));
+            }
+            let mut v = Vec::with_capacity(dims);
+            read_elem(vb, &mut v);
+            out[target * dims..(target + 1) * dims].copy_from_slice(&v);
+        }
+    }
+    Ok(out)
+}
+
+/// Reads an index accessor (unsigned integers, not normalised).
+fn read_indices(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
+    let i = acc.index();
+    if !matches!(
+        acc.data_type(),
+        DataType::U8 | DataType::U16 | DataType::U32
+    ) || acc.dimensions() != Dimensions::Scalar
+        || acc.normalized()
+    {
+        return Err(format!(
+            "accessor {i}: indices must be unsigned integer scalars"
+        ));
+    }
+    // u32 values above 2^24 are not exact in f32: read integers directly.
+    let t = acc.data_type();
+    let size = component_size(t);
+    let int = |b: &[u8]| uint(b, t);
+    let count = acc.count();
+    let mut out = match acc.view() {
+        Some(view) => {
+            let bytes = view_bytes(&view, buffers).map_err(|e| format!("accessor {i}: {e}"))?;
+            let stride = view.stride().unwrap_or(size).max(size);
+            elements(bytes, acc.offset(), stride, size, count)
+                .ok_or_else(|| {
+                    format!(
+                        "accessor {i}: {count} elements outside buffer view {}",
+                        view.index()
+                    )
+                })?
+                .map(int)
+                .collect()
+        }
+        None if count <= MAX_ZERO_FILLED => vec![0; count],
+        None => {
+            return Err(format!(
+                "accessor {i}: {count} elements without a buffer view, more than {MAX_ZERO_FILLED}"
+            ));
+        }
+    };
+    if let Some(sparse) = acc.sparse() {
+        let n = sparse.count();
+        let idx = sparse.indices();
+        let it = match idx.index_type() {
+            gltf::accessor::sparse::IndexType::U8 => DataType::U8,
+            gltf::accessor::sparse::IndexType::U16 => DataType::U16,
+            gltf::accessor::sparse::IndexType::U32 => DataType::U32,
+        };
+        let isize = component_size(it);
+        let ibytes =
+            view_bytes(&idx.view(), buffers).map_err(|e| format!("accessor {i} sparse: {e}"))?;
+        let vals = sparse.values();
+        let vbytes =
+            view_bytes(&vals.view(), buffers).map_err(|e| format!("accessor {i} sparse: {e}"))?;
+        let (Some(indices), Some(values)) = (
+            elements(ibytes, idx.offset(), isize, isize, n),
+            elements(vbytes, vals.offset(), size, size, n),
+        ) else {
+            return Err(format!(
+                "accessor {i}: sparse data outside its buffer views"
+            ));
+        };
+        for (ib, vb) in indices.zip(values) {
+            let target = uint(ib, it) as usize;
+            *out.get_mut(target).ok_or_else(|| {
+                format!("accessor {i}: sparse index {target} out of range (count {count})")
+            })? = int(vb);
+        }
+    }
+    Ok(out)
+}
+
+/// Reads one triangle primitive into a [`MeshData`].
+fn read_primitive(
+    prim: &gltf::Primitive,
+    buffers: &[Vec<u8>],
+    budget: &mut Budget,
+) -> Result<MeshData, String> {
+    let pos = prim.get(&gltf::Semantic::Positions).ok_or("no POSITION")?;
+    let n = pos.count();
+    if n > budget.vertices {
+        return Err(format!(
+            "{n} vertices; at most {MAX_VERTICES} are read per file"
+        ));
+    }
+    budget.vertices -= n;
+    let positions: Vec<Vec3> = read_floats(&pos, 3, buffers)?
+        .chunks_exact(3)
+        .map(Vec3::from_slice)
+        .collect();
+    if let Some(k) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(format!("accessor {}: non-finite position {k}", pos.index()));
+    }
+    let normals = match prim.get(&gltf::Semantic::Normals) {
+        None => None,
+        Some(acc) if acc.count() == n => Some(
+            read_floats(&acc, 3, buffers)?
+                .chunks_exact(3)
+                .map(|c| {
+                    let v = Vec3::from_slice(c);
+                    if v.is_finite() {
+                        v.normalize_or_zero()
+                    } else {
+                        Vec3::ZERO
+                    }
+                })
+                .collect(),
+        ),
+        Some(acc) => {
+            return Err(format!(
+                "accessor {}: {} normals for {n} positions",
+                acc.index(),
+                acc.count()
+            ));
+        }
+    };
+    let uvs = match prim.get(&gltf::Semantic::TexCoords(0)) {
+        None => None,
+        Some(acc) if acc.count() == n => {
+            let uv: Vec<Vec2> = read_floats(&acc, 2, buffers)?
+                .chunks_exact(2)
+                .map(Vec2::from_slice)
+                .collect();
+            if let Some(k) = uv.iter().position(|t| !t.is_finite()) {
+                return Err(format!(
+                    "accessor {}: non-finite texture coordinate {k}",
+                    acc.index()
+                ));
+            }
+            Some(uv)
+        }
+        Some(acc) => {
+            return Err(format!(
+                "accessor {}: {} texture coordinates for {n} positions",
+                acc.index(),
+                acc.count()
+            ));
+        }
+    };
+    let indices = match prim.indices() {
+        Some(acc) => {
+            let idx = read_indices(&acc, buffers)?;
+            if let Some(&bad) = idx.iter().find(|&&v| v as usize >= n) {
+                return Err(format!(
+                    "accessor {}: index {bad} out of range ({n} vertices)",
+                    acc.index()
+                ));
+            }
+            idx
+        }
+        None => (0..n as u32).collect(),
+    };
+    let triangles = assemble(prim.mode(), &indices);
+    if triangles.len() > budget.triangles {
+        return Err(format!("more than {MAX_TRIANGLES} triangles in the file"));
+    }
+    budget.triangles -= triangles.len();
+    Ok(MeshData {
+        positions,
+        normals,
+        uvs,
+        triangles,
+    })
+}
+
+/// Triangles of a triangle list, strip or fan, each in the winding the spec gives (strips
+/// alternate so that every triangle keeps the first one's orientation). Degenerate triangles
+/// with repeated indices are dropped.
+pub fn assemble(mode: Mode, idx: &[u32]) -> Vec<[u32; 3]> {
+    let tris: Vec<[u32; 3]> = match mode {
+        Mode::TriangleStrip => (0..idx.len().saturating_sub(2))
+            .map(|i| {
+                if i % 2 == 0 {
+                    [idx[i], idx[i + 1], idx[i + 2]]
+                } else {
+                    [idx[i + 1], idx[i], idx[i + 2]]
+                }
+            })
+            .collect(),
+        Mode::TriangleFan => (1..idx.len().saturating_sub(1))
+            .map(|i| [idx[0], idx[i], idx[i + 1]])
+            .collect(),
+        _ => idx.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+    };
+    tris.into_iter()
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+        .collect()
+}
+
+/// A texture reference with its sampler.
+fn texture(tex: &gltf::Texture, texcoord: u32) -> GltfTexture {
+    use gltf::texture::{MagFilter, WrappingMode};
+    let wrap = |w| match w {
+        WrappingMode::Repeat => Wrap::Repeat,
+        WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+    };
+    let sampler = tex.sampler();
+    GltfTexture {
+        image: tex.source().index(),
+        texcoord,
+        wrap_s: wrap(sampler.wrap_s()),
+        wrap_t: wrap(sampler.wrap_t()),
+        nearest: sampler.mag_filter() == Some(MagFilter::Nearest),
+    }
+}
+
+/// Reads a material, checking its factors.
+fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> {
+    let pbr = m.pbr_metallic_roughness();
+    let name = m.name().map(str::to_owned);
+    let what = || match (&name, m.index()) {
+        (Some(n), _) => format!("material \"{n}\""),
+        (None, Some(i)) => format!("material {i}"),
+        (None, None) => "default material".into(),
+    };
+    let emissive = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
+    let finite = pbr.base_color_factor().iter().all(|v| v.is_finite())
+        && pbr.metallic_factor().is_finite()
+        && pbr.roughness_factor().is_finite()
+        && emissive.is_finite();
+    if !finite {
+        return Err(format!("{}: non-finite factor", what()));
+    }
+    let alpha_mode = match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+        gltf::material::AlphaMode::Mask => AlphaMode::Mask(m.alpha_cutoff().unwrap_or(0.5)),
+        gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+    };
+    Ok(GltfMaterial {
+        base_color_factor: pbr.base_color_factor(),
+        base_color_texture: pbr
+            .base_color_texture()
+            .map(|t| texture(&t.texture(), t.tex_coord())),
+        metallic: pbr.metallic_factor(),
+        roughness: pbr.roughness_factor(),
+        metallic_roughness_texture: pbr
+            .metallic_roughness_texture()
+            .map(|t| texture(&t.texture(), t.tex_coord())),
+        normal_texture: m
+            .normal_texture()
+            .map(|t| (texture(&t.texture(), t.tex_coord()), t.scale())),
+        emissive,
+        emissive_texture: m
+            .emissive_texture()
+            .map(|t| texture(&t.texture(), t.tex_coord())),
+        alpha_mode,
+        double_sided: m.double_sided(),
+        name,
+    })
+}
+
+/// The node's own transform (TRS or matrix), checked to be finite.
+fn local(node: &gltf::Node) -> Result<Affine3A, String> {
+    let m = match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => {
+            Affine3A::from_mat4(Mat4::from_cols_array_2d(&matrix))
+        }
+        gltf::scene::Transform::Decomposed {
+            translation,
+            rotation,
+            scale,
+        } => Affine3A::from_scale_rotation_translation(
+            Vec3::from(scale),
+            Quat::from_array(rotation).normalize(),
+            Vec3::from(translation),
+        ),
+    };
+    if !m.is_finite() {
+        return Err(format!("node {}: non-finite transform", node.index()));
+    }
+    Ok(m)
+}
+
+/// Lists `node` and its descendants with composed transforms.
+fn walk(
+    node: &gltf::Node,
+    parent: Affine3A,
+    depth: usize,
+    scene: &mut GltfScene,
+) -> Result<(), String> {
+    if depth >= MAX_NODE_DEPTH {
+        return Err(format!(
+            "node {}: hierarchy deeper than {MAX_NODE_DEPTH} (or a cycle)",
+            node.index()
+        ));
+    }
+    let world = parent * local(node)?;
+    if node.skin().is_some() {
+        scene
+            .warnings
+            .push(format!("node {}: skin ignored", node.index()));
+    }
+    if scene.nodes.len() >= MAX_NODE_INSTANCES {
+        return Err(format!(
+            "more than {MAX_NODE_INSTANCES} node instances in the default scene"
+        ));
+    }
+    scene.nodes.push(GltfNode {
+        index: node.index(),
+        name: node.name().map(str::to_owned),
+        world_from_node: world,
+        mesh: node.mesh().map(|m| m.index()),
+    });
+    for child in node.children() {
+        walk(&child, world, depth + 1, scene)?;
+    }
+    Ok(())
+}
