@@ -445,7 +445,7 @@ fn corrupted_files_never_panic() {
     ];
     let mut rng = Rng::new(23, 0);
     let mut outcomes = [0usize; 2];
-    for round in 0..3000 {
+    for round in 0..20_000 {
         let mut bytes = files[round % files.len()].clone();
         let flips = 1 + (rng.next_f32() * 4.0) as usize;
         for _ in 0..flips {
