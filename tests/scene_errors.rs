@@ -346,7 +346,7 @@ fn kind_typos_list_the_kinds_in_the_users_words() {
     let e = scene_error("material-kind", &WHITE.replace("Diffuse", "Difuse"), BALL);
     assert_eq!(
         message(&e),
-        "material \"w\": unknown material kind \"Difuse\" (expected Diffuse, Metal, Glossy, Dielectric or Light)"
+        "material \"w\": unknown material kind \"Difuse\" (expected Diffuse, Metal, Glossy, Dielectric, Light or Pbr)"
     );
     assert_eq!(location(&e).0, 4, "{e}");
     let e = scene_error("shape-kind", WHITE, &BALL.replace("Sphere", "Sphre"));
