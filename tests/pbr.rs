@@ -7,8 +7,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{point_estimate, render, temp_dir, write_scene};
-use rondo::Overrides;
+use common::{point_camera, point_estimate, render, temp_dir, with, write_scene};
 use rondo::scene::format::Method;
 use rondo::scene::load::{AssetCache, load_scene};
 
@@ -20,20 +19,6 @@ fn write_white_map(dir: &Path) -> PathBuf {
     path
 }
 
-/// Overrides of the method and sample count.
-fn with(method: Method, spp: u32) -> Overrides {
-    Overrides {
-        method: Some(method),
-        spp: Some(spp),
-        ..Overrides::default()
-    }
-}
-
-/// A camera of vanishing field of view from `position` at `at`.
-fn point_camera(position: &str, at: &str) -> String {
-    format!("Camera(position: {position}, look_at: {at}, up: (0, 1, 0), fov: 0.001)")
-}
-
 /// A unit sphere of `material` in the white environment, seen almost head-on (θo ≈ 8°).
 fn furnace(dir: &Path, material: &str) -> PathBuf {
     write_scene(
@@ -43,7 +28,7 @@ fn furnace(dir: &Path, material: &str) -> PathBuf {
             "Scene(camera: {}, settings: Settings(width: 32, height: 32, max_depth: 16, \
              environment: Environment(path: \"one.exr\")), materials: {{ \"m\": {material} }}, \
              entities: [Entity(material: \"m\", shape: Sphere(center: (0, 0, 0), radius: 1))])",
-            point_camera("(0.6, 0.3, -4)", "(0, 0, 0)")
+            point_camera("(0.6, 0.3, -4)", "(0, 0, 0)", "(0, 1, 0)")
         ),
     )
 }
@@ -162,7 +147,7 @@ fn an_emissive_pbr_sphere_lights_a_plane_as_the_closed_form_says_and_is_light_sa
              \"ground\": Diffuse(albedo: Constant((0.5, 0.5, 0.5))) }}, \
              entities: [Entity(material: \"lamp\", shape: Sphere(center: (0, 2, 0), radius: 0.5)), \
              Entity(material: \"ground\", shape: Plane(point: (0, 0, 0), normal: (0, 1, 0)))])",
-            point_camera("(3, 1, 0)", "(0, 0, 0)")
+            point_camera("(3, 1, 0)", "(0, 0, 0)", "(0, 1, 0)")
         ),
     );
     let expected = 0.5 * 4.0 * 0.25 / 4.0;

@@ -7,8 +7,7 @@ mod common;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
-use common::{point_estimate, render, temp_dir, write_scene};
-use rondo::Overrides;
+use common::{point_camera, point_estimate, render, temp_dir, with, write_scene};
 use rondo::scene::format::Method;
 
 /// Writes a `width` × `height` OpenEXR map whose texel (x, y) has grey radiance `f(x, y)`.
@@ -29,21 +28,6 @@ fn write_map(
     let path = dir.join(name);
     image.save(&path).expect("write map");
     path
-}
-
-/// Overrides of the method and sample count.
-fn with(method: Method, spp: u32) -> Overrides {
-    Overrides {
-        method: Some(method),
-        spp: Some(spp),
-        ..Overrides::default()
-    }
-}
-
-/// A camera of vanishing field of view from `position` at `at`: every pixel an independent
-/// estimate of the radiance leaving that one point.
-fn point_camera(position: &str, at: &str, up: &str) -> String {
-    format!("Camera(position: {position}, look_at: {at}, up: {up}, fov: 0.001)")
 }
 
 /// Whether `mean ± se` is within `k` standard errors of `expected`.

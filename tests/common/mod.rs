@@ -215,3 +215,18 @@ pub fn exr_channels(path: &Path) -> std::collections::BTreeMap<String, Vec<f32>>
         .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
         .collect()
 }
+
+/// Overrides of the method and sample count.
+pub fn with(method: rondo::scene::format::Method, spp: u32) -> Overrides {
+    Overrides {
+        method: Some(method),
+        spp: Some(spp),
+        ..Overrides::default()
+    }
+}
+
+/// A camera of vanishing field of view from `position` at `at` (RON vectors): every pixel an
+/// independent estimate of the radiance leaving that one point.
+pub fn point_camera(position: &str, at: &str, up: &str) -> String {
+    format!("Camera(position: {position}, look_at: {at}, up: {up}, fov: 0.001)")
+}
