@@ -298,10 +298,7 @@ impl LightSet {
     pub fn sky_max_radiance(&self) -> f32 {
         self.distant
             .iter()
-            .map(|d| match d {
-                DistantLight::Environment(e) => e.strength * e.map.max(),
-                DistantLight::Sun(s) => s.disk_radiance().max_element(),
-            })
+            .map(DistantLight::max_radiance)
             .fold(0.0, f32::max)
     }
 

@@ -37,19 +37,8 @@ impl PartialEq for EnvironmentLight {
 }
 
 impl EnvironmentLight {
-    /// Radiance arriving along unit world direction `d`.
-    #[inline]
-    pub fn radiance(&self, d: Vec3) -> Vec3 {
-        self.strength * self.map.radiance(self.world_from_map.transpose() * d)
-    }
-
-    /// Density per steradian of [`DistantLight::sample`] at world direction `d`.
-    #[inline]
-    pub fn pdf(&self, d: Vec3) -> f32 {
-        self.map.pdf(self.world_from_map.transpose() * d)
-    }
-
-    /// Radiance along world direction `d` and its density, from one texel lookup.
+    /// Radiance along world direction `d` and the density of [`DistantLight::sample`] there,
+    /// from one texel lookup.
     #[inline]
     pub fn lookup(&self, d: Vec3) -> (Vec3, f32) {
         let (radiance, pdf) = self.map.lookup(self.world_from_map.transpose() * d);
@@ -74,16 +63,6 @@ impl Sky {
             .chain(self.sun.map(DistantLight::Sun))
             .collect()
     }
-
-    /// The brightest radiance (any channel) arriving from the sky.
-    pub fn max_radiance(&self) -> f32 {
-        let env = self
-            .environment
-            .as_ref()
-            .map_or(0.0, |e| e.strength * e.map.max());
-        let sun = self.sun.map_or(0.0, |s| s.disk_radiance().max_element());
-        env.max(sun)
-    }
 }
 
 /// One distant light.
@@ -96,18 +75,8 @@ pub enum DistantLight {
 }
 
 impl DistantLight {
-    /// Radiance arriving along unit world direction `d`.
-    #[inline]
-    pub fn radiance(&self, d: Vec3) -> Vec3 {
-        match self {
-            Self::Environment(e) => e.radiance(d),
-            Self::Sun(s) => s.radiance(d),
-        }
-    }
-
     /// Radiance arriving along unit world direction `d` and the density with which
-    /// [`DistantLight::sample`] gives `d`: [`DistantLight::radiance`] and [`DistantLight::pdf`]
-    /// at the cost of one.
+    /// [`DistantLight::sample`] gives `d`.
     #[inline]
     pub fn lookup(&self, d: Vec3) -> (Vec3, f32) {
         match self {
@@ -116,12 +85,11 @@ impl DistantLight {
         }
     }
 
-    /// Density per steradian with which [`DistantLight::sample`] gives `d`.
-    #[inline]
-    pub fn pdf(&self, d: Vec3) -> f32 {
+    /// The brightest radiance (any channel) the light sends.
+    pub fn max_radiance(&self) -> f32 {
         match self {
-            Self::Environment(e) => e.pdf(d),
-            Self::Sun(s) => s.pdf(d),
+            Self::Environment(e) => e.strength * e.map.max(),
+            Self::Sun(s) => s.disk_radiance().max_element(),
         }
     }
 
@@ -178,12 +146,14 @@ mod tests {
         assert_eq!(map.radiance(into_texel), Vec3::splat(5.0));
         let world = rotation * into_texel;
         assert!(world.z < -0.9, "{world}");
-        assert_eq!(light.radiance(world), Vec3::splat(10.0));
-        assert_eq!(light.radiance(into_texel), Vec3::ZERO);
-        assert_eq!(light.pdf(world), map.pdf(into_texel));
+        assert_eq!(
+            light.lookup(world),
+            (Vec3::splat(10.0), map.pdf(into_texel))
+        );
+        assert_eq!(light.lookup(into_texel).0, Vec3::ZERO);
         let d = light
             .sample(Vec2::new(0.3, 0.6), || Vec2::new(0.5, 0.5))
             .expect("lit");
-        assert!(d.z < -0.9 && light.pdf(d) > 0.0, "{d}");
+        assert!(d.z < -0.9 && light.lookup(d).1 > 0.0, "{d}");
     }
 }
