@@ -7,7 +7,9 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{point_camera, point_estimate, render, temp_dir, with, write_scene};
+use common::{
+    assert_methods_agree, point_camera, point_estimate, render, temp_dir, with, within, write_scene,
+};
 use rondo::scene::format::Method;
 use rondo::scene::load::{AssetCache, load_scene};
 
@@ -31,30 +33,6 @@ fn furnace(dir: &Path, material: &str) -> PathBuf {
             point_camera("(0.6, 0.3, -4)", "(0, 0, 0)", "(0, 1, 0)")
         ),
     )
-}
-
-/// Whether `mean ± se` is within `k` standard errors of `expected`.
-fn within(mean: f64, se: f64, expected: f64, k: f64) -> bool {
-    (mean - expected).abs() <= k * se + 1e-6 * expected.abs()
-}
-
-/// The three methods' estimates agree pairwise within 3.5 combined standard errors.
-fn assert_methods_agree(what: &str, estimates: &[(Method, f64, f64)]) {
-    for a in estimates {
-        for b in estimates {
-            let se = (a.2 * a.2 + b.2 * b.2).sqrt();
-            assert!(
-                within(a.1, se, b.1, 3.5),
-                "{what}: {} {} ± {} vs {} {} ± {}",
-                a.0,
-                a.1,
-                a.2,
-                b.0,
-                b.1,
-                b.2
-            );
-        }
-    }
 }
 
 #[test]

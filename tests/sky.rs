@@ -7,7 +7,9 @@ mod common;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
-use common::{point_camera, point_estimate, render, temp_dir, with, write_scene};
+use common::{
+    assert_methods_agree, point_camera, point_estimate, render, temp_dir, with, within, write_scene,
+};
 use rondo::scene::format::Method;
 
 /// Writes a `width` × `height` OpenEXR map whose texel (x, y) has grey radiance `f(x, y)`.
@@ -28,11 +30,6 @@ fn write_map(
     let path = dir.join(name);
     image.save(&path).expect("write map");
     path
-}
-
-/// Whether `mean ± se` is within `k` standard errors of `expected`.
-fn within(mean: f64, se: f64, expected: f64, k: f64) -> bool {
-    (mean - expected).abs() <= k * se + 1e-6 * expected.abs()
 }
 
 #[test]
@@ -79,21 +76,7 @@ fn a_constant_environment_is_a_white_furnace_for_every_method() {
             estimates.push((method, mean, se));
         }
         // The three methods estimate the same radiance.
-        for a in &estimates {
-            for b in &estimates {
-                let se = (a.2 * a.2 + b.2 * b.2).sqrt();
-                assert!(
-                    within(a.1, se, b.1, 3.5),
-                    "{material}: {} {} ± {} vs {} {} ± {}",
-                    a.0,
-                    a.1,
-                    a.2,
-                    b.0,
-                    b.1,
-                    b.2
-                );
-            }
-        }
+        assert_methods_agree(material, &estimates);
     }
 }
 

@@ -230,3 +230,27 @@ pub fn with(method: rondo::scene::format::Method, spp: u32) -> Overrides {
 pub fn point_camera(position: &str, at: &str, up: &str) -> String {
     format!("Camera(position: {position}, look_at: {at}, up: {up}, fov: 0.001)")
 }
+
+/// Whether `mean ± se` is within `k` standard errors of `expected`.
+pub fn within(mean: f64, se: f64, expected: f64, k: f64) -> bool {
+    (mean - expected).abs() <= k * se + 1e-6 * expected.abs()
+}
+
+/// The three methods' estimates agree pairwise within 3.5 combined standard errors.
+pub fn assert_methods_agree(what: &str, estimates: &[(rondo::scene::format::Method, f64, f64)]) {
+    for a in estimates {
+        for b in estimates {
+            let se = (a.2 * a.2 + b.2 * b.2).sqrt();
+            assert!(
+                within(a.1, se, b.1, 3.5),
+                "{what}: {} {} ± {} vs {} {} ± {}",
+                a.0,
+                a.1,
+                a.2,
+                b.0,
+                b.1,
+                b.2
+            );
+        }
+    }
+}
