@@ -6,6 +6,7 @@
 
 use glam::{Vec2, Vec3};
 
+use super::maps::{AlphaMask, NormalMap};
 use super::microfacet::{
     alpha_from_roughness, cos2_sin2, distribution, lambda, sample_visible_normal, schlick_rgb,
 };
@@ -67,10 +68,17 @@ pub enum Material {
         /// Perceptual roughness in [0, 1]; GGX α = roughness², clamped to
         /// [`super::microfacet::MIN_ROUGHNESS`]².
         roughness: f32,
+        /// A linear texture whose green channel scales `roughness` and whose blue channel
+        /// scales `metallic` (glTF's `metallicRoughnessTexture`).
+        metallic_roughness: Option<Texture>,
         /// Emitted colour.
         emissive: Texture,
         /// Scale of `emissive` (`KHR_materials_emissive_strength`).
         emissive_strength: f32,
+        /// Tangent-space normal map.
+        normal_map: Option<NormalMap>,
+        /// Alpha mask: where the surface is absent.
+        alpha: Option<AlphaMask>,
     },
 }
 
@@ -185,9 +193,23 @@ impl Material {
         )
     }
 
-    /// The metallic–roughness BRDF of a `Pbr` material at `uv`.
+    /// The metallic–roughness BRDF of a `Pbr` material at `uv`: the base colour, and the
+    /// factors times the texture's blue (metallic) and green (roughness) channels.
     #[inline]
-    fn pbr_at(base_color: &Texture, metallic: f32, roughness: f32, uv: Vec2) -> Pbr {
+    fn pbr_at(
+        base_color: &Texture,
+        metallic: f32,
+        roughness: f32,
+        metallic_roughness: &Option<Texture>,
+        uv: Vec2,
+    ) -> Pbr {
+        let (metallic, roughness) = match metallic_roughness {
+            None => (metallic, roughness),
+            Some(t) => {
+                let texel = t.eval(uv);
+                (metallic * texel.z, roughness * texel.y)
+            }
+        };
         Pbr::new(base_color.eval(uv), metallic, roughness)
     }
 
@@ -225,10 +247,12 @@ impl Material {
                 base_color,
                 metallic,
                 roughness,
+                metallic_roughness,
                 ..
             } => {
                 let facing = if d.dot(n) < 0.0 { n } else { -n };
-                Some(Self::pbr_at(base_color, *metallic, *roughness, uv).eval(-d, wi, facing))
+                let pbr = Self::pbr_at(base_color, *metallic, *roughness, metallic_roughness, uv);
+                Some(pbr.eval(-d, wi, facing))
             }
             _ => None,
         }
@@ -379,13 +403,11 @@ impl Material {
                 base_color,
                 metallic,
                 roughness,
+                metallic_roughness,
                 ..
             } => {
-                let s = Self::pbr_at(base_color, *metallic, *roughness, uv).sample(
-                    -d,
-                    facing,
-                    sampler.next_2d(),
-                )?;
+                let pbr = Self::pbr_at(base_color, *metallic, *roughness, metallic_roughness, uv);
+                let s = pbr.sample(-d, facing, sampler.next_2d())?;
                 Some(Scatter {
                     direction: s.wi,
                     attenuation: s.weight,

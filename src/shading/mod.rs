@@ -1,5 +1,6 @@
 //! Shading kernels: random numbers, samplers, sampling, textures and materials. No ECS here.
 
+pub mod maps;
 pub mod material;
 pub mod microfacet;
 pub mod pbr;

@@ -27,13 +27,13 @@ pub enum Wrap {
     MirroredRepeat,
 }
 
-/// How an image texture is sampled: its filter and its wrap mode.
+/// How an image texture is sampled: its filter and its wrap modes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Sampling {
     /// Between texel centres.
     pub filter: Filter,
-    /// Outside [0, 1].
-    pub wrap: Wrap,
+    /// Outside [0, 1], along u then along v (glTF's `wrapS`, `wrapT`).
+    pub wrap: [Wrap; 2],
 }
 
 impl Wrap {
@@ -129,7 +129,7 @@ impl ImageTexture {
     pub fn sample(&self, uv: Vec2, sampling: Sampling) -> Vec3 {
         let (w, h) = (self.width as usize, self.height as usize);
         let texel = |i: i64, j: i64| {
-            let (i, j) = (sampling.wrap.index(i, w), sampling.wrap.index(j, h));
+            let (i, j) = (sampling.wrap[0].index(i, w), sampling.wrap[1].index(j, h));
             self.texels[j * w + i]
         };
         // Continuous texel coordinates, rows from the top; non-finite reads as 0.
@@ -137,7 +137,7 @@ impl ImageTexture {
         let x = finite(uv.x) * w as f32;
         let y = (1.0 - finite(uv.y)) * h as f32;
         match (sampling.filter, sampling.wrap) {
-            (Filter::Nearest, Wrap::Clamp) => self.lookup(uv),
+            (Filter::Nearest, [Wrap::Clamp, Wrap::Clamp]) => self.lookup(uv),
             (Filter::Nearest, _) => texel(x.floor() as i64, y.floor() as i64),
             (Filter::Bilinear, _) => {
                 let (x, y) = (x - 0.5, y - 0.5);
@@ -168,6 +168,8 @@ pub enum Texture {
     },
     /// An image, shared between materials that use the same file, and how it is sampled.
     Image(Arc<ImageTexture>, Sampling),
+    /// A texture times a factor per channel (glTF's texture × factor).
+    Scaled(Box<Texture>, Vec3),
 }
 
 impl PartialEq for Texture {
@@ -188,6 +190,7 @@ impl PartialEq for Texture {
                 },
             ) => s == s2 && e == e2 && o == o2,
             (Self::Image(a, s), Self::Image(b, s2)) => Arc::ptr_eq(a, b) && s == s2,
+            (Self::Scaled(a, f), Self::Scaled(b, f2)) => a == b && f == f2,
             _ => false,
         }
     }
@@ -207,6 +210,7 @@ impl Texture {
                 }
             }
             Self::Image(image, sampling) => image.sample(uv, *sampling),
+            Self::Scaled(texture, factor) => texture.eval(uv) * *factor,
         }
     }
 
@@ -216,6 +220,7 @@ impl Texture {
             Self::Constant(c) => c.abs().max_element(),
             Self::Checker { even, odd, .. } => even.max_channel().max(odd.max_channel()),
             Self::Image(image, _) => image.max,
+            Self::Scaled(texture, factor) => texture.max_channel() * factor.abs().max_element(),
         }
     }
 }
@@ -277,7 +282,7 @@ mod tests {
         let img = grey_2x2();
         let bilinear = |wrap| Sampling {
             filter: Filter::Bilinear,
-            wrap,
+            wrap: [wrap; 2],
         };
         let at = |u: f32, v: f32, wrap| img.sample(Vec2::new(u, v), bilinear(wrap)).x;
         // Texel centres are exact: (0.25, 0.75) is the top-left texel.
@@ -305,7 +310,7 @@ mod tests {
         let img = grey_2x2();
         let nearest = |wrap| Sampling {
             filter: Filter::Nearest,
-            wrap,
+            wrap: [wrap; 2],
         };
         let at = |u: f32, v: f32, wrap| img.sample(Vec2::new(u, v), nearest(wrap)).x;
         // Repeat: u + 1 reads the same texel; negative u wraps from the right.

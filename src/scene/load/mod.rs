@@ -355,8 +355,11 @@ impl Expander<'_> {
                 base_color: texture(base_color)?,
                 metallic: metallic.0,
                 roughness: roughness.0,
+                metallic_roughness: None,
                 emissive: texture(emissive)?,
                 emissive_strength: emissive_strength.0,
+                normal_map: None,
+                alpha: None,
             },
         })
     }
@@ -375,7 +378,7 @@ impl Expander<'_> {
                 self.depend(&full);
                 let sampling = Sampling {
                     filter: *filter,
-                    wrap: *wrap,
+                    wrap: [*wrap; 2],
                 };
                 if let Some(image) = self.textures.get(&full) {
                     return Ok(Texture::Image(image.clone(), sampling));
