@@ -26,6 +26,7 @@ const MAX_ASSET_BYTES: u64 = 1 << 30;
 #[derive(Default)]
 pub struct AssetCache {
     images: HashMap<PathBuf, Cached<ImageTexture>>,
+    linear_images: HashMap<PathBuf, Cached<ImageTexture>>,
     meshes: HashMap<PathBuf, Cached<MeshData>>,
     environments: HashMap<PathBuf, Cached<EnvironmentMap>>,
     decodes: u64,
@@ -135,10 +136,21 @@ impl AssetCache {
         &self.requested
     }
 
-    /// The texture at `path`, decoded now or taken from the cache.
+    /// The texture at `path`, decoded now or taken from the cache: an 8- or 16-bit image as
+    /// sRGB-encoded colour, a float image as linear.
     pub fn texture(&mut self, path: &Path) -> Result<Arc<ImageTexture>, String> {
+        self.image(path, Encoding::Srgb)
+    }
+
+    /// The image at `path` decoded with `encoding`, now or from the cache (each encoding of a
+    /// file is cached on its own).
+    pub fn image(&mut self, path: &Path, encoding: Encoding) -> Result<Arc<ImageTexture>, String> {
         self.note(path);
-        let (value, fresh) = cached(&mut self.images, path, |bytes| decode_image(path, bytes))?;
+        let map = match encoding {
+            Encoding::Srgb => &mut self.images,
+            Encoding::Linear => &mut self.linear_images,
+        };
+        let (value, fresh) = cached(map, path, |bytes| decode_image(path, bytes, encoding))?;
         self.decodes += u64::from(fresh);
         Ok(value)
     }
@@ -152,30 +164,63 @@ impl AssetCache {
     }
 }
 
+/// How the 8- and 16-bit channels of an image encode its values (float images are linear).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Encoding {
+    /// Colour, sRGB-encoded (base colour, emission, RON `Image` textures).
+    Srgb,
+    /// Data, linear (normal maps, metallic–roughness).
+    Linear,
+}
+
+/// Largest image accepted, in texels (16384²).
+pub const MAX_IMAGE_TEXELS: u64 = 1 << 28;
+
 /// Decodes the image file `path` from its `bytes` (the format from the content, else from the
-/// extension).
-fn decode_image(path: &Path, bytes: &[u8]) -> Result<ImageTexture, String> {
+/// extension), with `encoding`; alpha is kept if it is not opaque everywhere.
+pub fn decode_image(path: &Path, bytes: &[u8], encoding: Encoding) -> Result<ImageTexture, String> {
     let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes));
     if let Ok(format) = image::ImageFormat::from_path(path) {
         reader.set_format(format);
     }
-    let decoded = reader
+    let mut reader = reader
         .with_guessed_format()
-        .map_err(|e| format!("cannot read image: {e}"))?
+        .map_err(|e| format!("cannot read image: {e}"))?;
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(MAX_IMAGE_TEXELS * 16);
+    reader.limits(limits);
+    let decoded = reader
         .decode()
         .map_err(|e| format!("cannot decode image: {e}"))?;
-    if decoded.width() == 0 || decoded.height() == 0 {
+    let (width, height) = (decoded.width(), decoded.height());
+    if width == 0 || height == 0 {
         return Err("image is empty".into());
     }
-    // Float images (EXR) hold linear values; 8/16-bit ones are sRGB-encoded.
+    if u64::from(width) * u64::from(height) > MAX_IMAGE_TEXELS {
+        return Err(format!(
+            "the image has {width}×{height} texels; at most {MAX_IMAGE_TEXELS} are accepted"
+        ));
+    }
+    // Float images (EXR) hold linear values; 8/16-bit ones are encoded as `encoding` says.
     Ok(match decoded {
         image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_) => {
             let linear = decoded.into_rgb32f();
-            ImageTexture::from_linear(linear.width(), linear.height(), linear.as_raw())
+            ImageTexture::from_linear(width, height, linear.as_raw())
+        }
+        other if other.color().has_alpha() => {
+            let rgba = other.into_rgba8();
+            ImageTexture::from_rgba8(width, height, rgba.as_raw(), encoding == Encoding::Srgb)
         }
         other => {
-            let srgb = other.into_rgb8();
-            ImageTexture::from_srgb8(srgb.width(), srgb.height(), srgb.as_raw())
+            let rgb = other.into_rgb8();
+            match encoding {
+                Encoding::Srgb => ImageTexture::from_srgb8(width, height, rgb.as_raw()),
+                Encoding::Linear => {
+                    let floats: Vec<f32> =
+                        rgb.as_raw().iter().map(|&v| f32::from(v) / 255.0).collect();
+                    ImageTexture::from_linear(width, height, &floats)
+                }
+            }
         }
     })
 }

@@ -53,12 +53,14 @@ impl Wrap {
     }
 }
 
-/// An image decoded to linear RGB.
+/// An image decoded to linear RGB, with its alpha channel if it has one that is not opaque.
 #[derive(Debug)]
 pub struct ImageTexture {
     width: u32,
     height: u32,
     texels: Vec<Vec3>,
+    /// Alpha per texel, in [0, 1]; `None` when every texel is opaque.
+    alpha: Option<Vec<f32>>,
     /// The largest channel magnitude of any texel.
     max: f32,
 }
@@ -78,14 +80,35 @@ impl ImageTexture {
     /// `pixels.len()` must be `3 · width · height`.
     pub fn from_srgb8(width: u32, height: u32, pixels: &[u8]) -> Self {
         debug_assert_eq!(pixels.len(), 3 * width as usize * height as usize);
-        let lut: Vec<f32> = (0..=255u8)
-            .map(|v| srgb_to_linear(f32::from(v) / 255.0))
-            .collect();
+        let lut = srgb_table();
         let texels = pixels
             .chunks_exact(3)
             .map(|p| Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
             .collect();
-        Self::new(width, height, texels)
+        Self::new(width, height, texels, None)
+    }
+
+    /// Decodes 8-bit RGBA pixels (row-major, top row first): RGB sRGB-encoded if `srgb`, else
+    /// linear values `v / 255`; alpha always linear, kept only if some texel is not opaque.
+    /// `pixels.len()` must be `4 · width · height`.
+    pub fn from_rgba8(width: u32, height: u32, pixels: &[u8], srgb: bool) -> Self {
+        debug_assert_eq!(pixels.len(), 4 * width as usize * height as usize);
+        let lut = if srgb {
+            srgb_table()
+        } else {
+            (0..=255u8).map(|v| f32::from(v) / 255.0).collect()
+        };
+        let texels = pixels
+            .chunks_exact(4)
+            .map(|p| Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
+            .collect();
+        let alpha = pixels.chunks_exact(4).any(|p| p[3] != 255).then(|| {
+            pixels
+                .chunks_exact(4)
+                .map(|p| f32::from(p[3]) / 255.0)
+                .collect()
+        });
+        Self::new(width, height, texels, alpha)
     }
 
     /// Wraps linear RGB floats (row-major, top row first); `pixels.len()` must be
@@ -93,10 +116,10 @@ impl ImageTexture {
     pub fn from_linear(width: u32, height: u32, pixels: &[f32]) -> Self {
         debug_assert_eq!(pixels.len(), 3 * width as usize * height as usize);
         let texels = pixels.chunks_exact(3).map(Vec3::from_slice).collect();
-        Self::new(width, height, texels)
+        Self::new(width, height, texels, None)
     }
 
-    fn new(width: u32, height: u32, texels: Vec<Vec3>) -> Self {
+    fn new(width: u32, height: u32, texels: Vec<Vec3>, alpha: Option<Vec<f32>>) -> Self {
         let max = texels
             .iter()
             .map(|t| t.abs().max_element())
@@ -105,20 +128,32 @@ impl ImageTexture {
             width,
             height,
             texels,
+            alpha,
             max,
         }
     }
 
-    /// The texel at `uv`: `i = min(⌊u·W⌋, W−1)`, `j = min(⌊(1−v)·H⌋, H−1)` (v = 0 is the
-    /// bottom row), with u and v clamped to [0, 1], so every texel covers an equal square of
+    /// Whether the image has an alpha channel that is not opaque everywhere.
+    pub fn has_alpha(&self) -> bool {
+        self.alpha.is_some()
+    }
+
+    /// Index of the texel at `uv`: `i = min(⌊u·W⌋, W−1)`, `j = min(⌊(1−v)·H⌋, H−1)` (v = 0 is
+    /// the bottom row), with u and v clamped to [0, 1], so every texel covers an equal square of
     /// texture space (the thesis's `⌊u(W−1)⌋` never reaches the last column and row).
     #[inline]
-    pub fn lookup(&self, uv: Vec2) -> Vec3 {
+    fn nearest_clamped(&self, uv: Vec2) -> usize {
         let u = uv.x.clamp(0.0, 1.0);
         let v = uv.y.clamp(0.0, 1.0);
         let i = ((u * self.width as f32) as usize).min(self.width as usize - 1);
         let j = (((1.0 - v) * self.height as f32) as usize).min(self.height as usize - 1);
-        self.texels[j * self.width as usize + i]
+        j * self.width as usize + i
+    }
+
+    /// The texel at `uv`, nearest and clamped (see [`ImageTexture::sample`]).
+    #[inline]
+    pub fn lookup(&self, uv: Vec2) -> Vec3 {
+        self.texels[self.nearest_clamped(uv)]
     }
 
     /// The colour at `uv` sampled as `sampling` says; nearest and clamped is
@@ -127,29 +162,57 @@ impl ImageTexture {
     /// texel centres.
     #[inline]
     pub fn sample(&self, uv: Vec2, sampling: Sampling) -> Vec3 {
+        self.filtered(uv, sampling, |k| self.texels[k], Vec3::lerp)
+    }
+
+    /// The alpha at `uv`, sampled as the colour is; 1 for an image without alpha.
+    #[inline]
+    pub fn sample_alpha(&self, uv: Vec2, sampling: Sampling) -> f32 {
+        match &self.alpha {
+            None => 1.0,
+            Some(alpha) => self.filtered(uv, sampling, |k| alpha[k], |a, b, t| a + (b - a) * t),
+        }
+    }
+
+    /// A channel read by `texel(index)` at `uv`, filtered and wrapped as `sampling` says.
+    #[inline]
+    fn filtered<T: Copy>(
+        &self,
+        uv: Vec2,
+        sampling: Sampling,
+        texel: impl Fn(usize) -> T,
+        lerp: impl Fn(T, T, f32) -> T,
+    ) -> T {
         let (w, h) = (self.width as usize, self.height as usize);
-        let texel = |i: i64, j: i64| {
+        let at = |i: i64, j: i64| {
             let (i, j) = (sampling.wrap[0].index(i, w), sampling.wrap[1].index(j, h));
-            self.texels[j * w + i]
+            texel(j * w + i)
         };
         // Continuous texel coordinates, rows from the top; non-finite reads as 0.
         let finite = |x: f32| if x.is_finite() { x } else { 0.0 };
         let x = finite(uv.x) * w as f32;
         let y = (1.0 - finite(uv.y)) * h as f32;
         match (sampling.filter, sampling.wrap) {
-            (Filter::Nearest, [Wrap::Clamp, Wrap::Clamp]) => self.lookup(uv),
-            (Filter::Nearest, _) => texel(x.floor() as i64, y.floor() as i64),
+            (Filter::Nearest, [Wrap::Clamp, Wrap::Clamp]) => texel(self.nearest_clamped(uv)),
+            (Filter::Nearest, _) => at(x.floor() as i64, y.floor() as i64),
             (Filter::Bilinear, _) => {
                 let (x, y) = (x - 0.5, y - 0.5);
                 let (i, j) = (x.floor(), y.floor());
                 let (tx, ty) = (x - i, y - j);
                 let (i, j) = (i as i64, j as i64);
-                let top = texel(i, j).lerp(texel(i + 1, j), tx);
-                let bottom = texel(i, j + 1).lerp(texel(i + 1, j + 1), tx);
-                top.lerp(bottom, ty)
+                let top = lerp(at(i, j), at(i + 1, j), tx);
+                let bottom = lerp(at(i, j + 1), at(i + 1, j + 1), tx);
+                lerp(top, bottom, ty)
             }
         }
     }
+}
+
+/// sRGB decoding of every 8-bit value.
+fn srgb_table() -> Vec<f32> {
+    (0..=255u8)
+        .map(|v| srgb_to_linear(f32::from(v) / 255.0))
+        .collect()
 }
 
 /// A colour source.
@@ -326,6 +389,35 @@ mod tests {
         assert_eq!(at(0.25, 1.25, Wrap::Repeat), 2.0);
         // Non-finite coordinates read as 0: v = 0 is the bottom edge, which repeat wraps to the top.
         assert_eq!(at(f32::NAN, f32::INFINITY, Wrap::Repeat), 0.0);
+    }
+
+    #[test]
+    fn rgba_pixels_keep_a_linear_alpha_and_decode_rgb_as_asked() {
+        // Top row: opaque white, transparent black; bottom row: half alpha, opaque grey 128.
+        let px = [
+            255, 255, 255, 255, 0, 0, 0, 0, 10, 20, 30, 128, 128, 128, 128, 255,
+        ];
+        let srgb = ImageTexture::from_rgba8(2, 2, &px, true);
+        let linear = ImageTexture::from_rgba8(2, 2, &px, false);
+        let bottom_right = Vec2::new(0.75, 0.25);
+        assert!((srgb.lookup(bottom_right).x - srgb_to_linear(128.0 / 255.0)).abs() < 1e-6);
+        assert_eq!(linear.lookup(bottom_right).x, 128.0 / 255.0);
+        let nearest = Sampling::default();
+        assert_eq!(srgb.sample_alpha(Vec2::new(0.75, 0.75), nearest), 0.0);
+        assert_eq!(
+            srgb.sample_alpha(Vec2::new(0.25, 0.25), nearest),
+            128.0 / 255.0
+        );
+        // Bilinear halfway along the top row: the mean of 1 and 0.
+        let bilinear = Sampling {
+            filter: Filter::Bilinear,
+            wrap: [Wrap::Clamp; 2],
+        };
+        assert!((srgb.sample_alpha(Vec2::new(0.5, 0.75), bilinear) - 0.5).abs() < 1e-6);
+        // An opaque image keeps no alpha and reads 1 everywhere.
+        let opaque = ImageTexture::from_rgba8(1, 1, &[1, 2, 3, 255], true);
+        assert!(!opaque.has_alpha() && srgb.has_alpha());
+        assert_eq!(opaque.sample_alpha(Vec2::ZERO, nearest), 1.0);
     }
 
     #[test]
