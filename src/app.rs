@@ -66,6 +66,8 @@ pub struct LoadInfo {
     pub dependencies: Vec<std::path::PathBuf>,
     /// The settings, overrides applied.
     pub settings: SettingsDesc,
+    /// What the load skipped or approximated ([`LoadedScene::warnings`]).
+    pub warnings: Vec<String>,
 }
 
 /// The renderer: owns the world, the schedule, the texture cache and the thread pool.
@@ -245,6 +247,7 @@ impl Renderer {
         let info = LoadInfo {
             dependencies: scene.dependencies.clone(),
             settings: scene.settings.clone(),
+            warnings: scene.warnings.clone(),
         };
         self.submit(scene);
         Ok(info)

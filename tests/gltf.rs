@@ -6,66 +6,12 @@ mod common;
 
 use std::path::Path;
 
+use common::gltf_doc::{Bin, doc, glb};
 use common::temp_dir;
 use glam::{Vec2, Vec3};
 use rondo::scene::gltf::{GltfScene, read_gltf};
 use rondo::shading::rng::Rng;
 use serde_json::{Value, json};
-
-/// Standard base64 with padding.
-fn base64(data: &[u8]) -> String {
-    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut s = String::new();
-    for c in data.chunks(3) {
-        let n = u32::from(c[0]) << 16
-            | u32::from(*c.get(1).unwrap_or(&0)) << 8
-            | u32::from(*c.get(2).unwrap_or(&0));
-        for k in 0..4 {
-            if k <= c.len() {
-                s.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                s.push('=');
-            }
-        }
-    }
-    s
-}
-
-/// A binary buffer under construction; each `push` returns a buffer view index.
-#[derive(Default)]
-struct Bin {
-    bytes: Vec<u8>,
-    views: Vec<Value>,
-}
-
-impl Bin {
-    fn view(&mut self, data: Vec<u8>) -> usize {
-        while !self.bytes.len().is_multiple_of(4) {
-            self.bytes.push(0);
-        }
-        self.views
-            .push(json!({"buffer": 0, "byteOffset": self.bytes.len(), "byteLength": data.len()}));
-        self.bytes.extend(data);
-        self.views.len() - 1
-    }
-    fn f32s(&mut self, v: &[f32]) -> usize {
-        self.view(v.iter().flat_map(|x| x.to_le_bytes()).collect())
-    }
-    fn u16s(&mut self, v: &[u16]) -> usize {
-        self.view(v.iter().flat_map(|x| x.to_le_bytes()).collect())
-    }
-}
-
-/// A document from `bin`'s views and the given parts, its buffer a data URI.
-fn doc(bin: &Bin, mut parts: Value) -> Value {
-    parts["asset"] = json!({"version": "2.0"});
-    parts["bufferViews"] = Value::Array(bin.views.clone());
-    parts["buffers"] = json!([{
-        "byteLength": bin.bytes.len(),
-        "uri": format!("data:application/octet-stream;base64,{}", base64(&bin.bytes)),
-    }]);
-    parts
-}
 
 fn read(doc: &Value) -> Result<GltfScene, String> {
     read_gltf(Path::new("test.gltf"), doc.to_string().as_bytes(), |uri| {
@@ -257,13 +203,14 @@ fn normals_and_normalized_integer_texcoords() {
     let scene = read(&doc(&bin, parts)).expect("reads");
     let p = &scene.meshes[0].primitives;
     assert_eq!(p[0].data.normals.as_deref(), Some(&[Vec3::Z; 3][..]));
+    // glTF's (u, v) is stored as (u, 1 − v): its v runs down the image, rondo's up.
     assert_eq!(
         p[0].data.uvs.as_deref(),
-        Some(&[Vec2::ZERO, Vec2::X, Vec2::Y][..])
+        Some(&[Vec2::Y, Vec2::ONE, Vec2::ZERO][..])
     );
     let uv = p[1].data.uvs.as_deref().expect("uvs");
-    assert_eq!(uv[1], Vec2::X);
-    assert!((uv[2] - Vec2::new(32768.0 / 65535.0, 1.0)).length() < 1e-7);
+    assert_eq!(uv[1], Vec2::ONE);
+    assert!((uv[2] - Vec2::new(32768.0 / 65535.0, 0.0)).length() < 1e-7);
 }
 
 #[test]
@@ -300,32 +247,6 @@ fn materials_and_emissive_strength() {
         scene.images,
         vec![rondo::scene::gltf::GltfImage::File("tex ture.png".into())]
     );
-}
-
-/// `doc` with its buffer in a `.glb` binary chunk.
-fn glb(bin: &Bin, parts: Value) -> Vec<u8> {
-    let mut d = doc(bin, parts);
-    d["buffers"] = json!([{"byteLength": bin.bytes.len()}]);
-    let mut json = d.to_string().into_bytes();
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let mut data = bin.bytes.clone();
-    while !data.len().is_multiple_of(4) {
-        data.push(0);
-    }
-    let total = 12 + 8 + json.len() + 8 + data.len();
-    let mut out = Vec::new();
-    out.extend(b"glTF");
-    out.extend(2u32.to_le_bytes());
-    out.extend((total as u32).to_le_bytes());
-    out.extend((json.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(json);
-    out.extend((data.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(data);
-    out
 }
 
 #[test]

@@ -55,7 +55,13 @@ pub fn run(
     };
     let s = match &part {
         Some(p) => p.settings.clone(),
-        None => r.load(scene)?.settings,
+        None => {
+            let info = r.load(scene)?;
+            for w in &info.warnings {
+                eprintln!("warning: {w}");
+            }
+            info.settings
+        }
     };
     let denoise = part.is_none() && options.denoise().or(s.denoise).unwrap_or(false);
     // The library is loaded before the work starts: a render that cannot be denoised is refused.

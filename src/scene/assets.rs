@@ -3,8 +3,9 @@
 
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
+use super::gltf::{GltfImage, GltfScene, read_gltf};
 use crate::ecs::components::MeshData;
 use crate::shading::texture::ImageTexture;
 use crate::sky::EnvironmentMap;
@@ -29,6 +30,7 @@ pub struct AssetCache {
     linear_images: HashMap<PathBuf, Cached<ImageTexture>>,
     meshes: HashMap<PathBuf, Cached<MeshData>>,
     environments: HashMap<PathBuf, Cached<EnvironmentMap>>,
+    gltfs: HashMap<PathBuf, CachedGltf>,
     decodes: u64,
     mesh_loads: u64,
     environment_builds: u64,
@@ -38,13 +40,8 @@ pub struct AssetCache {
     requested_set: HashSet<PathBuf>,
 }
 
-/// The cached value for `path`, or `load(bytes)` when the file is new or its bytes changed.
-fn cached<T>(
-    map: &mut HashMap<PathBuf, Cached<T>>,
-    path: &Path,
-    load: impl FnOnce(&[u8]) -> Result<T, String>,
-) -> Result<(Arc<T>, bool), String> {
-    use std::hash::Hasher;
+/// The bytes of the file at `path`: a regular file of at most [`MAX_ASSET_BYTES`].
+fn read_asset(path: &Path) -> Result<Vec<u8>, String> {
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read: {e}"))?;
     if meta.is_dir() {
         return Err("is a directory, not a file".into());
@@ -59,10 +56,25 @@ fn cached<T>(
             meta.len()
         ));
     }
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
+    std::fs::read(path).map_err(|e| format!("cannot read: {e}"))
+}
+
+/// Hash of a file's bytes.
+fn hash_bytes(bytes: &[u8]) -> u64 {
+    use std::hash::Hasher;
     let mut hasher = std::hash::DefaultHasher::new();
-    hasher.write(&bytes);
-    let hash = hasher.finish();
+    hasher.write(bytes);
+    hasher.finish()
+}
+
+/// The cached value for `path`, or `load(bytes)` when the file is new or its bytes changed.
+fn cached<T>(
+    map: &mut HashMap<PathBuf, Cached<T>>,
+    path: &Path,
+    load: impl FnOnce(&[u8]) -> Result<T, String>,
+) -> Result<(Arc<T>, bool), String> {
+    let bytes = read_asset(path)?;
+    let hash = hash_bytes(&bytes);
     if let Some(c) = map.get(path)
         && c.hash == hash
     {
@@ -79,13 +91,67 @@ fn cached<T>(
     Ok((value, true))
 }
 
+/// A glTF file as read, with the external buffer files it was read from and its embedded
+/// images, decoded when first asked for.
+pub struct GltfAsset {
+    /// The file's meshes, nodes, materials and images.
+    pub scene: GltfScene,
+    /// External buffer files and the hashes of their bytes when they were read.
+    buffers: Vec<(PathBuf, u64)>,
+    /// Embedded images decoded so far, by image index and encoding.
+    embedded: Mutex<HashMap<(usize, Encoding), Arc<ImageTexture>>>,
+}
+
+impl GltfAsset {
+    /// The external buffer files the file was read from.
+    pub fn buffer_files(&self) -> impl Iterator<Item = &Path> {
+        self.buffers.iter().map(|(p, _)| p.as_path())
+    }
+
+    /// Embedded image `index` (bytes in the file) decoded with `encoding`, once per asset.
+    pub fn embedded_image(
+        &self,
+        index: usize,
+        encoding: Encoding,
+    ) -> Result<Arc<ImageTexture>, String> {
+        let Some(GltfImage::Bytes { bytes, mime_type }) = self.scene.images.get(index) else {
+            return Err(format!("image {index} is not embedded"));
+        };
+        let mut embedded = self
+            .embedded
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if let Some(image) = embedded.get(&(index, encoding)) {
+            return Ok(image.clone());
+        }
+        // The MIME type names the format; the content decides when it is unknown.
+        let hint = match mime_type.as_str() {
+            "image/png" => "embedded.png",
+            "image/jpeg" => "embedded.jpg",
+            _ => "embedded",
+        };
+        let image = Arc::new(
+            decode_image(Path::new(hint), bytes, encoding)
+                .map_err(|e| format!("image {index}: {e}"))?,
+        );
+        embedded.insert((index, encoding), image.clone());
+        Ok(image)
+    }
+}
+
+/// A cached glTF file: the hash of its own bytes (those of its buffers are in the asset).
+struct CachedGltf {
+    hash: u64,
+    value: Arc<GltfAsset>,
+}
+
 impl AssetCache {
     /// Number of image decodes so far.
     pub fn decodes(&self) -> u64 {
         self.decodes
     }
 
-    /// Number of mesh file loads so far.
+    /// Number of mesh file loads so far (OBJ and glTF files).
     pub fn mesh_loads(&self) -> u64 {
         self.mesh_loads
     }
@@ -155,6 +221,57 @@ impl AssetCache {
         Ok(value)
     }
 
+    /// The glTF file at `path` (`.gltf` or `.glb`), read now with its external buffers or taken
+    /// from the cache when neither its bytes nor its buffers' have changed. Its buffer files
+    /// are noted as asked for (see [`AssetCache::note`]), read or not.
+    pub fn gltf(&mut self, path: &Path) -> Result<Arc<GltfAsset>, String> {
+        self.note(path);
+        let bytes = read_asset(path).map_err(|e| format!("glTF {}: {e}", path.display()))?;
+        let hash = hash_bytes(&bytes);
+        if let Some(c) = self.gltfs.get(path)
+            && c.hash == hash
+        {
+            let value = c.value.clone();
+            for (buffer, _) in &value.buffers {
+                self.note(buffer);
+            }
+            let unchanged = value
+                .buffers
+                .iter()
+                .all(|(p, h)| read_asset(p).is_ok_and(|b| hash_bytes(&b) == *h));
+            if unchanged {
+                return Ok(value);
+            }
+        }
+        let dir = path.parent().unwrap_or(Path::new(""));
+        let mut buffers = Vec::new();
+        let mut asked = Vec::new();
+        let scene = read_gltf(path, &bytes, |relative| {
+            let full = dir.join(relative);
+            asked.push(full.clone());
+            let bytes = read_asset(&full)?;
+            buffers.push((full, hash_bytes(&bytes)));
+            Ok(bytes)
+        });
+        for p in &asked {
+            self.note(p);
+        }
+        self.mesh_loads += 1;
+        let value = Arc::new(GltfAsset {
+            scene: scene?,
+            buffers,
+            embedded: Mutex::new(HashMap::new()),
+        });
+        self.gltfs.insert(
+            path.to_path_buf(),
+            CachedGltf {
+                hash,
+                value: value.clone(),
+            },
+        );
+        Ok(value)
+    }
+
     /// The mesh at `path`, read now or taken from the cache.
     pub fn mesh(&mut self, path: &Path) -> Result<Arc<MeshData>, String> {
         self.note(path);
@@ -165,7 +282,7 @@ impl AssetCache {
 }
 
 /// How the 8- and 16-bit channels of an image encode its values (float images are linear).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Encoding {
     /// Colour, sRGB-encoded (base colour, emission, RON `Image` textures).
     Srgb,

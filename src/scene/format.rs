@@ -698,8 +698,9 @@ pub struct PrefabDesc {
     pub entities: Vec<EntityDesc>,
 }
 
-/// `Entity(name, material, shape, transform)`, or a prefab placement
-/// `Entity(name, prefab, transform, materials)`.
+/// `Entity(name, material, shape, transform)`, a prefab placement
+/// `Entity(name, prefab, transform, materials)`, or a glTF placement
+/// `Entity(name, gltf, transform, materials)`.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Entity")]
 pub struct EntityDesc {
@@ -711,7 +712,10 @@ pub struct EntityDesc {
     pub shape: Option<ShapeDesc>,
     /// Path of a prefab file to place (or `shape`), relative to this file.
     pub prefab: Option<String>,
-    /// For a prefab: its material names mapped to names defined here.
+    /// Path of a glTF 2.0 file (`.gltf` or `.glb`) to place (or `shape`, or `prefab`),
+    /// relative to this file: its default scene becomes entities named `<name>/<node>`.
+    pub gltf: Option<String>,
+    /// For a prefab or a glTF file: its material names mapped to names defined here.
     pub materials: Option<BTreeMap<String, String>>,
     /// Placement.
     pub transform: Option<TransformDesc>,

@@ -9,7 +9,7 @@
 //!
 //! Supported: triangles (indexed or not; strips and fans converted), `POSITION`, `NORMAL` (flat
 //! shading when absent: [`MeshData::normals`] is `None`), `TEXCOORD_0` (float or normalised
-//! integers), sparse accessors, accessors without a buffer view (zeros), TRS and matrix node
+//! integers; stored as `(u, 1 − v)`, rondo's v pointing up the image), sparse accessors, accessors without a buffer view (zeros), TRS and matrix node
 //! transforms, the metallic–roughness material with its textures, `KHR_materials_emissive_strength`
 //! and `KHR_mesh_quantization`. Skipped with a warning: points and lines, skins, morph targets.
 //! Ignored: cameras, lights, animations, vertex colours, tangents. Any other extension listed in
@@ -38,7 +38,12 @@ pub const MAX_NODE_INSTANCES: usize = 1 << 20;
 pub const MAX_NODE_DEPTH: usize = 256;
 
 /// Extensions that may appear in `extensionsRequired`.
-const SUPPORTED_REQUIRED: &[&str] = &["KHR_materials_emissive_strength", "KHR_mesh_quantization"];
+const SUPPORTED_REQUIRED: &[&str] = &[
+    "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_transmission",
+    "KHR_mesh_quantization",
+];
 
 /// A glTF file read into plain data.
 #[derive(Debug, Default)]
@@ -165,6 +170,12 @@ pub struct GltfMaterial {
     pub alpha_mode: AlphaMode,
     /// Whether back faces are shaded as front faces.
     pub double_sided: bool,
+    /// `KHR_materials_transmission`'s factor (0 without the extension).
+    pub transmission: f32,
+    /// Whether the transmission factor is multiplied by a texture.
+    pub transmission_texture: bool,
+    /// Index of refraction (`KHR_materials_ior`; 1.5 without it).
+    pub ior: f32,
 }
 
 /// Reads a glTF file from its `bytes` (`.gltf` JSON or `.glb`); `path` names it in errors.
@@ -708,9 +719,10 @@ fn read_primitive(
     let uvs = match prim.get(&gltf::Semantic::TexCoords(0)) {
         None => None,
         Some(acc) if acc.count() == n => {
+            // glTF's v runs down the image from its top row, rondo's up from the bottom row.
             let uv: Vec<Vec2> = read_floats(&acc, 2, buffers)?
                 .chunks_exact(2)
-                .map(Vec2::from_slice)
+                .map(|t| Vec2::new(t[0], 1.0 - t[1]))
                 .collect();
             if let Some(k) = uv.iter().position(|t| !t.is_finite()) {
                 return Err(format!(
@@ -806,6 +818,11 @@ fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> {
         (None, None) => "default material".into(),
     };
     let emissive = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
+    let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
+    let ior = m.ior().unwrap_or(1.5);
+    if !(transmission.is_finite() && ior.is_finite() && ior > 0.0) {
+        return Err(format!("{}: invalid transmission or ior", what()));
+    }
     let finite = pbr.base_color_factor().iter().all(|v| v.is_finite())
         && pbr.metallic_factor().is_finite()
         && pbr.roughness_factor().is_finite()
@@ -837,6 +854,11 @@ fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> {
             .map(|t| texture(&t.texture(), t.tex_coord())),
         alpha_mode,
         double_sided: m.double_sided(),
+        transmission,
+        transmission_texture: m
+            .transmission()
+            .is_some_and(|t| t.transmission_texture().is_some()),
+        ior,
         name,
     })
 }

@@ -615,6 +615,14 @@ impl Watch {
             break (info, parse);
         };
         self.last_error = None;
+        for message in &info.warnings {
+            out.emit(
+                Report::Warning {
+                    message: message.clone(),
+                },
+                None,
+            );
+        }
         self.denoising = match self.options.denoise.or(info.settings.denoise) {
             Some(false) => Denoising::Off,
             Some(true) => Denoising::Output,

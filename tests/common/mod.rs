@@ -4,6 +4,8 @@
     reason = "each test binary uses a different subset of the helpers"
 )]
 
+pub mod gltf_doc;
+
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;

@@ -516,6 +516,7 @@ mod tests {
                     material: material.into(),
                 })
                 .collect(),
+            warnings: Vec::new(),
             dependencies: Vec::new(),
             sources: Vec::new(),
             origins: Vec::new(),

@@ -21,6 +21,8 @@ use crate::shading::material::Material;
 use crate::shading::texture::{ImageTexture, Sampling, Texture};
 use crate::sky::{EnvironmentLight, Sky, Sun};
 
+mod gltf;
+
 pub use super::assets::AssetCache;
 use super::error::{Location, SceneError};
 use super::format::{
@@ -108,6 +110,9 @@ pub struct LoadedScene {
     pub stats: LoadStats,
     /// The distant lights of `settings.environment` and `settings.sun`, the map loaded.
     pub sky: Sky,
+    /// What was loaded differently from how the files ask (parts of glTF files that rondo
+    /// skips or approximates), one sentence each, naming the file.
+    pub warnings: Vec<String>,
 }
 
 /// Parses scene source text. RON's `implicit_some` is on, so optional fields are written bare.
@@ -179,6 +184,16 @@ struct Prefab {
     defaults: RefCell<Option<Rc<Scope>>>,
 }
 
+/// An entity about to be added: its qualified name, shape (with object-space bounds if it is a
+/// mesh), placement and material key.
+struct Placed {
+    name: String,
+    shape: Shape,
+    bounds: Option<[Vec3; 2]>,
+    transform: Transform,
+    key: String,
+}
+
 /// A mesh fetched for this load, with its object-space bounds.
 struct LoadedMesh {
     data: Arc<MeshData>,
@@ -207,6 +222,11 @@ struct Expander<'a> {
     /// Whether some written name contains `/`: only then can two qualified names collide.
     slashed: bool,
     stats: LoadStats,
+    /// Bounds of glTF primitives by the address of their data, computed once per load.
+    gltf_bounds: HashMap<usize, [Vec3; 2]>,
+    /// Warnings in first-seen order, each once.
+    warnings: Vec<String>,
+    warned: HashSet<String>,
 }
 
 /// Reads, parses and validates the scene at `path`, expanding prefabs and loading textures and
@@ -239,6 +259,9 @@ pub fn load_scene(path: &Path, assets: &mut AssetCache) -> Result<LoadedScene, S
         chain: vec![std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())],
         slashed: false,
         stats: LoadStats::default(),
+        gltf_bounds: HashMap::new(),
+        warnings: Vec::new(),
+        warned: HashSet::new(),
     };
     x.depend(path);
     let mut scope = Scope::new();
@@ -262,10 +285,19 @@ pub fn load_scene(path: &Path, assets: &mut AssetCache) -> Result<LoadedScene, S
         material_origins: x.material_origins,
         stats: x.stats,
         sky,
+        warnings: x.warnings,
     })
 }
 
 impl Expander<'_> {
+    /// Records a warning about the file at `path`, once.
+    fn warn(&mut self, path: &Path, message: &str) {
+        let warning = format!("{}: {message}", path.display());
+        if self.warned.insert(warning.clone()) {
+            self.warnings.push(warning);
+        }
+    }
+
     fn depend(&mut self, path: &Path) {
         if !self.seen.contains(path) {
             self.seen.insert(path.to_path_buf());
@@ -444,25 +476,30 @@ impl Expander<'_> {
                 named: e.name.is_some(),
             };
             let transform = parent * e.transform.unwrap_or_default().matrix();
-            match (&e.shape, &e.prefab) {
-                (Some(shape), None) => {
+            match (&e.shape, &e.prefab, &e.gltf) {
+                (Some(shape), None, None) => {
                     self.place_shape(file, e, shape, scope, name, transform, origin)?
                 }
-                (None, Some(prefab)) => {
+                (None, Some(prefab), None) => {
                     self.place_prefab(file, e, prefab, scope, &name, transform, i)?
                 }
-                (Some(_), Some(_)) => {
+                (None, None, Some(gltf)) => {
+                    self.place_gltf(file, e, gltf, scope, &name, transform, origin)?
+                }
+                (None, None, None) => {
                     return Err(file.error(
                         at,
                         None,
-                        format!("entity \"{name}\": give `shape` or `prefab`, not both"),
+                        format!("entity \"{name}\": `shape`, `prefab` or `gltf` is required"),
                     ));
                 }
-                (None, None) => {
+                _ => {
                     return Err(file.error(
                         at,
                         None,
-                        format!("entity \"{name}\": `shape` or `prefab` is required"),
+                        format!(
+                            "entity \"{name}\": give one of `shape`, `prefab` and `gltf`, not several"
+                        ),
                     ));
                 }
             }
@@ -535,6 +572,32 @@ impl Expander<'_> {
                 (Shape::Mesh(MeshRef { path: full, data }), Some(bounds))
             }
         };
+        let placed = Placed {
+            name,
+            shape,
+            bounds,
+            transform,
+            key: key.clone(),
+        };
+        self.push_entity(file, at, placed, origin)
+    }
+
+    /// Adds an entity after checking that a sphere stays a sphere and that the shape stays
+    /// within [`MAX_COORDINATE`] of the origin (a mesh's bounds decide unless they reach past it).
+    fn push_entity(
+        &mut self,
+        file: &SourceFile,
+        at: Anchor,
+        placed: Placed,
+        origin: Origin,
+    ) -> Result<(), SceneError> {
+        let Placed {
+            name,
+            shape,
+            bounds,
+            transform,
+            key,
+        } = placed;
         if matches!(shape, Shape::Sphere { .. }) && !transform.is_similarity() {
             return Err(file.error(
                 at,
@@ -563,7 +626,7 @@ impl Expander<'_> {
             name,
             shape,
             transform,
-            material: key.clone(),
+            material: key,
         });
         self.origins.push(origin);
         Ok(())

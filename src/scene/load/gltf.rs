@@ -1,0 +1,367 @@
+//! Placing a glTF 2.0 file in a scene: `Entity(name, gltf, transform, materials)`.
+//!
+//! The file's default scene becomes one entity per node and triangle primitive, named
+//! `<placement>/<node name, or #index>` (`/<primitive index>` added for a mesh of several
+//! primitives), each placed by the placement's transform times the node's. Every node that uses
+//! a mesh shares its data, so it is instanced. The file's materials become `Pbr` materials keyed
+//! `<canonical path>::<material name, or #index>` unless the placement maps their names to the
+//! scene's, as a prefab placement does.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::{Affine3A, Vec3};
+
+use super::{Anchor, Expander, Origin, Placed, Scope, SourceFile};
+use crate::ecs::components::{MeshRef, Shape, Transform};
+use crate::scene::assets::{Encoding, GltfAsset};
+use crate::scene::error::SceneError;
+use crate::scene::format::EntityDesc;
+use crate::scene::gltf::{AlphaMode, GltfImage, GltfMaterial, GltfTexture, Wrap as GltfWrap};
+use crate::shading::maps::{AlphaMask, NormalMap};
+use crate::shading::material::Material;
+use crate::shading::texture::{Filter, ImageTexture, Sampling, Texture, Wrap};
+
+/// The name a placement's `materials` uses for primitives without a material.
+const DEFAULT_MATERIAL: &str = "#default";
+
+/// The labels of a file's materials or nodes: the name when it is unique in the file, else
+/// `#index`.
+fn labels<'a>(names: impl Iterator<Item = (usize, Option<&'a str>)> + Clone) -> Vec<String> {
+    let mut count: HashMap<&str, usize> = HashMap::new();
+    for (_, name) in names.clone() {
+        if let Some(n) = name {
+            *count.entry(n).or_default() += 1;
+        }
+    }
+    names
+        .map(|(i, name)| match name {
+            Some(n) if count.get(n) == Some(&1) && !n.is_empty() => n.to_owned(),
+            _ => format!("#{i}"),
+        })
+        .collect()
+}
+
+impl Expander<'_> {
+    /// Places the glTF file `gltf` written by entity `e` of `file` (see the module's doc).
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the entity and everything it is placed by"
+    )]
+    pub(super) fn place_gltf(
+        &mut self,
+        file: &SourceFile,
+        e: &EntityDesc,
+        gltf: &str,
+        scope: &Scope,
+        name: &str,
+        transform: Affine3A,
+        origin: Origin,
+    ) -> Result<(), SceneError> {
+        let at = Anchor::Entity(origin.index as usize, e.name.as_deref());
+        let fail = |then: Option<&str>, message: String| {
+            file.error(at, then, format!("entity \"{name}\": {message}"))
+        };
+        if e.material.is_some() {
+            return Err(fail(
+                None,
+                "a glTF placement maps names with `materials`, not `material`".into(),
+            ));
+        }
+        let full = file.dir().join(gltf);
+        self.depend(&full);
+        let asset = self
+            .assets
+            .gltf(&full)
+            .map_err(|m| fail(Some(gltf), m))?;
+        for buffer in asset.buffer_files() {
+            self.depend(buffer);
+        }
+        for w in &asset.scene.warnings {
+            self.warn(&full, w);
+        }
+        let materials = &asset.scene.materials;
+        let material_labels = labels(
+            materials
+                .iter()
+                .enumerate()
+                .map(|(i, m)| (i, m.name.as_deref())),
+        );
+
+        // The placement's names, checked against the file's.
+        let mut mapped: HashMap<&str, String> = HashMap::new();
+        for (theirs, ours) in e.materials.iter().flatten() {
+            if theirs != DEFAULT_MATERIAL && !material_labels.contains(theirs) {
+                return Err(fail(
+                    Some(theirs),
+                    format!(
+                        "maps \"{theirs}\", which {} does not define (its materials: {})",
+                        full.display(),
+                        if material_labels.is_empty() {
+                            "none".to_string()
+                        } else {
+                            material_labels.join(", ")
+                        }
+                    ),
+                ));
+            }
+            let Some(key) = scope.get(ours) else {
+                return Err(fail(
+                    Some(ours),
+                    format!("maps \"{theirs}\" to unknown material \"{ours}\""),
+                ));
+            };
+            mapped.insert(theirs, key.clone());
+        }
+
+        let canonical = std::fs::canonicalize(&full).unwrap_or_else(|_| full.clone());
+        // The table key of each material index (`None`: the default material), made once.
+        let mut keys: HashMap<Option<usize>, String> = HashMap::new();
+        let mut placed_nodes: HashMap<usize, usize> = HashMap::new();
+        let node_labels = labels(
+            asset
+                .scene
+                .nodes
+                .iter()
+                .map(|n| (n.index, n.name.as_deref())),
+        );
+        let prefix = format!("{name}/");
+        for (node, base) in asset.scene.nodes.iter().zip(&node_labels) {
+            let Some(mesh) = node.mesh.and_then(|m| asset.scene.meshes.get(m)) else {
+                continue;
+            };
+            // A node reached through two parents is placed twice: `label`, then `label@2`, …
+            let count = placed_nodes.entry(node.index).or_default();
+            *count += 1;
+            let label = match *count {
+                1 => base.clone(),
+                k => format!("{base}@{k}"),
+            };
+            let world = transform * node.world_from_node;
+            let many = mesh.primitives.len() > 1;
+            for (p, prim) in mesh.primitives.iter().enumerate() {
+                let key = match keys.get(&prim.material) {
+                    Some(key) => key.clone(),
+                    None => {
+                        let label = match prim.material {
+                            Some(i) => material_labels[i].as_str(),
+                            None => DEFAULT_MATERIAL,
+                        };
+                        let key = match mapped.get(label) {
+                            Some(key) => key.clone(),
+                            None => {
+                                let key = format!("{}::{label}", canonical.display());
+                                if !self.materials.contains_key(&key) {
+                                    let gltf_material = prim.material.map(|i| &materials[i]);
+                                    let material = self
+                                        .gltf_material(&asset, &full, gltf_material, label)
+                                        .map_err(|m| fail(Some(gltf), m))?;
+                                    self.materials.insert(key.clone(), material);
+                                    self.material_origins
+                                        .insert(key.clone(), (file.id, label.to_owned()));
+                                }
+                                key
+                            }
+                        };
+                        keys.insert(prim.material, key.clone());
+                        key
+                    }
+                };
+                let entity = if many {
+                    format!("{prefix}{label}/{p}")
+                } else {
+                    format!("{prefix}{label}")
+                };
+                let bounds = self.gltf_bounds(&prim.data);
+                let mesh_path = PathBuf::from(format!(
+                    "{}#mesh{}/{p}",
+                    full.display(),
+                    node.mesh.unwrap_or_default()
+                ));
+                let placed = Placed {
+                    name: entity,
+                    shape: Shape::Mesh(MeshRef {
+                        path: mesh_path,
+                        data: prim.data.clone(),
+                    }),
+                    bounds: Some(bounds),
+                    transform: Transform(world),
+                    key,
+                };
+                let origin = Origin {
+                    prefix: prefix.len() as u32,
+                    named: false,
+                    ..origin
+                };
+                self.push_entity(file, at, placed, origin)?;
+            }
+        }
+        // Node names may hold `/`: the qualified names are checked for collisions.
+        self.slashed = true;
+        Ok(())
+    }
+
+    /// Object-space bounds of a glTF primitive, computed once per load of its data.
+    fn gltf_bounds(&mut self, data: &Arc<crate::ecs::components::MeshData>) -> [Vec3; 2] {
+        let id = Arc::as_ptr(data) as usize;
+        if let Some(b) = self.gltf_bounds.get(&id) {
+            return *b;
+        }
+        let bounds = data.positions.iter().fold(
+            [Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)],
+            |[lo, hi], &p| [lo.min(p), hi.max(p)],
+        );
+        self.stats.limit_vertices += data.positions.len() as u64;
+        self.gltf_bounds.insert(id, bounds);
+        bounds
+    }
+
+    /// The rondo material of glTF material `m` (`None`: the spec's default material, white,
+    /// metallic 1, roughness 1) of the file at `path`, its textures loaded.
+    fn gltf_material(
+        &mut self,
+        asset: &GltfAsset,
+        path: &Path,
+        m: Option<&GltfMaterial>,
+        label: &str,
+    ) -> Result<Material, String> {
+        let Some(m) = m else {
+            return Ok(Material::Pbr {
+                base_color: Texture::Constant(Vec3::ONE),
+                metallic: 1.0,
+                roughness: 1.0,
+                metallic_roughness: None,
+                emissive: Texture::Constant(Vec3::ZERO),
+                emissive_strength: 1.0,
+                normal_map: None,
+                alpha: None,
+            });
+        };
+        let what = format!("material \"{label}\"");
+        let factor = Vec3::from_slice(&m.base_color_factor[..3]);
+        if m.transmission > 0.0 && m.metallic < 1.0 {
+            self.warn(
+                path,
+                &format!(
+                    "{what}: transmission {} is imported as smooth clear glass of ior {} (rondo has no rough or tinted transmission)",
+                    m.transmission, m.ior
+                ),
+            );
+            return Ok(Material::Dielectric { ior: m.ior });
+        }
+        let image = |x: &mut Self, t: &GltfTexture, encoding: Encoding| {
+            x.gltf_image(asset, path, t, encoding)
+                .map_err(|e| format!("{what}: {e}"))
+        };
+        let base = match &m.base_color_texture {
+            Some(t) => Some(image(self, t, Encoding::Srgb)?),
+            None => None,
+        };
+        let base_color = scaled(base.clone(), factor);
+        let emissive = match &m.emissive_texture {
+            Some(t) => scaled(Some(image(self, t, Encoding::Srgb)?), m.emissive),
+            None => Texture::Constant(m.emissive),
+        };
+        let metallic_roughness = match &m.metallic_roughness_texture {
+            Some(t) => {
+                let (img, sampling) = image(self, t, Encoding::Linear)?;
+                Some(Texture::Image(img, sampling))
+            }
+            None => None,
+        };
+        let normal_map = match &m.normal_texture {
+            Some((t, scale)) => {
+                let (img, sampling) = image(self, t, Encoding::Linear)?;
+                Some(NormalMap {
+                    texture: Texture::Image(img, sampling),
+                    scale: *scale,
+                })
+            }
+            None => None,
+        };
+        let cutoff = match m.alpha_mode {
+            AlphaMode::Opaque => None,
+            AlphaMode::Mask(cutoff) => Some(cutoff),
+            AlphaMode::Blend => {
+                self.warn(
+                    path,
+                    &format!("{what}: alphaMode BLEND is rendered as MASK with cutoff 0.5"),
+                );
+                Some(0.5)
+            }
+        };
+        let alpha = cutoff.map(|cutoff| AlphaMask {
+            cutoff,
+            factor: m.base_color_factor[3],
+            image: base.filter(|(img, _)| img.has_alpha()),
+        });
+        Ok(Material::Pbr {
+            base_color,
+            metallic: m.metallic.clamp(0.0, 1.0),
+            roughness: m.roughness.clamp(0.0, 1.0),
+            metallic_roughness,
+            emissive,
+            emissive_strength: 1.0,
+            normal_map,
+            alpha,
+        })
+    }
+
+    /// Texture `t` of the glTF file at `path`: its image decoded with `encoding` (an external
+    /// file through the cache, as a dependency; an embedded one once per content of the glTF
+    /// file) and its sampler.
+    fn gltf_image(
+        &mut self,
+        asset: &GltfAsset,
+        path: &Path,
+        t: &GltfTexture,
+        encoding: Encoding,
+    ) -> Result<(Arc<ImageTexture>, Sampling), String> {
+        if t.texcoord != 0 {
+            self.warn(
+                path,
+                &format!(
+                    "a texture uses TEXCOORD_{}; only TEXCOORD_0 is read",
+                    t.texcoord
+                ),
+            );
+        }
+        let image = match asset.scene.images.get(t.image) {
+            Some(GltfImage::File(relative)) => {
+                let dir = path.parent().unwrap_or(Path::new(""));
+                let full = dir.join(relative);
+                self.depend(&full);
+                self.assets
+                    .image(&full, encoding)
+                    .map_err(|e| format!("image {}: {e}", full.display()))?
+            }
+            Some(GltfImage::Bytes { .. }) => asset.embedded_image(t.image, encoding)?,
+            None => return Err(format!("image {} does not exist", t.image)),
+        };
+        let wrap = |w: GltfWrap| match w {
+            GltfWrap::Repeat => Wrap::Repeat,
+            GltfWrap::MirroredRepeat => Wrap::MirroredRepeat,
+            GltfWrap::ClampToEdge => Wrap::Clamp,
+        };
+        let sampling = Sampling {
+            filter: if t.nearest {
+                Filter::Nearest
+            } else {
+                Filter::Bilinear
+            },
+            wrap: [wrap(t.wrap_s), wrap(t.wrap_t)],
+        };
+        Ok((image, sampling))
+    }
+}
+
+/// A texture image times a colour factor (the factor alone without an image; the image alone
+/// for a white factor).
+fn scaled(image: Option<(Arc<ImageTexture>, Sampling)>, factor: Vec3) -> Texture {
+    match image {
+        None => Texture::Constant(factor),
+        Some((img, sampling)) if factor == Vec3::ONE => Texture::Image(img, sampling),
+        Some((img, sampling)) => Texture::Scaled(Box::new(Texture::Image(img, sampling)), factor),
+    }
+}
