@@ -46,7 +46,21 @@ pub struct SceneView<'a, L: Layout = DefaultLayout> {
     pub roulette: bool,
     /// Sample generator of the converging passes.
     pub sampler: SamplerKind,
+    /// Whether some material has an alpha mask ([`has_masks`] of `materials`): only then are
+    /// hits tested for presence, so that scenes without masks pay nothing for them.
+    pub masked: bool,
 }
+
+/// Whether any of `materials` has an alpha mask ([`Material::is_masked`]): the value of
+/// [`SceneView::masked`].
+pub fn has_masks(materials: &[Material]) -> bool {
+    materials.iter().any(Material::is_masked)
+}
+
+/// Most surfaces one ray passes through where their alpha masks say they are absent; the next
+/// hit then counts as present whatever its mask says. A bound on the work a hostile scene (a
+/// stack of thousands of masked layers) can cause, far beyond what real scenes reach.
+pub const MAX_PASS_THROUGHS: u32 = 1024;
 
 /// Counters of one render.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -172,11 +186,57 @@ pub fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
     Ray::new(spawn_origin(p, side, err), dir)
 }
 
+/// The first hit of a surface that is present along `ray`, up to `end` (a shadow ray's end
+/// point; `None`: without end), in a scene with alpha masks. Where a mask says its surface is
+/// absent ([`Material::is_present`]) the ray passes through: it starts again from the hit
+/// point, spawned on the far side with the point's error bound, in the same direction or, with
+/// an `end`, towards it (so that the rounding of the new origin cannot carry the segment into
+/// the surface at its end); `ray` is left as the segment that found the returned hit. No
+/// sampler dimension is drawn, so a path is what it would be without the absent surfaces. After
+/// [`MAX_PASS_THROUGHS`] the next hit counts as present.
+#[inline]
+fn first_present<L: Layout, W: Lanes>(
+    lanes: W,
+    view: &SceneView<L>,
+    ray: &mut Ray,
+    end: Option<Vec3>,
+    stats: &mut TraceStats,
+) -> Option<Hit> {
+    let mut t_max = end.map_or(f32::INFINITY, |e| (e - ray.origin).length());
+    for _ in 0..MAX_PASS_THROUGHS {
+        let hit = view.geometry.intersect_with(lanes, ray, t_max)?;
+        let s = view.geometry.surface(ray, &hit);
+        let material = &view.materials[view.owner_material[s.owner as usize] as usize];
+        if material.is_present(s.uv) {
+            return Some(hit);
+        }
+        let err = point_error(view.geometry, &hit, s.p);
+        let origin = spawn(s.p, s.n, err, ray.direction).origin;
+        *ray = match end {
+            None => Ray::new(origin, ray.direction),
+            Some(e) => {
+                let span = e - origin;
+                t_max = span.length();
+                // Past the end (or degenerate): nothing more in between.
+                if t_max.is_nan() || t_max <= 0.0 || span.dot(ray.direction) <= 0.0 {
+                    return None;
+                }
+                Ray::new(origin, span / t_max)
+            }
+        };
+        stats.rays += 1;
+    }
+    view.geometry.intersect_with(lanes, ray, t_max)
+}
+
 /// Radiance arriving along `ray`, by path tracing with the view's [`Method`]:
 /// - `Naive`: BSDF sampling only; emitters count when a path hits them (the thesis's algorithm).
 /// - `Nee`: at every diffuse vertex a shadow ray goes to a point sampled on an emitter; emitters
 ///   hit by the BSDF-sampled continuation of such a vertex are then not counted again.
 /// - `Mis`: both, weighted by the power heuristic (Veach 1997, ch. 9).
+///
+/// Surfaces that alpha masks make absent are passed through without a bounce (see
+/// [`first_present`]).
 ///
 /// Emission seen by the camera or after a glass/mirror bounce always counts in full. Russian
 /// roulette (after a few bounces, survival probability = the path's throughput without the
@@ -194,9 +254,9 @@ pub fn trace_path<L: Layout, S: Sampler>(
 
 /// [`trace_path`] with the BVHs' box tests as wide as `lanes`, and the path's features for the
 /// denoiser: the albedo and the shading normal (on the side the path arrived from) of the first
-/// hit that is not a perfect mirror or glass ([`Material::is_specular`]), the albedo tinted by
-/// the specular bounces before it; the background as albedo (and a zero normal) if the path
-/// leaves the scene first; zero if it ends first. They use no random numbers, so the radiance is
+/// hit that is not a perfect mirror or glass ([`Material::is_specular`]) nor absent where an
+/// alpha mask says so, the albedo tinted by the specular bounces before it; the background as
+/// albedo (and a zero normal) if the path leaves the scene first; zero if it ends first. They use no random numbers, so the radiance is
 /// the same whether they are collected or not; without `collect` (a film without feature
 /// buffers) they are not computed and come back zero.
 #[inline(always)]
@@ -220,7 +280,12 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     let mut features = (!collect).then(FeatureSample::default);
     for depth in 0..view.max_depth {
         stats.rays += 1;
-        let Some(hit) = view.geometry.intersect_with(lanes, &ray, f32::INFINITY) else {
+        let found = if view.masked {
+            first_present(lanes, view, &mut ray, None, stats)
+        } else {
+            view.geometry.intersect_with(lanes, &ray, f32::INFINITY)
+        };
+        let Some(hit) = found else {
             let mut seen = view.background;
             let mut light = view.background;
             for k in 0..view.lights.distant().len() {
@@ -434,7 +499,7 @@ fn direct_light<L: Layout, W: Lanes>(
         return Vec3::ZERO;
     };
     // The direction to the light, what it sends along it, its density, and the shadow ray's
-    // origin, direction and length.
+    // origin, direction, length and end point (none for a distant light).
     let (wi, emitted, pdf_light, shadow) = match sampled {
         Sampled::Surface(light) => {
             let to_light = light.p - s.p;
@@ -443,7 +508,14 @@ fn direct_light<L: Layout, W: Lanes>(
                 return Vec3::ZERO;
             }
             let wi = to_light / dist2.sqrt();
-            let emitted = view.materials[light.material as usize].emitted(wi, light.n, light.uv);
+            let emitter = &view.materials[light.material as usize];
+            // A point where the emitter's mask says it is absent sends nothing: the light's
+            // density stays that of its whole surface, as for the BSDF-sampled rays that pass
+            // through such points.
+            if view.masked && !emitter.is_present(light.uv) {
+                return Vec3::ZERO;
+            }
+            let emitted = emitter.emitted(wi, light.n, light.uv);
             // Shadow ray between the two offset points, so neither surface can block it.
             let from = spawn(s.p, s.n, err, wi).origin;
             let to_side = if wi.dot(light.n) < 0.0 {
@@ -451,7 +523,8 @@ fn direct_light<L: Layout, W: Lanes>(
             } else {
                 -light.n
             };
-            let span = spawn_origin(light.p, to_side, light.err) - from;
+            let end = spawn_origin(light.p, to_side, light.err);
+            let span = end - from;
             let length = span.length();
             if length.is_nan() || length <= 0.0 {
                 return Vec3::ZERO;
@@ -460,13 +533,13 @@ fn direct_light<L: Layout, W: Lanes>(
                 wi,
                 emitted,
                 light.pdf,
-                (Ray::new(from, span / length), length),
+                (Ray::new(from, span / length), length, Some(end)),
             )
         }
         Sampled::Distant(light) => {
             let wi = light.direction;
             let shadow = spawn(s.p, s.n, err, wi);
-            (wi, light.radiance, light.pdf, (shadow, f32::INFINITY))
+            (wi, light.radiance, light.pdf, (shadow, f32::INFINITY, None))
         }
     };
     if emitted == Vec3::ZERO {
@@ -487,8 +560,13 @@ fn direct_light<L: Layout, W: Lanes>(
         return Vec3::ZERO;
     }
     stats.rays += 1;
-    let (shadow_ray, length) = shadow;
-    if view.geometry.occluded_with(lanes, &shadow_ray, length) {
+    let (mut shadow_ray, length, end) = shadow;
+    let occluded = if view.masked {
+        first_present(lanes, view, &mut shadow_ray, end, stats).is_some()
+    } else {
+        view.geometry.occluded_with(lanes, &shadow_ray, length)
+    };
+    if occluded {
         return Vec3::ZERO;
     }
     let weight = if view.method == Method::Mis {

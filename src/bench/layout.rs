@@ -43,7 +43,7 @@ use crate::geometry::layout::{Aos, Hybrid, Layout, LayoutKind, Soa, SoaSimd};
 use crate::geometry::packed::{BvhPlan, Geometry, Primitive};
 use crate::geometry::ray::Ray;
 use crate::lights::LightSet;
-use crate::render::{SceneView, render_pass};
+use crate::render::{SceneView, has_masks, render_pass};
 use crate::scene::format::Method;
 use crate::shading::material::Material;
 use crate::shading::rng::Rng;
@@ -663,6 +663,7 @@ impl RenderBench {
             method: Method::default(),
             roulette: true,
             sampler: SamplerKind::default(),
+            masked: has_masks(&self.materials),
         };
         let mut film = Film::new(self.size, self.size);
         let cancel = AtomicBool::new(false);

@@ -663,6 +663,10 @@ pub enum MaterialDesc {
         /// Scale of `emissive`.
         #[serde(default = "one")]
         emissive_strength: NonNegative,
+        /// Alpha mask (glTF's `alphaMode: MASK`): where the alpha of the `base_color` image is
+        /// below this cutoff the surface is absent and rays pass through it. No mask by default.
+        #[serde(default)]
+        alpha_cutoff: Option<NonNegative>,
     },
 }
 

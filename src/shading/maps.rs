@@ -3,6 +3,8 @@
 
 use std::sync::Arc;
 
+use glam::Vec2;
+
 use super::texture::{ImageTexture, Sampling, Texture};
 
 /// A tangent-space normal map: the texel's RGB in [0, 1] encodes a normal `2·rgb − 1` in the
@@ -27,6 +29,33 @@ pub struct AlphaMask {
     pub image: Option<(Arc<ImageTexture>, Sampling)>,
 }
 
+impl AlphaMask {
+    /// Whether the surface is present at `uv`: `factor · alpha(uv) ≥ cutoff`, alpha 1 without
+    /// an image (or for an image without an alpha channel). A NaN alpha reads as absent.
+    #[inline]
+    pub fn present(&self, uv: Vec2) -> bool {
+        let alpha = match &self.image {
+            None => 1.0,
+            Some((image, sampling)) => image.sample_alpha(uv, *sampling),
+        };
+        self.factor * alpha >= self.cutoff
+    }
+
+    /// The mask of cutoff `cutoff` and factor 1 that reads the alpha of a base colour texture:
+    /// of its image, sampled as the colour is, when it is an [`Texture::Image`]; any other
+    /// texture has alpha 1 (the surface is then present everywhere if `cutoff` ≤ 1).
+    pub fn of_base_color(cutoff: f32, base_color: &Texture) -> Self {
+        Self {
+            cutoff,
+            factor: 1.0,
+            image: match base_color {
+                Texture::Image(image, sampling) => Some((image.clone(), *sampling)),
+                _ => None,
+            },
+        }
+    }
+}
+
 impl PartialEq for AlphaMask {
     /// Images compare by identity, as in [`Texture`].
     fn eq(&self, other: &Self) -> bool {
@@ -37,5 +66,45 @@ impl PartialEq for AlphaMask {
                 (Some((a, s)), Some((b, s2))) => Arc::ptr_eq(a, b) && s == s2,
                 _ => false,
             }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_mask_is_present_where_factor_times_alpha_reaches_the_cutoff() {
+        // Top row: alpha 1, 0; bottom row: 128/255, 127/255.
+        let px = [0, 0, 0, 255, 0, 0, 0, 0, 0, 0, 0, 128, 0, 0, 0, 127];
+        let image = Arc::new(ImageTexture::from_rgba8(2, 2, &px, true));
+        let mask = |factor, cutoff| AlphaMask {
+            cutoff,
+            factor,
+            image: Some((image.clone(), Sampling::default())),
+        };
+        let texels = [
+            Vec2::new(0.25, 0.75),
+            Vec2::new(0.75, 0.75),
+            Vec2::new(0.25, 0.25),
+            Vec2::new(0.75, 0.25),
+        ];
+        let present = |m: &AlphaMask| texels.map(|uv| m.present(uv));
+        assert_eq!(present(&mask(1.0, 0.5)), [true, false, true, false]);
+        // Equal to the cutoff is present.
+        assert_eq!(
+            present(&mask(1.0, 128.0 / 255.0)),
+            [true, false, true, false]
+        );
+        assert_eq!(present(&mask(0.5, 0.5)), [true, false, false, false]);
+        assert_eq!(present(&mask(0.0, 0.5)), [false; 4]);
+        assert_eq!(present(&mask(1.0, 0.0)), [true; 4]);
+        // Without an image, alpha is 1: the factor alone decides.
+        let flat = |factor| AlphaMask {
+            cutoff: 0.5,
+            factor,
+            image: None,
+        };
+        assert!(flat(1.0).present(Vec2::ZERO) && !flat(0.4).present(Vec2::ZERO));
     }
 }

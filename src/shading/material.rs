@@ -184,6 +184,24 @@ impl Material {
         !matches!(self, Self::Light { .. })
     }
 
+    /// Whether the material has an alpha mask (a `Pbr` with `alpha`): only then may
+    /// [`Material::is_present`] be false.
+    pub fn is_masked(&self) -> bool {
+        matches!(self, Self::Pbr { alpha: Some(_), .. })
+    }
+
+    /// Whether the surface is there at `uv`: false where its alpha mask says it is absent, so
+    /// that rays pass through it; true for every material without a mask.
+    #[inline]
+    pub fn is_present(&self, uv: Vec2) -> bool {
+        match self {
+            Self::Pbr {
+                alpha: Some(mask), ..
+            } => mask.present(uv),
+            _ => true,
+        }
+    }
+
     /// Whether next-event estimation applies: the BSDF can be evaluated for any pair of
     /// directions (see [`Material::eval`]).
     pub fn samples_lights(&self) -> bool {

@@ -14,7 +14,7 @@ use crate::ecs::resources::{
 };
 use crate::film::shift_for;
 use crate::geometry::packed::{Aos, Hybrid, LayoutCache, LayoutKind, Soa, SoaSimd};
-use crate::render::{SceneView, render_pass, render_preview};
+use crate::render::{SceneView, has_masks, render_pass, render_preview};
 use crate::shading::material::Material;
 
 /// Paths a live preview traces at most, unless the smallest block gives more: about 9 ms on the
@@ -126,6 +126,7 @@ pub fn render_frame(
                 method: s.method,
                 roulette: control.roulette,
                 sampler: s.sampler,
+                masked: has_masks(&materials.materials),
             };
             if preview {
                 render_preview(

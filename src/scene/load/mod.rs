@@ -383,16 +383,21 @@ impl Expander<'_> {
                 roughness,
                 emissive,
                 emissive_strength,
-            } => Material::Pbr {
-                base_color: texture(base_color)?,
-                metallic: metallic.0,
-                roughness: roughness.0,
-                metallic_roughness: None,
-                emissive: texture(emissive)?,
-                emissive_strength: emissive_strength.0,
-                normal_map: None,
-                alpha: None,
-            },
+                alpha_cutoff,
+            } => {
+                let base_color = texture(base_color)?;
+                Material::Pbr {
+                    alpha: alpha_cutoff
+                        .map(|c| crate::shading::maps::AlphaMask::of_base_color(c.0, &base_color)),
+                    base_color,
+                    metallic: metallic.0,
+                    roughness: roughness.0,
+                    metallic_roughness: None,
+                    emissive: texture(emissive)?,
+                    emissive_strength: emissive_strength.0,
+                    normal_map: None,
+                }
+            }
         })
     }
 
