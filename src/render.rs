@@ -15,6 +15,7 @@ use crate::geometry::packed::{Geometry, Hit, HitKind, LayoutKind, Surface};
 use crate::geometry::ray::{Ray, gamma, spawn_origin};
 use crate::lights::{LightSet, Sampled};
 use crate::scene::format::{MAX_DEPTH, Method};
+use crate::shading::maps::NormalMap;
 use crate::shading::material::{Material, Scatter};
 use crate::shading::rng::Rng;
 use crate::shading::sampler::{IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};
@@ -307,8 +308,15 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
             });
             break;
         };
-        let s = view.geometry.surface(&ray, &hit);
+        let mut s = view.geometry.surface(&ray, &hit);
         let material = &view.materials[view.owner_material[s.owner as usize] as usize];
+        if let Material::Pbr {
+            normal_map: Some(map),
+            ..
+        } = material
+        {
+            s.ns = normal_mapped(view.geometry, &hit, &s, map);
+        }
         if features.is_none() && (!material.is_specular() || depth + 1 == view.max_depth) {
             let n = shading_normal(&s, material);
             features = Some(FeatureSample {
@@ -375,8 +383,23 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     (radiance, features.unwrap_or_default())
 }
 
-/// The normal a material shades with: the interpolated vertex normal of a smooth mesh, except
-/// for glass, whose refraction must follow the true surface to stay watertight.
+/// The shading normal of `s` perturbed by `map`, where the hit has a texture tangent (see
+/// [`Geometry::uv_tangent`]); `s.ns` elsewhere. Out of line: only normal-mapped hits get here.
+#[inline(never)]
+fn normal_mapped<L: Layout>(
+    geometry: &Geometry<L>,
+    hit: &Hit,
+    s: &Surface,
+    map: &NormalMap,
+) -> Vec3 {
+    geometry
+        .uv_tangent(hit)
+        .map_or(s.ns, |t| map.perturb(s.uv, s.n, s.ns, t.tangent, t.sign))
+}
+
+/// The normal a material shades with: the interpolated vertex normal of a smooth mesh (perturbed
+/// by a normal map, see [`normal_mapped`]), except for glass, whose refraction must follow the
+/// true surface to stay watertight.
 #[inline]
 fn shading_normal(s: &Surface, material: &Material) -> Vec3 {
     if matches!(material, Material::Dielectric { .. }) {

@@ -10,7 +10,7 @@ use glam::{Affine3A, Vec2, Vec3};
 
 use super::aabb::RayQuery;
 use super::bvh::{Bounds, Bvh};
-use super::packed::Surface;
+use super::packed::{Surface, Tangent, uv_derivatives};
 use super::ray::{Ray, gamma};
 use super::triangle::intersect_triangle;
 use crate::ecs::components::MeshData;
@@ -373,6 +373,27 @@ impl InstanceSet {
             uv,
             owner: inst.owner,
         }
+    }
+
+    /// The texture-space tangent frame of `triangle` of instance `instance` (see
+    /// [`Tangent`]): the object-space derivatives carried to world space by the placement's
+    /// linear part (they are tangent vectors), the handedness taken against the world normal
+    /// [`InstanceSet::surface`] reports, so a mirroring placement flips it. `None` for a mesh
+    /// without texture coordinates or a degenerate triangle of them.
+    pub fn uv_tangent(&self, instance: u32, triangle: u32) -> Option<Tangent> {
+        let inst = &self.instances[instance as usize];
+        let k = triangle as usize;
+        let uv = inst.blas.uvs.as_ref()?[k];
+        let [a, b, c] = inst.blas.triangles[k];
+        let (dpdu, dpdv) = uv_derivatives([a, b, c], uv)?;
+        let m = &inst.world_from_object;
+        let n =
+            inst.object_from_world.matrix3.transpose() * glam::Vec3A::from((b - a).cross(c - a));
+        Tangent::from_derivatives(
+            m.transform_vector3(dpdu),
+            m.transform_vector3(dpdv),
+            n.into(),
+        )
     }
 
     /// Absolute error bound of the world-space point [`InstanceSet::surface`] returns: the

@@ -644,9 +644,9 @@ pub enum MaterialDesc {
         #[serde(default)]
         two_sided: bool,
     },
-    /// `Pbr(base_color, metallic, roughness, emissive, emissive_strength)`: the glTF 2.0
-    /// metallic–roughness material, with glTF's defaults (base colour 1, metallic 1,
-    /// roughness 1, no emission, strength 1).
+    /// `Pbr(base_color, metallic, roughness, emissive, emissive_strength, normal_map)`: the
+    /// glTF 2.0 metallic–roughness material, with glTF's defaults (base colour 1, metallic 1,
+    /// roughness 1, no emission, strength 1, no normal map).
     Pbr {
         /// Base colour.
         #[serde(default = "white")]
@@ -663,11 +663,39 @@ pub enum MaterialDesc {
         /// Scale of `emissive`.
         #[serde(default = "one")]
         emissive_strength: NonNegative,
+        /// Tangent-space normal map (none by default).
+        #[serde(default)]
+        normal_map: Option<NormalMapDesc>,
         /// Alpha mask (glTF's `alphaMode: MASK`): where the alpha of the `base_color` image is
         /// below this cutoff the surface is absent and rays pass through it. No mask by default.
         #[serde(default)]
         alpha_cutoff: Option<NonNegative>,
     },
+}
+
+/// `NormalMap(path: "n.png", scale: 1.0, filter: Nearest, wrap: Clamp)`: a tangent-space normal
+/// map, relative to the scene file, decoded as linear data; the texel's RGB encodes the normal
+/// `2·rgb − 1` in the frame (tangent ∂p/∂u, bitangent, shading normal), x and y scaled by
+/// `scale`. Tangents come from the triangles' texture coordinates, so it acts on triangles,
+/// quads, boxes and meshes with texture coordinates, not on spheres and planes.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, rename = "NormalMap")]
+pub struct NormalMapDesc {
+    /// Path to an image file.
+    pub path: String,
+    /// Scale of the map's x and y (1, the default, as drawn; 0 flattens it).
+    #[serde(default = "one_real")]
+    pub scale: Real,
+    /// `Nearest` (the default) or `Bilinear`.
+    #[serde(default)]
+    pub filter: Filter,
+    /// `Clamp` (the default), `Repeat` or `MirroredRepeat`.
+    #[serde(default)]
+    pub wrap: Wrap,
+}
+
+fn one_real() -> Real {
+    Real(1.0)
 }
 
 fn white() -> TextureDesc {

@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 
 use super::texture::{ImageTexture, Sampling, Texture};
 
@@ -15,6 +15,34 @@ pub struct NormalMap {
     pub texture: Texture,
     /// Scale of the map's x and y (glTF's `normalTexture.scale`).
     pub scale: f32,
+}
+
+impl NormalMap {
+    /// The shading normal at `uv` perturbed by the map: `normalize(T·x·scale + B·y·scale + N·z)`
+    /// with `(x, y, z) = 2·texel − 1`, in the frame of `N` = the unit shading normal `ns`, `T` =
+    /// the unit texture tangent `tangent` (∂p/∂u) orthogonalised against `ns` (Gram–Schmidt)
+    /// and `B = sign · N × T` (`sign` = −1 where the texture is mirrored). A result below the
+    /// surface of unit geometric normal `n` is mirrored at it, to stay on `n`'s side as shading
+    /// normals do; `ns` itself comes back when the frame or the result is degenerate (zero, or
+    /// in the surface's plane) or not finite.
+    #[inline]
+    pub fn perturb(&self, uv: Vec2, n: Vec3, ns: Vec3, tangent: Vec3, sign: f32) -> Vec3 {
+        let Some(t) = (tangent - ns * ns.dot(tangent)).try_normalize() else {
+            return ns;
+        };
+        let b = sign * ns.cross(t);
+        let m = 2.0 * self.texture.eval(uv) - Vec3::ONE;
+        let Some(p) = (t * (m.x * self.scale) + b * (m.y * self.scale) + ns * m.z).try_normalize()
+        else {
+            return ns;
+        };
+        let p = if p.dot(n) < 0.0 {
+            p - 2.0 * p.dot(n) * n
+        } else {
+            p
+        };
+        if p.dot(n) > 0.0 { p } else { ns }
+    }
 }
 
 /// An alpha mask: the surface is present where `factor · alpha(uv) ≥ cutoff`; rays pass

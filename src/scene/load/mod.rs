@@ -383,6 +383,7 @@ impl Expander<'_> {
                 roughness,
                 emissive,
                 emissive_strength,
+                normal_map,
                 alpha_cutoff,
             } => {
                 let base_color = texture(base_color)?;
@@ -395,9 +396,43 @@ impl Expander<'_> {
                     metallic_roughness: None,
                     emissive: texture(emissive)?,
                     emissive_strength: emissive_strength.0,
-                    normal_map: None,
+                    normal_map: match normal_map {
+                        None => None,
+                        Some(desc) => {
+                            Some(self.normal_map(desc, file.dir()).map_err(|(p, msg)| {
+                                file.error(
+                                    Anchor::Quoted(name),
+                                    Some(&p),
+                                    format!("material \"{name}\": normal_map: {msg}"),
+                                )
+                            })?)
+                        }
+                    },
                 }
             }
+        })
+    }
+
+    /// Loads the normal map `desc` relative to `dir` as linear data (a dependency). Errors carry
+    /// the path text.
+    fn normal_map(
+        &mut self,
+        desc: &super::format::NormalMapDesc,
+        dir: &Path,
+    ) -> Result<crate::shading::maps::NormalMap, (String, String)> {
+        let full = dir.join(&desc.path);
+        self.depend(&full);
+        let image = self
+            .assets
+            .image(&full, super::assets::Encoding::Linear)
+            .map_err(|e| (desc.path.clone(), format!("{}: {e}", full.display())))?;
+        let sampling = Sampling {
+            filter: desc.filter,
+            wrap: [desc.wrap; 2],
+        };
+        Ok(crate::shading::maps::NormalMap {
+            texture: Texture::Image(image, sampling),
+            scale: desc.scale.0,
         })
     }
 
