@@ -133,6 +133,47 @@ fn a_mask_between_a_plane_and_the_sun_lets_through_its_open_fraction() {
     }
 }
 
+#[test]
+fn a_masked_emitter_lights_only_from_its_present_points() {
+    let dir = temp_dir("alpha-emitter");
+    // The lattice of the shadow test on an emitter of radiance 2 (from both sides), a 2 × 2
+    // square at height 1 over the plane: by the same symmetry, the plane's point under a
+    // texel corner receives exactly the present three quarters of what the whole square
+    // would send. Light sampling picks points on the whole square; those where the mask is
+    // absent must send nothing.
+    write_rgba(&dir, "lattice.png", (64, 64), [0, 0, 0], |x, y| {
+        if x % 2 == 0 && y % 2 == 0 { 0 } else { 255 }
+    });
+    let present = 0.75;
+    // Form factor from a point to a parallel rectangle X·h by Y·h with a corner above it, at
+    // height h: (X/√(1+X²)·atan(Y/√(1+X²)) + Y/√(1+Y²)·atan(X/√(1+Y²))) / 2π; the square is
+    // four such rectangles with X = Y = 1. Irradiance = L·π·F.
+    let corner = 2.0 * (0.5f64.sqrt() * (0.5f64.sqrt()).atan()) / (2.0 * PI);
+    let e = 2.0 * PI * 4.0 * corner;
+    let expected = 0.8 / PI * present * e;
+    let scene = write_scene(
+        &dir,
+        "emitter.ron",
+        &format!(
+            "Scene(camera: {}, settings: Settings(width: 32, height: 32, max_depth: 2), \
+             materials: {{ \"ground\": Diffuse(albedo: Constant((0.8, 0.8, 0.8))), \
+               \"panel\": Pbr(base_color: Image(path: \"lattice.png\"), emissive: Constant((2, 2, 2)), \
+                 alpha_cutoff: 0.5) }}, \
+             entities: [ \
+               Entity(material: \"ground\", shape: Plane(point: (0, 0, 0), normal: (0, 1, 0))), \
+               Entity(material: \"panel\", shape: Quad(a: (-1, 1, -1), b: (1, 1, -1), c: (1, 1, 1), d: (-1, 1, 1))) ])",
+            point_camera("(3, 0.5, 2)", "(0, 0, 0)", "(0, 1, 0)")
+        ),
+    );
+    for method in [Method::Naive, Method::Nee, Method::Mis] {
+        let (mean, se) = point_estimate(&render(&scene, with(method, 256), None));
+        assert!(
+            within(mean, se, expected, 3.5) && (mean / expected - 1.0).abs() < 0.03,
+            "{method}: {mean} ± {se}, expected {expected}"
+        );
+    }
+}
+
 /// The Cornell box (scenes/cornell.ron) with a glass ball and, if `ghosts`, two masked quads
 /// across it that are absent everywhere: one whose image has alpha 0 in every texel, one whose
 /// cutoff is above any alpha.
