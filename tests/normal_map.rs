@@ -410,3 +410,48 @@ fn perturb_orthogonalises_the_tangent_mirrors_what_falls_below_and_falls_back_wh
     assert_eq!(p(&map(1.0, 0.0, 0.0, 1.0), n, Vec3::X, 1.0), n);
     assert_eq!(p(&map(0.6, 0.0, 0.8, f32::NAN), ns, Vec3::X, 1.0), ns);
 }
+
+#[test]
+fn a_gltf_normal_texture_tilts_the_normal_as_the_gltf_convention_says() {
+    use common::gltf_doc::{Bin, doc};
+    use serde_json::json;
+    let dir = temp_dir("normal-map-gltf");
+    // glTF's convention: the map's red along +u, green towards the image's top (+Y up), the
+    // values linear. The quad over [−1, 1]² faces +z with u along +x and the image's top at
+    // y = 1 (glTF's v runs down the image), so the frame is (x, y, z).
+    let bytes = encode(DVec3::new(-0.4, 0.5, 0.77));
+    write_map(&dir, "n.png", bytes);
+    let mut bin = Bin::default();
+    let v = bin.f32s(&[
+        -1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 1.0, 1.0, 0.0, -1.0, 1.0, 0.0,
+    ]);
+    let uv = bin.f32s(&[0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0]);
+    let i = bin.u16s(&[0, 1, 2, 0, 2, 3]);
+    let parts = json!({
+        "accessors": [
+            {"bufferView": v, "componentType": 5126, "count": 4, "type": "VEC3"},
+            {"bufferView": uv, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": i, "componentType": 5123, "count": 6, "type": "SCALAR"},
+        ],
+        "images": [{"uri": "n.png"}],
+        "textures": [{"source": 0}],
+        "materials": [{"name": "bumpy", "normalTexture": {"index": 0, "scale": 0.5},
+            "pbrMetallicRoughness": {"metallicFactor": 0.0}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+        "nodes": [{"name": "quad", "mesh": 0}],
+        "scenes": [{"nodes": [0]}],
+    });
+    std::fs::write(dir.join("quad.gltf"), doc(&bin, parts).to_string()).expect("gltf written");
+    let source = r#"Scene(
+        camera: Camera(position: (0, 0, 3), look_at: (0, 0, 0), fov: 30),
+        settings: Settings(width: 8, height: 8, spp: 4, max_depth: 2, method: Naive),
+        entities: [Entity(name: "m", gltf: "quad.gltf")],
+    )"#;
+    let expected = mapped(bytes, 0.5, [DVec3::X, DVec3::Y, DVec3::Z]);
+    for (i, got) in normals(&dir, source).iter().enumerate() {
+        assert!(
+            (got.as_dvec3() - expected).length() < 1e-4,
+            "pixel {i} has normal {got}, expected {expected}"
+        );
+    }
+}

@@ -676,8 +676,9 @@ pub enum MaterialDesc {
 /// `NormalMap(path: "n.png", scale: 1.0, filter: Nearest, wrap: Clamp)`: a tangent-space normal
 /// map, relative to the scene file, decoded as linear data; the texel's RGB encodes the normal
 /// `2·rgb − 1` in the frame (tangent ∂p/∂u, bitangent, shading normal), x and y scaled by
-/// `scale`. Tangents come from the triangles' texture coordinates, so it acts on triangles,
-/// quads, boxes and meshes with texture coordinates, not on spheres and planes.
+/// `scale`; green points towards the image's top (OpenGL's convention, glTF's). Tangents come
+/// from the triangles' texture coordinates, so it acts on triangles, quads, boxes and meshes
+/// with texture coordinates, not on spheres and planes.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, rename = "NormalMap")]
 pub struct NormalMapDesc {
