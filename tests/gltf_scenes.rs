@@ -326,3 +326,181 @@ fn external_buffers_and_images_are_dependencies() {
     load_scene(&path, &mut assets).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(assets.mesh_loads(), loads + 1);
 }
+
+#[test]
+fn masks_blend_transmission_cameras_and_lights_load_as_documented() {
+    let dir = temp_dir("gltf-kinds");
+    let mut bin = Bin::default();
+    let v = bin.f32s(&TRIANGLE);
+    let mut parts = json!({
+        "extensionsUsed": ["KHR_materials_transmission", "KHR_materials_ior", "KHR_lights_punctual"],
+        "accessors": [{"bufferView": v, "componentType": 5126, "count": 3, "type": "VEC3"}],
+        "materials": [
+            {"name": "leaf", "alphaMode": "MASK", "alphaCutoff": 0.3,
+             "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 0.8]}},
+            {"name": "veil", "alphaMode": "BLEND"},
+            {"name": "glass", "pbrMetallicRoughness": {"metallicFactor": 0.0, "roughnessFactor": 0.0},
+             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0},
+                            "KHR_materials_ior": {"ior": 1.33}}},
+        ],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]},
+            {"primitives": [{"attributes": {"POSITION": 0}, "material": 1}]},
+            {"primitives": [{"attributes": {"POSITION": 0}, "material": 2}]},
+        ],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}],
+        "nodes": [{"name": "l", "mesh": 0}, {"name": "v", "mesh": 1}, {"name": "g", "mesh": 2}],
+        "scenes": [{"nodes": [0, 1, 2]}],
+    });
+    parts["nodes"][0]["camera"] = json!(0);
+    std::fs::write(dir.join("k.gltf"), doc(&bin, parts).to_string()).expect("write");
+    let path = write_scene(&dir, "scene.ron", &placing("k.gltf", "{}"));
+    let scene = load_scene(&path, &mut AssetCache::default()).unwrap_or_else(|e| panic!("{e}"));
+    let material = |k: usize| &scene.materials[&scene.entities[k].material];
+    let alpha = |k: usize| match material(k) {
+        Material::Pbr { alpha, .. } => alpha.clone().map(|a| (a.cutoff, a.factor)),
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(alpha(0), Some((0.3, 0.8)), "MASK keeps its cutoff and factor");
+    assert_eq!(alpha(1), Some((0.5, 1.0)), "BLEND is a mask at 0.5");
+    assert_eq!(material(2), &Material::Dielectric { ior: 1.33 });
+    let warned = |what: &str| scene.warnings.iter().any(|w| w.contains(what));
+    for what in ["BLEND", "transmission", "cameras", "punctual lights"] {
+        assert!(warned(what), "no warning about {what}: {:?}", scene.warnings);
+    }
+    assert!(scene.warnings.iter().all(|w| w.contains("k.gltf")));
+}
+
+#[test]
+fn hostile_gltf_placements_never_panic() {
+    let dir = temp_dir("gltf-fuzz");
+    let mut bin = Bin::default();
+    let png = bin.view(texture_png());
+    let parts = textured_quad(
+        &mut bin,
+        9729,
+        json!({"bufferView": png, "mimeType": "image/png"}),
+    );
+    let good = glb(&bin, parts);
+    let path = write_scene(
+        &dir,
+        "scene.ron",
+        r#"Scene(camera: Camera(position: (0, 0, 2), look_at: (0, 0, 0)),
+                 entities: [Entity(name: "m", gltf: "m.glb")])"#,
+    );
+    let mut rng = rondo::shading::rng::Rng::new(23, 5);
+    let (mut loaded, mut refused) = (0, 0);
+    for round in 0..3000 {
+        let mut bytes = good.clone();
+        match round % 3 {
+            0 => bytes.truncate(rng.next_u32() as usize % good.len()),
+            _ => {
+                for _ in 0..1 + rng.next_u32() % 8 {
+                    let at = rng.next_u32() as usize % bytes.len();
+                    bytes[at] = rng.next_u32() as u8;
+                }
+            }
+        }
+        std::fs::write(dir.join("m.glb"), &bytes).expect("write");
+        // A fresh cache: every round decodes its images.
+        match load_scene(&path, &mut AssetCache::default()) {
+            Ok(_) => loaded += 1,
+            Err(e) => {
+                assert!(e.to_string().contains("m.glb"), "{e}");
+                refused += 1;
+            }
+        }
+    }
+    assert!(loaded > 0 && refused > 0, "{loaded} loaded, {refused} refused");
+}
+
+/// Every path to a value inside `v` (object keys and array indices).
+fn paths(v: &Value, at: Vec<Value>, out: &mut Vec<Vec<Value>>) {
+    match v {
+        Value::Object(m) => {
+            for (k, c) in m {
+                let mut p = at.clone();
+                p.push(json!(k));
+                out.push(p.clone());
+                paths(c, p, out);
+            }
+        }
+        Value::Array(a) => {
+            for (i, c) in a.iter().enumerate() {
+                let mut p = at.clone();
+                p.push(json!(i));
+                out.push(p.clone());
+                paths(c, p, out);
+            }
+        }
+        _ => {}
+    }
+}
+
+/// `v` with the value at `path` removed (`None`) or replaced.
+fn edited(v: &Value, path: &[Value], with: Option<Value>) -> Value {
+    let mut v = v.clone();
+    let mut slot = &mut v;
+    for key in &path[..path.len() - 1] {
+        slot = match key {
+            Value::String(k) => &mut slot[k.as_str()],
+            _ => &mut slot[key.as_u64().unwrap_or_default() as usize],
+        };
+    }
+    let last = &path[path.len() - 1];
+    match (slot, last, with) {
+        (Value::Object(m), Value::String(k), None) => {
+            m.remove(k);
+        }
+        (Value::Array(a), _, None) => {
+            a.remove(last.as_u64().unwrap_or_default() as usize);
+        }
+        (slot, Value::String(k), Some(w)) => slot[k.as_str()] = w,
+        (slot, _, Some(w)) => slot[last.as_u64().unwrap_or_default() as usize] = w,
+        _ => {}
+    }
+    v
+}
+
+#[test]
+fn every_field_removed_or_replaced_loads_or_is_refused() {
+    let dir = temp_dir("gltf-fields");
+    let mut bin = Bin::default();
+    let png = bin.view(texture_png());
+    let mut parts = textured_quad(
+        &mut bin,
+        9729,
+        json!({"bufferView": png, "mimeType": "image/png"}),
+    );
+    parts["materials"][0]["normalTexture"] = json!({"index": 0, "scale": 0.5});
+    parts["materials"][0]["alphaMode"] = json!("MASK");
+    let path = write_scene(
+        &dir,
+        "scene.ron",
+        r#"Scene(camera: Camera(position: (0, 0, 2), look_at: (0, 0, 0)),
+                 entities: [Entity(name: "m", gltf: "m.gltf")])"#,
+    );
+    let document = doc(&bin, parts);
+    let mut all = Vec::new();
+    paths(&document, Vec::new(), &mut all);
+    let replacements = [
+        None,
+        Some(json!(-1)),
+        Some(json!(1e10)),
+        Some(json!(4_294_967_295u64)),
+        Some(json!("x")),
+        Some(json!([])),
+    ];
+    let mut refused = 0;
+    for p in &all {
+        for with in &replacements {
+            let text = edited(&document, p, with.clone()).to_string();
+            std::fs::write(dir.join("m.gltf"), text).expect("write");
+            if let Err(e) = load_scene(&path, &mut AssetCache::default()) {
+                assert!(e.to_string().contains("m.gltf"), "{p:?}: {e}");
+                refused += 1;
+            }
+        }
+    }
+    assert!(refused > all.len(), "{refused} of {} edits refused", 6 * all.len());
+}

@@ -59,10 +59,17 @@ impl Fixture {
 
     /// Writes `files` (solid-colour PNGs) and `scene.ron`, and starts watching.
     fn open(name: &str, text: &str, files: &[(&str, [u8; 3])]) -> Self {
+        Self::open_with(name, text, |dir| {
+            for (file, rgb) in files {
+                write_png(&dir.join(file), *rgb);
+            }
+        })
+    }
+
+    /// Lets `write` fill the directory, writes `scene.ron`, and starts watching.
+    fn open_with(name: &str, text: &str, write: impl FnOnce(&Path)) -> Self {
         let dir = common::temp_dir(&format!("watch-{name}"));
-        for (file, rgb) in files {
-            write_png(&dir.join(file), *rgb);
-        }
+        write(&dir);
         let scene = dir.join("scene.ron");
         std::fs::write(&scene, text).expect("write scene");
         let out = dir.join("out.png");
@@ -361,6 +368,72 @@ fn texture_edit_rerenders_and_decodes_only_that_texture() {
     assert!(!r.bvh_rebuilt, "{r}");
     assert!(r.trigger.iter().any(|p| p.ends_with("wall.png")), "{r:?}");
     assert_eq!(f.centre(), [0, 0, 255]);
+}
+
+/// The buffer `quad.bin` of [`write_gltf_quad`]'s quad, moved by `dx` along x.
+fn write_quad_buffer(dir: &Path, dx: f32) -> usize {
+    let positions = [-2.0, -2.0, 5.0, 2.0, -2.0, 5.0, 2.0, 2.0, 5.0, -2.0, 2.0, 5.0f32];
+    let mut bytes: Vec<u8> = positions
+        .iter()
+        .enumerate()
+        .flat_map(|(k, p)| (if k % 3 == 0 { p + dx } else { *p }).to_le_bytes())
+        .collect();
+    let uvs = [0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0f32];
+    bytes.extend(uvs.iter().flat_map(|v| v.to_le_bytes()));
+    bytes.extend([0u16, 1, 2, 0, 2, 3].iter().flat_map(|v| v.to_le_bytes()));
+    std::fs::write(dir.join("quad.bin"), &bytes).expect("write buffer");
+    bytes.len()
+}
+
+/// A glTF quad over [−2, 2]² at z = 5, its buffer in `quad.bin`, emitting its emissive texture
+/// `t.png` over a black conductor base, so a pixel seeing it shows the texel exactly.
+fn write_gltf_quad(dir: &Path) {
+    let length = write_quad_buffer(dir, 0.0);
+    let gltf = format!(
+        r#"{{"asset": {{"version": "2.0"}},
+        "buffers": [{{"uri": "quad.bin", "byteLength": {}}}],
+        "bufferViews": [{{"buffer": 0, "byteLength": 48}}, {{"buffer": 0, "byteOffset": 48, "byteLength": 32}},
+                        {{"buffer": 0, "byteOffset": 80, "byteLength": 12}}],
+        "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"}},
+                      {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"}},
+                      {{"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}}],
+        "images": [{{"uri": "t.png"}}], "textures": [{{"source": 0}}],
+        "materials": [{{"name": "screen", "emissiveFactor": [1, 1, 1], "emissiveTexture": {{"index": 0}},
+                        "pbrMetallicRoughness": {{"baseColorFactor": [0, 0, 0, 1]}}}}],
+        "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "TEXCOORD_0": 1}}, "indices": 2, "material": 0}}]}}],
+        "nodes": [{{"name": "quad", "mesh": 0}}], "scenes": [{{"nodes": [0]}}]}}"#,
+        length
+    );
+    std::fs::write(dir.join("quad.gltf"), gltf).expect("write glTF");
+}
+
+#[test]
+fn gltf_texture_edit_skips_the_bvh_and_a_buffer_edit_rebuilds_it() {
+    let text = r#"Scene(
+    camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0), fov: 40.0),
+    settings: Settings(width: 32, height: 32, spp: 4, max_depth: 3),
+    entities: [Entity(name: "model", gltf: "quad.gltf")],
+)"#;
+    let f = Fixture::open_with("gltf", text, |dir| {
+        write_png(&dir.join("t.png"), [255, 0, 0]);
+        write_gltf_quad(dir);
+    });
+    let first = f.rendered();
+    assert!(first.bvh_rebuilt);
+    assert_eq!(f.centre(), [255, 0, 0]);
+
+    write_png(&f.dir.join("t.png"), [0, 0, 255]);
+    let r = f.rendered();
+    assert_eq!(r.textures_decoded, 1, "{r}");
+    assert!(!r.bvh_rebuilt, "{r}");
+    assert_eq!(f.centre(), [0, 0, 255]);
+
+    // Moving the quad out of the centre's view through its buffer file.
+    write_quad_buffer(&f.dir, 10.0);
+    let r = f.rendered();
+    assert!(r.bvh_rebuilt, "{r}");
+    assert!(r.trigger.iter().any(|p| p.ends_with("quad.bin")), "{r:?}");
+    assert_eq!(f.centre(), [0, 0, 0]);
 }
 
 #[test]

@@ -9,11 +9,13 @@
 //!
 //! Supported: triangles (indexed or not; strips and fans converted), `POSITION`, `NORMAL` (flat
 //! shading when absent: [`MeshData::normals`] is `None`), `TEXCOORD_0` (float or normalised
-//! integers; stored as `(u, 1 − v)`, rondo's v pointing up the image), sparse accessors, accessors without a buffer view (zeros), TRS and matrix node
-//! transforms, the metallic–roughness material with its textures, `KHR_materials_emissive_strength`
-//! and `KHR_mesh_quantization`. Skipped with a warning: points and lines, skins, morph targets.
-//! Ignored: cameras, lights, animations, vertex colours, tangents. Any other extension listed in
-//! `extensionsRequired` is an error naming it.
+//! integers; stored as `(u, 1 − v)`, rondo's v pointing up the image), sparse accessors,
+//! accessors without a buffer view (zeros), TRS and matrix node transforms, the
+//! metallic–roughness material with its textures, `KHR_materials_emissive_strength`,
+//! `KHR_materials_transmission`, `KHR_materials_ior` and `KHR_mesh_quantization`. Skipped with a
+//! warning: points and lines, morph targets, skins, cameras, punctual lights. Ignored:
+//! animations, vertex colours, tangents (normal maps derive them from texture coordinates). Any
+//! other extension listed in `extensionsRequired` is an error naming it.
 
 use std::path::Path;
 use std::sync::Arc;
@@ -269,29 +271,47 @@ fn read(
             primitives,
         });
     }
-    for image in doc.images() {
-        let i = image.index();
-        scene.images.push(match image.source() {
-            gltf::image::Source::View { view, mime_type } => GltfImage::Bytes {
-                bytes: view_bytes(&view, &buffers)
-                    .map_err(|e| format!("image {i}: {e}"))?
-                    .to_vec(),
-                mime_type: mime_type.to_owned(),
-            },
-            gltf::image::Source::Uri { uri, mime_type } => match decode_data_uri(uri) {
+    // Read from the JSON: the crate's `Image::source` unwraps a missing `mimeType` or `uri`.
+    let views: Vec<gltf::buffer::View> = doc.views().collect();
+    for (i, image) in doc.as_json().images.iter().enumerate() {
+        let mime_type = image.mime_type.as_ref().map(|m| m.0.clone());
+        scene.images.push(match (&image.buffer_view, &image.uri) {
+            (Some(view), _) => {
+                let view = views
+                    .get(view.value())
+                    .ok_or_else(|| format!("image {i}: buffer view {} does not exist", view.value()))?;
+                GltfImage::Bytes {
+                    bytes: view_bytes(view, &buffers)
+                        .map_err(|e| format!("image {i}: {e}"))?
+                        .to_vec(),
+                    mime_type: mime_type.unwrap_or_default(),
+                }
+            }
+            (None, Some(uri)) => match decode_data_uri(uri) {
                 Some(r) => {
                     let (bytes, mime) = r.map_err(|e| format!("image {i}: {e}"))?;
                     GltfImage::Bytes {
                         bytes,
-                        mime_type: mime_type.map_or(mime, str::to_owned),
+                        mime_type: mime_type.unwrap_or(mime),
                     }
                 }
                 None => GltfImage::File(relative_uri(uri).map_err(|e| format!("image {i}: {e}"))?),
             },
+            (None, None) => return Err(format!("image {i}: neither a uri nor a bufferView")),
         });
     }
     for m in doc.materials() {
         scene.materials.push(read_material(&m)?);
+    }
+    if doc.cameras().next().is_some() {
+        scene
+            .warnings
+            .push("cameras are ignored (the scene's camera is used)".into());
+    }
+    if doc.extensions_used().any(|e| e == "KHR_lights_punctual") {
+        scene
+            .warnings
+            .push("punctual lights (KHR_lights_punctual) are ignored".into());
     }
     let roots = doc.default_scene().or_else(|| doc.scenes().next());
     if let Some(root) = roots {

@@ -156,7 +156,9 @@ impl Expander<'_> {
                                     let gltf_material = prim.material.map(|i| &materials[i]);
                                     let material = self
                                         .gltf_material(&asset, &full, gltf_material, label)
-                                        .map_err(|m| fail(Some(gltf), m))?;
+                                        .map_err(|m| {
+                                            fail(Some(gltf), format!("glTF {}: {m}", full.display()))
+                                        })?;
                                     self.materials.insert(key.clone(), material);
                                     self.material_origins
                                         .insert(key.clone(), (file.id, label.to_owned()));
@@ -194,7 +196,10 @@ impl Expander<'_> {
                     named: false,
                     ..origin
                 };
-                self.push_entity(file, at, placed, origin)?;
+                self.push_entity(file, at, placed, origin).map_err(|mut e| {
+                    e.message = format!("{} (from {})", e.message, full.display());
+                    e
+                })?;
             }
         }
         // Node names may hold `/`: the qualified names are checked for collisions.
