@@ -504,3 +504,28 @@ fn every_field_removed_or_replaced_loads_or_is_refused() {
     }
     assert!(refused > all.len(), "{refused} of {} edits refused", 6 * all.len());
 }
+
+#[test]
+fn an_embedded_jpeg_is_read() {
+    let dir = temp_dir("gltf-jpeg");
+    let mut jpeg = Vec::new();
+    image::RgbImage::from_pixel(8, 8, image::Rgb([200, 100, 50]))
+        .write_to(
+            &mut std::io::Cursor::new(&mut jpeg),
+            image::ImageFormat::Jpeg,
+        )
+        .expect("encode");
+    let mut bin = Bin::default();
+    let view = bin.view(jpeg);
+    let parts = textured_quad(
+        &mut bin,
+        9728,
+        json!({"bufferView": view, "mimeType": "image/jpeg"}),
+    );
+    std::fs::write(dir.join("quad.glb"), glb(&bin, parts)).expect("write");
+    let albedo = albedo_of_quad(&dir, "quad.glb");
+    // A flat colour survives JPEG within a step or two of 255.
+    let expected = Vec3::new(200.0, 100.0, 50.0).map(|b| srgb_to_linear(b / 255.0));
+    let got = albedo[16 * 32 + 16];
+    assert!((got - expected).abs().max_element() < 0.01, "{got} against {expected}");
+}

@@ -308,10 +308,13 @@ fn read(
             .warnings
             .push("cameras are ignored (the scene's camera is used)".into());
     }
-    if doc.extensions_used().any(|e| e == "KHR_lights_punctual") {
-        scene
-            .warnings
-            .push("punctual lights (KHR_lights_punctual) are ignored".into());
+    for ext in doc.extensions_used() {
+        if !SUPPORTED_REQUIRED.contains(&ext) {
+            scene.warnings.push(match ext {
+                "KHR_lights_punctual" => "punctual lights (KHR_lights_punctual) are ignored".into(),
+                other => format!("extension {other} is ignored"),
+            });
+        }
     }
     let roots = doc.default_scene().or_else(|| doc.scenes().next());
     if let Some(root) = roots {
