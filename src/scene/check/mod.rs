@@ -441,7 +441,10 @@ fn albedo_above_one(scene: &LoadedScene, out: &mut Out) {
         let albedo = match m {
             Material::Diffuse { albedo }
             | Material::Metal { albedo, .. }
-            | Material::Glossy { albedo, .. } => albedo,
+            | Material::Glossy { albedo, .. }
+            | Material::Pbr {
+                base_color: albedo, ..
+            } => albedo,
             _ => continue,
         };
         let max = albedo.max_channel();
@@ -841,6 +844,29 @@ mod tests {
         assert!(w[0].message.contains("\"bent\""));
         assert!(w[1].message.contains("\"spare\""));
         assert!(w[2].message.contains("\"hot\"") && w[2].message.contains("1.5"));
+    }
+
+    #[test]
+    fn a_pbr_base_colour_above_one_is_reported() {
+        let pbr = |c: f32| Material::Pbr {
+            base_color: Texture::Constant(Vec3::new(0.5, c, 0.5)),
+            metallic: 0.0,
+            roughness: 0.5,
+            metallic_roughness: None,
+            emissive: Texture::Constant(Vec3::ZERO),
+            emissive_strength: 1.0,
+            normal_map: None,
+            alpha: None,
+        };
+        let sphere = Shape::Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        };
+        let with = |c: f32| scene(&[("p", pbr(c))], vec![("ball", "p", sphere.clone(), ID)]);
+        let w = check_scene(&with(1.25));
+        assert_eq!(kinds(&w), vec![WarningKind::AlbedoAboveOne], "{w:?}");
+        assert!(w[0].message.contains("1.25"), "{w:?}");
+        assert_eq!(check_scene(&with(1.0)), vec![]);
     }
 
     #[test]
