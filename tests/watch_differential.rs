@@ -1,5 +1,5 @@
 //! Differential test of live editing: random sequences of edits (scene, prefab, mesh, texture,
-//! environment map and directory operations, valid and broken, saved in the ways editors save,
+//! environment map, glTF model (its file, buffer and image) and directory operations, valid and broken, saved in the ways editors save,
 //! with random gaps of 0–100 ms) are played against a running watch; after each sequence the
 //! watch must show what a fresh render of the files on disk shows: the same pixels, or the same
 //! error. The scene is sometimes lit by an environment map (`env/sky.exr` or `env/sky.hdr`) and
@@ -37,6 +37,41 @@ const MESHES: [&str; 2] = [
     "v -2 -2 0\nv 2 -2 0\nv 9 3 0\nf 1 2 3\n",
 ];
 const BROKEN_MESH: &str = "v 0 0 0\nf 1 2 9\n";
+
+/// Two buffers of `models/m.gltf` of one byte count: a triangle over the centre, or aside (three
+/// positions, then three texture coordinates).
+fn gltf_buffer(variant: Option<usize>) -> Vec<u8> {
+    let dx = match variant {
+        Some(v) => [0.0, 3.0][v % 2],
+        None => return b"short".to_vec(),
+    };
+    let floats = [
+        -1.0 + dx, -1.0, 2.0, 1.0 + dx, -1.0, 2.0, dx, 1.0, 2.0, 0.0, 1.0, 1.0, 1.0, 0.5, 0.0f32,
+    ];
+    floats.iter().flat_map(|f| f.to_le_bytes()).collect()
+}
+
+/// `models/m.gltf`: the triangle of [`gltf_buffer`] emitting `COLOURS[v]` times its emissive
+/// texture `img.png`, placed by a node translated by 0 or 0.5 along y; or not JSON.
+fn gltf_text(variant: Option<usize>) -> String {
+    let Some(v) = variant else {
+        return "{ \"asset\": ".into();
+    };
+    let (colour, dy) = (COLOURS[v % COLOURS.len()].0, [0.0, 0.5][v / COLOURS.len() % 2]);
+    let colour = colour.trim_matches(|c| c == '(' || c == ')');
+    format!(
+        r#"{{"asset": {{"version": "2.0"}},
+ "buffers": [{{"uri": "m.bin", "byteLength": 60}}],
+ "bufferViews": [{{"buffer": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 24}}],
+ "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"}},
+               {{"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}}],
+ "images": [{{"uri": "img.png"}}], "textures": [{{"source": 0}}],
+ "materials": [{{"name": "glow", "emissiveFactor": [{colour}], "emissiveTexture": {{"index": 0}},
+                 "pbrMetallicRoughness": {{"baseColorFactor": [0.3, 0.3, 0.3, 1], "metallicFactor": 0}}}}],
+ "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "TEXCOORD_0": 1}}, "material": 0}}]}}],
+ "nodes": [{{"name": "tri", "mesh": 0, "translation": [0, {dy}, 0]}}], "scenes": [{{"nodes": [0]}}]}}"#
+    )
+}
 
 /// The environment map files in `env/`: OpenEXR and Radiance, each written in its own format.
 const MAP_FILES: [&str; 2] = ["sky.exr", "sky.hdr"];
@@ -89,6 +124,8 @@ struct SceneText {
     textured: bool,
     /// The mesh entity `meshes/tri.obj` is in the scene.
     mesh: bool,
+    /// The glTF model `models/m.gltf` is placed in the scene.
+    gltf: bool,
     /// The ball comes before the wall.
     swapped: bool,
     /// Samples per pixel (1 or 4).
@@ -112,6 +149,7 @@ impl SceneText {
             wall_prefab: rng.chance(40),
             textured: rng.chance(40),
             mesh: rng.chance(40),
+            gltf: rng.chance(40),
             swapped: rng.chance(30),
             spp: if rng.chance(20) { 1 } else { 4 },
             environment: rng.chance(50).then(|| EnvText {
@@ -147,6 +185,9 @@ impl SceneText {
                 r#"Entity(name: "tri", material: "tri", shape: Mesh(path: "meshes/tri.obj"))"#
                     .into(),
             );
+        }
+        if self.gltf {
+            entities.push(r#"Entity(name: "model", gltf: "models/m.gltf")"#.into());
         }
         let albedo = if self.textured {
             r#"Image(path: "tex/ball.png")"#
@@ -275,7 +316,7 @@ impl Save {
 }
 
 /// The directories the scene's files live in.
-const DIRS: [&str; 4] = ["prefabs", "tex", "meshes", "env"];
+const DIRS: [&str; 5] = ["prefabs", "tex", "meshes", "env", "models"];
 
 /// One edit.
 #[derive(Clone, Debug)]
@@ -294,6 +335,12 @@ enum Op {
     Map(usize, MapBytes, Save),
     /// `rm env/MAP_FILES[file]`.
     RemoveMap(usize),
+    /// `models/m.gltf`: a variant of [`gltf_text`], or broken.
+    Gltf(Option<usize>, Save),
+    /// `models/m.bin`: a variant of [`gltf_buffer`], or too short.
+    GltfBuffer(Option<usize>, Save),
+    /// `models/img.png`: a colour, or not an image.
+    GltfImage(Option<usize>, Save),
     /// `linked/real.exr` of a pattern, and `env/sky.exr` made a symlink to it (later in-place
     /// writes of the map then edit the target, in another directory).
     LinkMap(usize),
@@ -425,6 +472,11 @@ fn dir_file(d: usize, v: usize) -> (&'static str, Vec<u8>) {
             MAP_FILES[0],
             map_bytes(0, MapBytes::Valid(v % MAP_PATTERNS, v % MAP_SIZES.len())),
         ),
+        4 => match v % 3 {
+            0 => ("m.gltf", gltf_text(Some(v)).into_bytes()),
+            1 => ("m.bin", gltf_buffer(Some(v))),
+            _ => ("img.png", png_bytes(Some(v % COLOURS.len()))),
+        },
         _ => (
             "tri.obj",
             mesh_text(Some(v % MESHES.len())).as_bytes().to_vec(),
@@ -436,7 +488,7 @@ impl Op {
     fn random(rng: &mut Rng, dir: &Path) -> Self {
         let d = rng.below(DIRS.len());
         let exists = dir.join(DIRS[d]).is_dir();
-        match rng.below(12) {
+        match rng.below(13) {
             0..=2 => Self::Scene(SceneText::random(rng), Save::random(rng)),
             3 => Self::Prefab(
                 (!rng.chance(20)).then(|| rng.below(COLOURS.len())),
@@ -460,6 +512,14 @@ impl Op {
                     0 => Self::RemoveMap(file),
                     1 => Self::LinkMap(rng.below(MAP_PATTERNS)),
                     _ => Self::Map(file, MapBytes::random(rng), Save::random(rng)),
+                }
+            }
+            10 => {
+                let variant = |rng: &mut Rng, n| (!rng.chance(20)).then(|| rng.below(n));
+                match rng.below(3) {
+                    0 => Self::Gltf(variant(rng, 2 * COLOURS.len()), Save::random(rng)),
+                    1 => Self::GltfBuffer(variant(rng, 2), Save::random(rng)),
+                    _ => Self::GltfImage(variant(rng, COLOURS.len()), Save::random(rng)),
                 }
             }
             _ => Self::Gap(rng.below(101) as u64),
@@ -499,6 +559,21 @@ impl Op {
             Self::Map(f, contents, save) => {
                 if let Some(path) = file("env", MAP_FILES[*f]) {
                     save.write(&path, &map_bytes(*f, *contents));
+                }
+            }
+            Self::Gltf(v, save) => {
+                if let Some(path) = file("models", "m.gltf") {
+                    save.write(&path, gltf_text(*v).as_bytes());
+                }
+            }
+            Self::GltfBuffer(v, save) => {
+                if let Some(path) = file("models", "m.bin") {
+                    save.write(&path, &gltf_buffer(*v));
+                }
+            }
+            Self::GltfImage(c, save) => {
+                if let Some(path) = file("models", "img.png") {
+                    save.write(&path, &png_bytes(*c));
                 }
             }
             Self::RemoveMap(f) => {
@@ -582,11 +657,17 @@ impl Bench {
             map_bytes(1, MapBytes::Valid(2, 0)),
         )
         .expect("write map");
+        // `dir_file(4, 0)` is the glTF file: its buffer over the centre and its image too.
+        for v in [4, 2] {
+            let (file, bytes) = dir_file(4, v);
+            std::fs::write(dir.join("models").join(file), bytes).expect("write");
+        }
         let text = SceneText {
             wall: 0,
             wall_prefab: true,
             textured: true,
             mesh: true,
+            gltf: true,
             swapped: false,
             spp: 4,
             environment: Some(EnvText {
@@ -763,6 +844,7 @@ fn scene_text(wall: usize) -> SceneText {
         wall_prefab: false,
         textured: false,
         mesh: false,
+        gltf: false,
         swapped: false,
         spp: 4,
         environment: None,
@@ -889,4 +971,28 @@ fn environment_map_broken_deleted_restored_then_a_radiance_map_edited() {
         .unwrap_or_else(|e| panic!("{e}"));
     b.play_change(&[Op::Map(1, MapBytes::Valid(1, 1), Save::Split(40))])
         .unwrap_or_else(|e| panic!("{e}"));
+}
+
+// A glTF model's file, buffer and image, each edited alone (every step changes the fresh render),
+// and its directory replaced.
+#[test]
+fn gltf_model_image_buffer_and_file_edits() {
+    let mut b = Bench::new("gltf");
+    let with_model = SceneText {
+        gltf: true,
+        ..scene_text(1)
+    };
+    let steps = [
+        vec![Op::Scene(with_model, Save::InPlace)],
+        vec![Op::GltfImage(Some(0), Save::KeepMtime)],
+        vec![Op::GltfBuffer(Some(1), Save::Rename)],
+        vec![Op::GltfBuffer(None, Save::InPlace)],
+        vec![Op::GltfBuffer(Some(0), Save::Split(30))],
+        vec![Op::Gltf(Some(4), Save::Recreate)],
+        vec![Op::Gltf(None, Save::InPlace)],
+        vec![Op::ReplaceDir(4, 3)],
+    ];
+    for ops in &steps {
+        b.play_change(ops).unwrap_or_else(|e| panic!("{e}"));
+    }
 }
