@@ -575,7 +575,7 @@ fn an_image_texture_takes_its_filter_and_wrap_and_refuses_unknown_ones() {
         sampling_of("Image(path: \"t.exr\", filter: Bilinear, wrap: MirroredRepeat)"),
         Sampling {
             filter: Filter::Bilinear,
-            wrap: Wrap::MirroredRepeat
+            wrap: [Wrap::MirroredRepeat; 2]
         }
     );
     let e = load_scene(
