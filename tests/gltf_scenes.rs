@@ -68,7 +68,11 @@ fn placing(model: &str, materials: &str) -> String {
 fn nodes_become_named_placed_entities_sharing_their_meshes() {
     let dir = temp_dir("gltf-place");
     std::fs::write(dir.join("m.gltf"), two_meshes().to_string()).expect("write");
-    let path = write_scene(&dir, "scene.ron", &placing("m.gltf", r##"{ "#1": "mine" }"##));
+    let path = write_scene(
+        &dir,
+        "scene.ron",
+        &placing("m.gltf", r##"{ "#1": "mine" }"##),
+    );
     let scene = load_scene(&path, &mut AssetCache::default()).unwrap_or_else(|e| panic!("{e}"));
     let names: Vec<&str> = scene.entities.iter().map(|e| e.name.as_str()).collect();
     assert_eq!(names, ["g/a", "g/#1", "g/multi/0", "g/multi/1"]);
@@ -130,10 +134,16 @@ fn placement_errors_name_the_file_the_line_and_the_problem() {
             .to_string()
     };
     let e = error("unknown.ron", &placing("m.gltf", r#"{ "Blue": "mine" }"#));
-    assert!(e.contains("unknown.ron:8:") && e.contains("\"Blue\""), "{e}");
+    assert!(
+        e.contains("unknown.ron:8:") && e.contains("\"Blue\""),
+        "{e}"
+    );
     assert!(e.contains("Red, #1"), "lists the file's materials: {e}");
     let e = error("ours.ron", &placing("m.gltf", r#"{ "Red": "nope" }"#));
-    assert!(e.contains("ours.ron:8:") && e.contains("unknown material \"nope\""), "{e}");
+    assert!(
+        e.contains("ours.ron:8:") && e.contains("unknown material \"nope\""),
+        "{e}"
+    );
     let e = error("missing.ron", &placing("gone.glb", "{}"));
     assert!(e.contains("missing.ron:") && e.contains("gone.glb"), "{e}");
     let both = placing("m.gltf", "{}").replace(
@@ -155,10 +165,7 @@ fn texture_png() -> Vec<u8> {
     let image = image::RgbImage::from_fn(2, 2, |x, y| image::Rgb(TEXELS[(y * 2 + x) as usize]));
     let mut png = Vec::new();
     image
-        .write_to(
-            &mut std::io::Cursor::new(&mut png),
-            image::ImageFormat::Png,
-        )
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
         .expect("encode");
     png
 }
@@ -361,12 +368,20 @@ fn masks_blend_transmission_cameras_and_lights_load_as_documented() {
         Material::Pbr { alpha, .. } => alpha.clone().map(|a| (a.cutoff, a.factor)),
         other => panic!("{other:?}"),
     };
-    assert_eq!(alpha(0), Some((0.3, 0.8)), "MASK keeps its cutoff and factor");
+    assert_eq!(
+        alpha(0),
+        Some((0.3, 0.8)),
+        "MASK keeps its cutoff and factor"
+    );
     assert_eq!(alpha(1), Some((0.5, 1.0)), "BLEND is a mask at 0.5");
     assert_eq!(material(2), &Material::Dielectric { ior: 1.33 });
     let warned = |what: &str| scene.warnings.iter().any(|w| w.contains(what));
     for what in ["BLEND", "transmission", "cameras", "punctual lights"] {
-        assert!(warned(what), "no warning about {what}: {:?}", scene.warnings);
+        assert!(
+            warned(what),
+            "no warning about {what}: {:?}",
+            scene.warnings
+        );
     }
     assert!(scene.warnings.iter().all(|w| w.contains("k.gltf")));
 }
@@ -411,7 +426,10 @@ fn hostile_gltf_placements_never_panic() {
             }
         }
     }
-    assert!(loaded > 0 && refused > 0, "{loaded} loaded, {refused} refused");
+    assert!(
+        loaded > 0 && refused > 0,
+        "{loaded} loaded, {refused} refused"
+    );
 }
 
 /// Every path to a value inside `v` (object keys and array indices).
@@ -502,7 +520,11 @@ fn every_field_removed_or_replaced_loads_or_is_refused() {
             }
         }
     }
-    assert!(refused > all.len(), "{refused} of {} edits refused", 6 * all.len());
+    assert!(
+        refused > all.len(),
+        "{refused} of {} edits refused",
+        6 * all.len()
+    );
 }
 
 #[test]
@@ -527,5 +549,8 @@ fn an_embedded_jpeg_is_read() {
     // A flat colour survives JPEG within a step or two of 255.
     let expected = Vec3::new(200.0, 100.0, 50.0).map(|b| srgb_to_linear(b / 255.0));
     let got = albedo[16 * 32 + 16];
-    assert!((got - expected).abs().max_element() < 0.01, "{got} against {expected}");
+    assert!(
+        (got - expected).abs().max_element() < 0.01,
+        "{got} against {expected}"
+    );
 }

@@ -372,7 +372,9 @@ fn texture_edit_rerenders_and_decodes_only_that_texture() {
 
 /// The buffer `quad.bin` of [`write_gltf_quad`]'s quad, moved by `dx` along x.
 fn write_quad_buffer(dir: &Path, dx: f32) -> usize {
-    let positions = [-2.0, -2.0, 5.0, 2.0, -2.0, 5.0, 2.0, 2.0, 5.0, -2.0, 2.0, 5.0f32];
+    let positions = [
+        -2.0, -2.0, 5.0, 2.0, -2.0, 5.0, 2.0, 2.0, 5.0, -2.0, 2.0, 5.0f32,
+    ];
     let mut bytes: Vec<u8> = positions
         .iter()
         .enumerate()

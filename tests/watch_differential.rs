@@ -46,7 +46,21 @@ fn gltf_buffer(variant: Option<usize>) -> Vec<u8> {
         None => return b"short".to_vec(),
     };
     let floats = [
-        -1.0 + dx, -1.0, 2.0, 1.0 + dx, -1.0, 2.0, dx, 1.0, 2.0, 0.0, 1.0, 1.0, 1.0, 0.5, 0.0f32,
+        -1.0 + dx,
+        -1.0,
+        2.0,
+        1.0 + dx,
+        -1.0,
+        2.0,
+        dx,
+        1.0,
+        2.0,
+        0.0,
+        1.0,
+        1.0,
+        1.0,
+        0.5,
+        0.0f32,
     ];
     floats.iter().flat_map(|f| f.to_le_bytes()).collect()
 }
@@ -57,7 +71,10 @@ fn gltf_text(variant: Option<usize>) -> String {
     let Some(v) = variant else {
         return "{ \"asset\": ".into();
     };
-    let (colour, dy) = (COLOURS[v % COLOURS.len()].0, [0.0, 0.5][v / COLOURS.len() % 2]);
+    let (colour, dy) = (
+        COLOURS[v % COLOURS.len()].0,
+        [0.0, 0.5][v / COLOURS.len() % 2],
+    );
     let colour = colour.trim_matches(|c| c == '(' || c == ')');
     format!(
         r#"{{"asset": {{"version": "2.0"}},

@@ -277,9 +277,9 @@ fn read(
         let mime_type = image.mime_type.as_ref().map(|m| m.0.clone());
         scene.images.push(match (&image.buffer_view, &image.uri) {
             (Some(view), _) => {
-                let view = views
-                    .get(view.value())
-                    .ok_or_else(|| format!("image {i}: buffer view {} does not exist", view.value()))?;
+                let view = views.get(view.value()).ok_or_else(|| {
+                    format!("image {i}: buffer view {} does not exist", view.value())
+                })?;
                 GltfImage::Bytes {
                     bytes: view_bytes(view, &buffers)
                         .map_err(|e| format!("image {i}: {e}"))?

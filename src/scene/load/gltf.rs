@@ -71,10 +71,7 @@ impl Expander<'_> {
         }
         let full = file.dir().join(gltf);
         self.depend(&full);
-        let asset = self
-            .assets
-            .gltf(&full)
-            .map_err(|m| fail(Some(gltf), m))?;
+        let asset = self.assets.gltf(&full).map_err(|m| fail(Some(gltf), m))?;
         for buffer in asset.buffer_files() {
             self.depend(buffer);
         }
@@ -157,7 +154,10 @@ impl Expander<'_> {
                                     let material = self
                                         .gltf_material(&asset, &full, gltf_material, label)
                                         .map_err(|m| {
-                                            fail(Some(gltf), format!("glTF {}: {m}", full.display()))
+                                            fail(
+                                                Some(gltf),
+                                                format!("glTF {}: {m}", full.display()),
+                                            )
                                         })?;
                                     self.materials.insert(key.clone(), material);
                                     self.material_origins
@@ -196,10 +196,11 @@ impl Expander<'_> {
                     named: false,
                     ..origin
                 };
-                self.push_entity(file, at, placed, origin).map_err(|mut e| {
-                    e.message = format!("{} (from {})", e.message, full.display());
-                    e
-                })?;
+                self.push_entity(file, at, placed, origin)
+                    .map_err(|mut e| {
+                        e.message = format!("{} (from {})", e.message, full.display());
+                        e
+                    })?;
             }
         }
         // Node names may hold `/`: the qualified names are checked for collisions.
