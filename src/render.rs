@@ -236,8 +236,8 @@ fn first_present<L: Layout, W: Lanes>(
 ///   hit by the BSDF-sampled continuation of such a vertex are then not counted again.
 /// - `Mis`: both, weighted by the power heuristic (Veach 1997, ch. 9).
 ///
-/// Surfaces that alpha masks make absent are passed through without a bounce (see
-/// [`first_present`]).
+/// Surfaces that alpha masks make absent are passed through without a bounce, a depth step or a
+/// sampler dimension, at most [`MAX_PASS_THROUGHS`] per ray.
 ///
 /// Emission seen by the camera or after a glass/mirror bounce always counts in full. Russian
 /// roulette (after a few bounces, survival probability = the path's throughput without the
