@@ -257,9 +257,9 @@ pub fn trace_path<L: Layout, S: Sampler>(
 /// denoiser: the albedo and the shading normal (on the side the path arrived from) of the first
 /// hit that is not a perfect mirror or glass ([`Material::is_specular`]) nor absent where an
 /// alpha mask says so, the albedo tinted by the specular bounces before it; the background as
-/// albedo (and a zero normal) if the path leaves the scene first; zero if it ends first. They use no random numbers, so the radiance is
-/// the same whether they are collected or not; without `collect` (a film without feature
-/// buffers) they are not computed and come back zero.
+/// albedo (and a zero normal) if the path leaves the scene first; zero if it ends first. They
+/// use no random numbers, so the radiance is the same whether they are collected or not;
+/// without `collect` (a film without feature buffers) they are not computed and come back zero.
 #[inline(always)]
 fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     lanes: W,
