@@ -183,6 +183,26 @@ fn benches_refuse_an_output_directory_that_is_a_file() {
 }
 
 #[test]
+fn bench_render_renders_every_run() {
+    let scene = scenes_dir().join("cornell.ron");
+    let out = rondo(&[
+        "bench", "render", text(&scene), "--runs", "3", "--width", "48", "--height", "48", "--spp",
+        "8",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let log = stderr(&out);
+    // `run k: 48x48, 8 spp, T s, …`: every run traces (before, runs 2 and 3 reloaded the
+    // unchanged scene into the finished film and reported 0.000 s).
+    let seconds: Vec<f64> = log
+        .lines()
+        .filter(|l| l.starts_with("run "))
+        .filter_map(|l| l.split(", ").nth(2)?.strip_suffix(" s")?.parse().ok())
+        .collect();
+    assert_eq!(seconds.len(), 3, "{log}");
+    assert!(seconds.iter().all(|&t| t > 0.0), "{log}");
+}
+
+#[test]
 fn bench_environment_runs_on_a_tiny_map_and_writes_its_table_only_when_asked() {
     let dir = temp_dir("cli-bench-environment");
     let args = [

@@ -89,6 +89,10 @@ pub fn render(scene: &Path, runs: usize, options: &RenderArgs) -> Result<()> {
     let mut times = Vec::new();
     let mut r = options.renderer()?;
     for run in 0..runs.max(1) {
+        // A renderer per run: reloading an unchanged scene into a finished film renders nothing.
+        if run > 0 {
+            r = options.renderer()?;
+        }
         r.load(scene)?;
         let wall = r.render_to_completion();
         eprintln!("run {}: {}", run + 1, summary(&r, wall));
