@@ -186,7 +186,16 @@ fn benches_refuse_an_output_directory_that_is_a_file() {
 fn bench_render_renders_every_run() {
     let scene = scenes_dir().join("cornell.ron");
     let out = rondo(&[
-        "bench", "render", text(&scene), "--runs", "3", "--width", "48", "--height", "48", "--spp",
+        "bench",
+        "render",
+        text(&scene),
+        "--runs",
+        "3",
+        "--width",
+        "48",
+        "--height",
+        "48",
+        "--spp",
         "8",
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
