@@ -7,7 +7,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::layout::{Kind, Row, WORKLOADS, spread};
+use super::layout_rows::{Kind, Row, WORKLOADS, spread};
 use crate::geometry::layout::LayoutKind;
 
 const KINDS: [Kind; 2] = [Kind::Sphere, Kind::Triangle];

@@ -8,4 +8,5 @@ pub mod chart;
 pub mod environment;
 pub mod instances;
 pub mod layout;
+pub mod layout_rows;
 pub mod load;

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 
 use clap::Args;
-use rondo::bench::layout;
+use rondo::bench::layout_rows;
 use rondo::film::OutputKind;
 use rondo::geometry::layout::LayoutKind;
 use rondo::scene::format::{MAX_DEPTH, MAX_SIDE, MAX_SPP, Method};
@@ -117,7 +117,7 @@ pub fn png_path(s: &str) -> Result<PathBuf, String> {
 
 /// The workloads `bench layout` knows.
 pub fn workload_names() -> clap::builder::PossibleValuesParser {
-    clap::builder::PossibleValuesParser::new(layout::WORKLOADS.iter().map(|w| w.0))
+    clap::builder::PossibleValuesParser::new(layout_rows::WORKLOADS.iter().map(|w| w.0))
 }
 
 impl RenderArgs {
