@@ -14,7 +14,7 @@
 use std::ops::Range;
 
 use glam::Vec3;
-use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2};
+use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, ploc::PlocSearchDistance};
 
 use super::aabb::RayQuery;
 use crate::cpu::{Lanes, Sse};
@@ -36,6 +36,19 @@ const WIDTH: usize = 8;
 const BUILD_PARAMS: BvhBuildParams = BvhBuildParams {
     collapse_traversal_cost: 1.0,
     ..BvhBuildParams::medium_build()
+};
+
+/// Primitives from which a build takes [`LARGE_BUILD_PARAMS`]: above every hand-made scene and
+/// the bunny (3,674 triangles), so those keep the trees of [`BUILD_PARAMS`] exactly.
+const LARGE_BUILD: usize = 1 << 17;
+
+/// The build of big meshes: PLOC pairs over a shorter window and a fifth of the reinsertion
+/// work. Reinsertion was most of obvhs's time on a 1M-triangle sphere; this build takes about
+/// half the time of [`BUILD_PARAMS`] for an SAH cost within 0.5 % (BENCHMARKS.md, issue 24).
+const LARGE_BUILD_PARAMS: BvhBuildParams = BvhBuildParams {
+    ploc_search_distance: PlocSearchDistance::VeryLow,
+    reinsertion_batch_ratio: 0.01,
+    ..BUILD_PARAMS
 };
 
 /// A wide node: the boxes of up to eight children lane by lane (`[min_x, min_y, min_z, max_x,
@@ -62,15 +75,25 @@ pub struct Bvh {
     wide: Vec<WideNode>,
 }
 
+/// Binary nodes from which the collapse builds the subtrees under the wide root in parallel.
+const PARALLEL_COLLAPSE: usize = LARGE_BUILD;
+
 /// Collapses binary node `n` of `bvh` (an inner node) into wide nodes appended to `wide`;
 /// returns the index of the node made for `n` and the depth of its wide subtree.
-fn collapse(bvh: &Bvh2, n: usize, wide: &mut Vec<WideNode>) -> (u32, usize) {
+///
+/// With `parallel`, the subtrees of `n`'s inner wide children are collapsed at once, each into
+/// its own vector, and appended in child order with their indices moved by where they land:
+/// the same nodes at the same indices as one after the other, whatever the thread count.
+fn collapse(bvh: &Bvh2, n: usize, wide: &mut Vec<WideNode>, parallel: bool) -> (u32, usize) {
     let nodes = &bvh.nodes;
     let first = nodes[n].first_index as usize;
-    let mut children = vec![first, first + 1];
+    // The children so far, in `slots[..len]` (no allocation: this runs once per wide node).
+    let mut slots = [0usize; WIDTH];
+    slots[..2].copy_from_slice(&[first, first + 1]);
+    let mut len = 2;
     // Open the inner child of largest area until eight children (or only leaves) remain.
-    while children.len() < WIDTH {
-        let Some((k, _)) = children
+    while len < WIDTH {
+        let Some((k, _)) = slots[..len]
             .iter()
             .enumerate()
             .filter(|&(_, &c)| !nodes[c].is_leaf())
@@ -83,10 +106,14 @@ fn collapse(bvh: &Bvh2, n: usize, wide: &mut Vec<WideNode>) -> (u32, usize) {
         else {
             break;
         };
-        let c = children.swap_remove(k);
-        let f = nodes[c].first_index as usize;
-        children.extend([f, f + 1]);
+        // As `Vec::swap_remove` then two pushes.
+        let f = nodes[slots[k]].first_index as usize;
+        slots[k] = slots[len - 1];
+        slots[len - 1] = f;
+        slots[len] = f + 1;
+        len += 1;
     }
+    let children = &mut slots[..len];
     // Children in binary-tree order, so slot order and traversal stay close to the binary tree's.
     children.sort_unstable();
     let index = wide.len();
@@ -98,6 +125,21 @@ fn collapse(bvh: &Bvh2, n: usize, wide: &mut Vec<WideNode>) -> (u32, usize) {
     });
     let mut node = wide[index];
     let mut depth = 1;
+    let mut subtrees = if parallel {
+        use rayon::prelude::*;
+        children
+            .par_iter()
+            .filter(|&&c| !nodes[c].is_leaf())
+            .map(|&c| {
+                let mut sub = Vec::new();
+                let depth = collapse(bvh, c, &mut sub, false).1;
+                (sub, depth)
+            })
+            .collect()
+    } else {
+        Vec::new()
+    }
+    .into_iter();
     for (k, &c) in children.iter().enumerate() {
         let b = nodes[c].aabb();
         for axis in 0..3 {
@@ -108,8 +150,21 @@ fn collapse(bvh: &Bvh2, n: usize, wide: &mut Vec<WideNode>) -> (u32, usize) {
         if nodes[c].is_leaf() {
             node.child[k] = nodes[c].first_index;
             node.count[k] = nodes[c].prim_count;
+        } else if let Some((sub, d)) = subtrees.next() {
+            // The subtree's root is its node 0, and its inner children index its own vector.
+            let base = wide.len() as u32;
+            wide.extend(sub.into_iter().map(|mut w| {
+                for j in 0..WIDTH {
+                    if w.valid >> j & 1 == 1 && w.count[j] == 0 {
+                        w.child[j] += base;
+                    }
+                }
+                w
+            }));
+            node.child[k] = base;
+            depth = depth.max(d + 1);
         } else {
-            let (child, d) = collapse(bvh, c, wide);
+            let (child, d) = collapse(bvh, c, wide, false);
             node.child[k] = child;
             depth = depth.max(d + 1);
         }
@@ -164,7 +219,12 @@ impl Bvh {
             .map(|&(min, max)| Aabb::new(min.into(), max.into()))
             .collect();
         let mut unused = std::time::Duration::ZERO;
-        let mut bvh = obvhs::bvh2::builder::build_bvh2(&aabbs, BUILD_PARAMS, &mut unused);
+        let params = if aabbs.len() >= LARGE_BUILD {
+            LARGE_BUILD_PARAMS
+        } else {
+            BUILD_PARAMS
+        };
+        let mut bvh = obvhs::bvh2::builder::build_bvh2(&aabbs, params, &mut unused);
         let order = bvh.primitive_indices.clone();
         // The leaves index groups in BVH order; make them slot ranges.
         let mut first_slot = Vec::with_capacity(order.len() + 1);
@@ -182,7 +242,7 @@ impl Bvh {
         }
         let mut wide = Vec::new();
         let depth = if bvh.nodes.first().is_some_and(|root| !root.is_leaf()) {
-            collapse(&bvh, 0, &mut wide).1
+            collapse(&bvh, 0, &mut wide, bvh.nodes.len() >= PARALLEL_COLLAPSE).1
         } else {
             0
         };

@@ -41,15 +41,16 @@ impl std::fmt::Debug for MeshBlas {
 }
 
 impl MeshBlas {
-    /// Builds the BVH of a mesh.
+    /// Builds the BVH of a mesh. The gathers around the build are maps in parallel: the same result for any thread count.
     pub fn build(mesh: &MeshData) -> Self {
+        use rayon::prelude::*;
         let tris: Vec<[Vec3; 3]> = mesh
             .triangles
-            .iter()
+            .par_iter()
             .map(|t| t.map(|i| mesh.positions[i as usize]))
             .collect();
         let bounds: Vec<Bounds> = tris
-            .iter()
+            .par_iter()
             .map(|p| (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2])))
             .collect();
         let (bvh, order) = Bvh::build(&bounds);
@@ -60,18 +61,18 @@ impl MeshBlas {
             });
         let normals = mesh.normals.as_ref().map(|n| {
             order
-                .iter()
+                .par_iter()
                 .map(|&k| mesh.triangles[k as usize].map(|v| n[v as usize]))
                 .collect()
         });
         let uvs = mesh.uvs.as_ref().map(|t| {
             order
-                .iter()
+                .par_iter()
                 .map(|&k| mesh.triangles[k as usize].map(|v| t[v as usize]))
                 .collect()
         });
         Self {
-            triangles: order.iter().map(|&i| tris[i as usize]).collect(),
+            triangles: order.par_iter().map(|&i| tris[i as usize]).collect(),
             normals,
             uvs,
             bvh,
