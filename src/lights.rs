@@ -27,10 +27,11 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::geometry::layout::{Layout, SphereStore, TriangleStore};
+use crate::geometry::layout::Layout;
 use crate::geometry::packed::{Geometry, HitKind};
 use crate::geometry::ray::gamma;
 use crate::geometry::sphere::sphere_uv;
+use crate::geometry::store::{SphereStore, TriangleStore};
 use crate::shading::material::Material;
 use crate::shading::sampling::{
     cone_one_minus_cos, sample_sphere_cone, sample_spherical_triangle, triangle_solid_angle,

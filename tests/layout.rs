@@ -9,13 +9,13 @@ use std::process::Command;
 
 use glam::{Mat3, Vec2, Vec3};
 use rondo::geometry::aabb::RayQuery;
-use rondo::geometry::layout::{
-    Aos, Hybrid, Layout, LayoutKind, Soa, SoaSimd, SphereStore, TriangleStore,
-    closest_sphere_scalar, closest_triangle_scalar,
-};
+use rondo::geometry::layout::{Aos, Hybrid, Layout, LayoutKind, Soa, SoaSimd};
 use rondo::geometry::packed::{Geometry, Hit, Primitive};
 use rondo::geometry::ray::Ray;
 use rondo::geometry::simd::LANES;
+use rondo::geometry::store::{
+    SphereStore, TriangleStore, closest_sphere_scalar, closest_triangle_scalar,
+};
 use rondo::geometry::triangle::TriangleHit;
 use rondo::shading::rng::Rng;
 use rondo::{Overrides, PassPlan, Renderer};

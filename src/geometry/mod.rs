@@ -9,4 +9,5 @@ pub mod plane;
 pub mod ray;
 pub mod simd;
 pub mod sphere;
+pub mod store;
 pub mod triangle;

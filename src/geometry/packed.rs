@@ -16,13 +16,13 @@ use glam::{Affine3A, Mat3, Vec2, Vec3};
 use super::aabb::RayQuery;
 use super::bvh::{Bounds, Bvh, Leaf};
 use super::instance::{InstanceSet, MeshBlas};
-pub use super::layout::{
-    Aos, DefaultLayout, Hybrid, Layout, LayoutKind, Soa, SoaSimd, Sphere, SphereAos, SphereSoa,
-    SphereStore, Triangle, TriangleAos, TriangleSoa, TriangleStore,
-};
+pub use super::layout::{Aos, DefaultLayout, Hybrid, Layout, LayoutKind, Soa, SoaSimd};
 use super::plane::{intersect_plane, plane_uv};
 use super::ray::Ray;
 use super::sphere::{intersect_sphere, sphere_uv};
+pub use super::store::{
+    Sphere, SphereAos, SphereSoa, SphereStore, Triangle, TriangleAos, TriangleSoa, TriangleStore,
+};
 use super::triangle::{TriangleHit, intersect_triangle};
 use crate::cpu::{Lanes, Sse};
 

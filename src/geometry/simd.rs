@@ -27,8 +27,8 @@ use std::ops::{Add, Div, Mul, Neg, Range, Sub};
 use glam::{BVec4A, Vec4};
 
 use super::aabb::RayQuery;
-use super::layout::{SphereSoa, TriangleSoa, closest_triangle_scalar};
 use super::ray::{Ray, gamma};
+use super::store::{SphereSoa, TriangleSoa, closest_triangle_scalar};
 use super::triangle::TriangleHit;
 
 /// Primitives tested at once: one SSE register of `f32`. The BVH's leaves hold 1 to 8
@@ -239,7 +239,7 @@ fn sphere_hits(t0: F, t1: F, t_max: f32) -> M {
     in_range(t0).or(in_range(t1))
 }
 
-/// [`crate::geometry::layout::closest_sphere_scalar`], [`LANES`] spheres at a time.
+/// [`crate::geometry::store::closest_sphere_scalar`], [`LANES`] spheres at a time.
 #[inline(always)]
 pub fn closest_sphere(
     spheres: &SphereSoa,
@@ -385,7 +385,7 @@ fn within(l: &TriangleLanes, i: usize, t_max: f32) -> bool {
     !((det < 0.0 && t_scaled < bound) || (det > 0.0 && t_scaled > bound))
 }
 
-/// [`crate::geometry::layout::closest_triangle_scalar`], [`LANES`] triangles at a time.
+/// [`crate::geometry::store::closest_triangle_scalar`], [`LANES`] triangles at a time.
 #[inline(always)]
 pub fn closest_triangle(
     tris: &TriangleSoa,
