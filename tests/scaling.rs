@@ -97,3 +97,35 @@ fn a_mesh_whose_corners_exceed_the_limit_is_judged_by_its_vertices() {
         "corners within the limit suffice"
     );
 }
+
+#[test]
+fn a_reload_after_a_one_entity_edit_parses_that_entity_only() {
+    let dir = temp_dir("scaling-incremental");
+    for n in [1_000, 10_000] {
+        let path = generate("flat", n, &dir.join(n.to_string())).expect("scene");
+        let mut assets = AssetCache::default();
+        let first = load_scene(&path, &mut assets).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(first.stats.entities_parsed, n as u64);
+        // One entity's radius, then another's name: each reload parses one entity, and loads
+        // what a fresh load of the file gives.
+        let text = std::fs::read_to_string(&path).expect("read");
+        let middle = format!("\"e{}\"", n / 2);
+        let at = text.find(&middle).expect("entity")
+            + text[text.find(&middle).expect("entity")..]
+                .find("radius: 0.4")
+                .expect("radius");
+        let edited = format!(
+            "{}radius: 0.3{}",
+            &text[..at],
+            &text[at + "radius: 0.4".len()..]
+        );
+        for edit in [edited.clone(), edited.replace("\"e7\"", "\"seven\"")] {
+            std::fs::write(&path, &edit).expect("write");
+            let scene = load_scene(&path, &mut assets).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(scene.stats.entities_parsed, 1, "{n} entities");
+            let fresh = load(&path);
+            assert_eq!(scene.entities, fresh.entities);
+            assert_eq!(scene.materials.len(), fresh.materials.len());
+        }
+    }
+}

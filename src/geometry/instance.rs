@@ -10,7 +10,7 @@ use glam::{Affine3A, Vec2, Vec3};
 
 use super::aabb::RayQuery;
 use super::bvh::{Bounds, Bvh};
-use super::packed::{Surface, Tangent, uv_derivatives};
+use super::surface::{Surface, Tangent, uv_derivatives};
 use super::ray::{Ray, gamma};
 use super::triangle::intersect_triangle;
 use crate::ecs::components::MeshData;

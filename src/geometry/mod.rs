@@ -10,4 +10,5 @@ pub mod ray;
 pub mod simd;
 pub mod sphere;
 pub mod store;
+pub mod surface;
 pub mod triangle;

@@ -24,6 +24,7 @@ pub mod check;
 pub mod error;
 pub mod format;
 pub mod gltf;
+pub mod incremental;
 pub mod load;
 pub mod locate;
 pub mod mesh;

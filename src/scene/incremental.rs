@@ -1,0 +1,534 @@
+//! Re-parsing a scene file after an edit: only the entities whose text changed.
+//!
+//! The last good parse is kept with the text it came from and the byte span of each entity of
+//! its `entities` list. A new text is compared with it byte by byte from both ends; when
+//! everything that differs lies within a run of whole entities of the old text, only that run,
+//! as it now reads, is parsed (as a RON list) and spliced into the old description. Everything
+//! else is byte-identical and was parsed in the same context (the list), so the result is what a
+//! full parse gives. Whenever that cannot be shown cheaply (the edit touches text between
+//! entities or outside the list, the run no longer parses as a list of whole entities, the file
+//! uses RON `#![enable(…)]` attributes), the whole file is parsed, so errors keep their exact
+//! `file:line:col`.
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use super::error::SceneError;
+use super::format::{EntityDesc, SceneDesc, parse};
+
+/// A scene file's last good parse.
+pub struct ParsedScene {
+    path: PathBuf,
+    text: String,
+    desc: SceneDesc,
+    /// Byte span of each entity of `desc.entities` in `text` (`None`: not found, so the next
+    /// edit parses the whole file).
+    spans: Option<Vec<Range<usize>>>,
+}
+
+impl ParsedScene {
+    /// The parsed description.
+    pub fn desc(&self) -> &SceneDesc {
+        &self.desc
+    }
+}
+
+/// Parses `text`, the contents of the scene file `path`, reusing `previous` (the last good
+/// parse of the same file) for the entities an edit left alone. Returns the parse and the
+/// number of entities parsed.
+pub fn parse_scene_text(
+    path: &Path,
+    text: String,
+    previous: Option<ParsedScene>,
+) -> Result<(ParsedScene, usize), SceneError> {
+    if let Some(previous) = previous.filter(|p| p.path == path)
+        && let Some(parsed) = splice(previous, &text)
+    {
+        let (scene, parsed) = parsed;
+        return Ok((
+            ParsedScene {
+                path: path.to_path_buf(),
+                text,
+                ..scene
+            },
+            parsed,
+        ));
+    }
+    let desc: SceneDesc = parse(path, &text)?;
+    let spans = entity_spans(&text).filter(|s| s.len() == desc.entities.len());
+    let parsed = desc.entities.len();
+    Ok((
+        ParsedScene {
+            path: path.to_path_buf(),
+            text,
+            desc,
+            spans,
+        },
+        parsed,
+    ))
+}
+
+/// `previous` updated to `text` by re-parsing only the entities the edit touched, or `None` when
+/// the edit is not confined to whole entities (see the module's doc). The returned parse still
+/// holds the old text; the caller puts the new one in.
+fn splice(previous: ParsedScene, text: &str) -> Option<(ParsedScene, usize)> {
+    let spans = previous.spans.as_ref()?;
+    let (old, new) = (previous.text.as_bytes(), text.as_bytes());
+    let prefix = old.iter().zip(new).take_while(|(a, b)| a == b).count();
+    let room = old.len().min(new.len()) - prefix;
+    let suffix = old
+        .iter()
+        .rev()
+        .zip(new.iter().rev())
+        .take(room)
+        .take_while(|(a, b)| a == b)
+        .count();
+    let old_end = old.len() - suffix;
+    // The first entity that ends after the common prefix, and the last that starts before the
+    // common suffix (for a pure insertion, before the byte after it): the edit must lie within
+    // them.
+    let first = spans.partition_point(|s| s.end <= prefix);
+    let probe = old_end.max(prefix + 1);
+    let last = spans.partition_point(|s| s.start < probe).checked_sub(1)?;
+    if first > last || spans[first].start > prefix || spans[last].end < old_end {
+        return None;
+    }
+    let start = spans[first].start;
+    let end = (spans[last].end + new.len()).checked_sub(old.len())?;
+    let run = text.get(start..end)?;
+    // The run must read as whole entities separated by commas, nothing before, between or
+    // after them but blanks and comments, so that the rest of the list reads as before.
+    let items = list_items(run)?;
+    let wrapped = format!("[{run}]");
+    let entities: Vec<EntityDesc> = parse(&previous.path, &wrapped).ok()?;
+    if entities.len() != items.len() || entities.is_empty() {
+        return None;
+    }
+    let parsed = entities.len();
+    let delta = new.len() as isize - old.len() as isize;
+    let shift = |r: &Range<usize>| {
+        let s = |x: usize| x.checked_add_signed(delta);
+        Some(s(r.start)?..s(r.end)?)
+    };
+    let mut new_spans = Vec::with_capacity(spans.len() + items.len());
+    new_spans.extend_from_slice(&spans[..first]);
+    new_spans.extend(items.iter().map(|r| r.start + start..r.end + start));
+    for r in &spans[last + 1..] {
+        new_spans.push(shift(r)?);
+    }
+    let ParsedScene { path, mut desc, .. } = previous;
+    desc.entities.splice(first..=last, entities);
+    Some((
+        ParsedScene {
+            path,
+            text: String::new(),
+            desc,
+            spans: Some(new_spans),
+        },
+        parsed,
+    ))
+}
+
+/// One significant lexical item of RON text: blanks, comments and the insides of strings and
+/// characters are skipped.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Lexeme {
+    /// `(`, `[` or `{`.
+    Open,
+    /// `)`, `]` or `}`.
+    Close,
+    Comma,
+    Colon,
+    /// An identifier (its text's range).
+    Word(usize, usize),
+    /// Anything else: a number, a string, a character, another sign.
+    Other,
+}
+
+/// The lexemes of `text` with their byte offsets, or `None` for text that does not lex (an
+/// unterminated string, comment or character).
+fn lex(text: &str) -> Option<Vec<(usize, Lexeme)>> {
+    let b = text.as_bytes();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < b.len() {
+        let c = b[i];
+        let at = i;
+        match c {
+            b' ' | b'\t' | b'\n' | b'\r' => i += 1,
+            b'/' if b.get(i + 1) == Some(&b'/') => {
+                i = b[i..]
+                    .iter()
+                    .position(|&c| c == b'\n')
+                    .map_or(b.len(), |p| i + p);
+            }
+            b'/' if b.get(i + 1) == Some(&b'*') => {
+                let mut depth = 0usize;
+                loop {
+                    if i >= b.len() {
+                        return None;
+                    }
+                    if b[i..].starts_with(b"/*") {
+                        depth += 1;
+                        i += 2;
+                    } else if b[i..].starts_with(b"*/") {
+                        depth -= 1;
+                        i += 2;
+                        if depth == 0 {
+                            break;
+                        }
+                    } else {
+                        i += 1;
+                    }
+                }
+            }
+            b'"' => {
+                i = quoted(b, i + 1, b'"')?;
+                out.push((at, Lexeme::Other));
+            }
+            b'\'' => {
+                i = quoted(b, i + 1, b'\'')?;
+                out.push((at, Lexeme::Other));
+            }
+            b'(' | b'[' | b'{' => {
+                i += 1;
+                out.push((at, Lexeme::Open));
+            }
+            b')' | b']' | b'}' => {
+                i += 1;
+                out.push((at, Lexeme::Close));
+            }
+            b',' => {
+                i += 1;
+                out.push((at, Lexeme::Comma));
+            }
+            b':' => {
+                i += 1;
+                out.push((at, Lexeme::Colon));
+            }
+            c if c.is_ascii_alphabetic() || c == b'_' => {
+                while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
+                    i += 1;
+                }
+                let word = &b[at..i];
+                // Raw strings `r"…"`, `r#"…"#` and byte strings `b"…"`, `br#"…"#`.
+                if matches!(word, b"r" | b"br") && matches!(b.get(i), Some(b'"' | b'#')) {
+                    let hashes = b[i..].iter().take_while(|&&c| c == b'#').count();
+                    let open = i + hashes;
+                    if b.get(open) != Some(&b'"') {
+                        return None;
+                    }
+                    let mut closing = vec![b'"'];
+                    closing.extend(std::iter::repeat_n(b'#', hashes));
+                    let p = b[open + 1..]
+                        .windows(closing.len())
+                        .position(|w| w == closing.as_slice())?;
+                    i = open + 1 + p + closing.len();
+                    out.push((at, Lexeme::Other));
+                } else if word == b"b" && b.get(i) == Some(&b'"') {
+                    i = quoted(b, i + 1, b'"')?;
+                    out.push((at, Lexeme::Other));
+                } else {
+                    out.push((at, Lexeme::Word(at, i)));
+                }
+            }
+            _ => {
+                // Numbers, signs and any other character (a multi-byte one whole).
+                i += 1;
+                while i < b.len() && b[i] & 0xC0 == 0x80 {
+                    i += 1;
+                }
+                out.push((at, Lexeme::Other));
+            }
+        }
+    }
+    Some(out)
+}
+
+/// The offset past the closing `quote` of a string or character whose contents start at `i`
+/// (backslash escapes skipped), or `None` if it is not closed.
+fn quoted(b: &[u8], mut i: usize, quote: u8) -> Option<usize> {
+    while i < b.len() {
+        match b[i] {
+            b'\\' => i += 2,
+            c if c == quote => return Some(i + 1),
+            _ => i += 1,
+        }
+    }
+    None
+}
+
+/// Spans of the items of a comma-separated run of values at depth 0 (`Entity(…)` or `(…)`),
+/// each from its first byte to past its closing bracket; `None` unless the run is exactly such
+/// items, one comma between each two and none before the first or after the last.
+fn list_items(run: &str) -> Option<Vec<Range<usize>>> {
+    let lexemes = lex(run)?;
+    let mut items = Vec::new();
+    let mut k = 0;
+    loop {
+        let (start, end, next) = value(run, &lexemes, k)?;
+        items.push(start..end);
+        match lexemes.get(next) {
+            None => return Some(items),
+            Some((_, Lexeme::Comma)) if next + 1 < lexemes.len() => k = next + 1,
+            _ => return None,
+        }
+    }
+}
+
+/// The entity value starting at lexeme `k`: `Entity(…)` or `(…)`, as (start offset, end offset,
+/// index of the next lexeme).
+fn value(text: &str, lexemes: &[(usize, Lexeme)], mut k: usize) -> Option<(usize, usize, usize)> {
+    let start = lexemes.get(k)?.0;
+    if let (_, Lexeme::Word(a, b)) = lexemes[k] {
+        if text.get(a..b) != Some("Entity") {
+            return None;
+        }
+        k += 1;
+    }
+    if lexemes.get(k)?.1 != Lexeme::Open {
+        return None;
+    }
+    let mut depth = 0usize;
+    while let Some(&(at, l)) = lexemes.get(k) {
+        k += 1;
+        match l {
+            Lexeme::Open => depth += 1,
+            Lexeme::Close => {
+                depth -= 1;
+                if depth == 0 {
+                    return Some((start, at + 1, k));
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+/// Spans of the entities of a scene text's `entities` list, or `None` if the text uses RON
+/// attributes or its list is not found as expected.
+fn entity_spans(text: &str) -> Option<Vec<Range<usize>>> {
+    if text.contains("#!") {
+        return None;
+    }
+    let lexemes = lex(text)?;
+    // `Scene(` … `entities` `:` `[` at depth 1 of the scene's parentheses.
+    let mut depth = 0usize;
+    let mut list = None;
+    for (k, &(_, l)) in lexemes.iter().enumerate() {
+        match l {
+            Lexeme::Open => depth += 1,
+            Lexeme::Close => depth = depth.checked_sub(1)?,
+            Lexeme::Word(a, b) if depth == 1 && &text[a..b] == "entities" => {
+                if lexemes.get(k + 1)?.1 != Lexeme::Colon || lexemes.get(k + 2)?.1 != Lexeme::Open {
+                    return None;
+                }
+                if list.replace(k + 3).is_some() {
+                    return None;
+                }
+            }
+            _ => {}
+        }
+    }
+    let mut k = list?;
+    let mut spans = Vec::new();
+    loop {
+        match lexemes.get(k)?.1 {
+            Lexeme::Close => return Some(spans),
+            _ => {
+                let (start, end, next) = value(text, &lexemes, k)?;
+                spans.push(start..end);
+                k = match lexemes.get(next)?.1 {
+                    Lexeme::Comma => next + 1,
+                    Lexeme::Close => next,
+                    _ => return None,
+                };
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SCENE: &str = r#"Scene(
+    camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0)),
+    materials: { "m": Diffuse(albedo: Constant((0.5, 0.5, 0.5))) },
+    entities: [
+        Entity(name: "a", material: "m", shape: Sphere(center: (0, 0, 0), radius: 1)),
+        // a comment with ( and "
+        Entity(name: "b)", material: "m", shape: Sphere(center: (2, 0, 0), radius: 1)), /* ( */
+        (name: "c", material: "m", shape: Sphere(center: (4, 0, 0), radius: 1)),
+    ],
+)"#;
+
+    fn full(text: &str) -> SceneDesc {
+        parse(Path::new("s.ron"), text).expect("parses")
+    }
+
+    #[test]
+    fn entity_spans_cover_each_entity_whatever_the_comments_and_strings() {
+        let spans = entity_spans(SCENE).expect("found");
+        let texts: Vec<&str> = spans.iter().map(|r| &SCENE[r.clone()]).collect();
+        assert_eq!(texts.len(), 3);
+        assert!(texts[0].starts_with("Entity(name: \"a\"") && texts[0].ends_with("radius: 1))"));
+        assert!(texts[1].starts_with("Entity(name: \"b)\""));
+        assert!(texts[2].starts_with("(name: \"c\"") && texts[2].ends_with("radius: 1))"));
+    }
+
+    #[test]
+    fn an_edit_inside_one_entity_reparses_only_it_and_equals_a_full_parse() {
+        let path = Path::new("s.ron");
+        let (first, n) = parse_scene_text(path, SCENE.to_string(), None).expect("parses");
+        assert_eq!(n, 3);
+        let edited = SCENE.replace(
+            "center: (2, 0, 0), radius: 1",
+            "center: (2, 1, 0), radius: 0.5",
+        );
+        let (second, n) = parse_scene_text(path, edited.clone(), Some(first)).expect("parses");
+        assert_eq!(n, 1, "only the edited entity is parsed");
+        let reference = full(&edited);
+        assert_eq!(format!("{:?}", second.desc()), format!("{reference:?}"));
+        // A second edit, of another entity, works from the spliced parse.
+        let again = edited.replace("\"c\"", "\"cc\"");
+        let (third, n) = parse_scene_text(path, again.clone(), Some(second)).expect("parses");
+        assert_eq!(n, 1);
+        assert_eq!(format!("{:?}", third.desc()), format!("{:?}", full(&again)));
+    }
+
+    #[test]
+    fn edits_outside_whole_entities_parse_the_whole_file() {
+        let path = Path::new("s.ron");
+        let cases = [
+            // Between entities: a new one.
+            SCENE.replace("/* ( */", "Entity(name: \"d\", material: \"m\", shape: Sphere(center: (6, 0, 0), radius: 1)),"),
+            // Outside the list.
+            SCENE.replace("(0.5, 0.5, 0.5)", "(0.25, 0.5, 0.5)"),
+            // A trailing comma inside the run would read as a list but not in the file.
+            SCENE.replace("radius: 1)), /* ( */", "radius: 1)),, /* ( */"),
+            // One entity split into two.
+            SCENE.replace(
+                "Entity(name: \"a\", material: \"m\", shape: Sphere(center: (0, 0, 0), radius: 1))",
+                "Entity(name: \"a\", material: \"m\", shape: Sphere(center: (0, 0, 0), radius: 1)), Entity(name: \"a2\", material: \"m\", shape: Sphere(center: (0, 3, 0), radius: 1))",
+            ),
+        ];
+        for edited in cases {
+            let (first, _) = parse_scene_text(path, SCENE.to_string(), None).expect("parses");
+            match parse_scene_text(path, edited.clone(), Some(first)) {
+                Ok((parsed, _)) => {
+                    assert_eq!(
+                        format!("{:?}", parsed.desc()),
+                        format!("{:?}", full(&edited))
+                    );
+                }
+                Err(e) => {
+                    let reference = parse::<SceneDesc>(path, &edited).expect_err("fails too");
+                    assert_eq!(e.to_string(), reference.to_string());
+                }
+            }
+        }
+        let (first, _) = parse_scene_text(path, SCENE.to_string(), None).expect("parses");
+        let split = SCENE.replace("(name: \"c\"", "Entity(name: \"c\"");
+        let (_, n) = parse_scene_text(path, split, Some(first)).expect("parses");
+        assert_eq!(
+            n, 1,
+            "renaming the struct of one entity is an edit inside it"
+        );
+    }
+
+    #[test]
+    fn a_broken_entity_is_the_error_a_full_parse_gives() {
+        let path = Path::new("s.ron");
+        let (first, _) = parse_scene_text(path, SCENE.to_string(), None).expect("parses");
+        let broken = SCENE.replace("(4, 0, 0), radius: 1", "(4, 0, 0), radius: oops");
+        let e = parse_scene_text(path, broken.clone(), Some(first))
+            .err()
+            .expect("fails");
+        let reference = parse::<SceneDesc>(path, &broken).expect_err("fails too");
+        assert_eq!(e.to_string(), reference.to_string());
+    }
+
+    #[test]
+    fn random_edits_parse_as_a_full_parse_does() {
+        let path = Path::new("s.ron");
+        let entity = |i: usize| {
+            format!(
+                "        Entity(name: \"e{i}\", material: \"m\", shape: Sphere(center: ({i}, 0, 0), radius: 0.{i}1)),\n"
+            )
+        };
+        let mut text = String::from(
+            "Scene(\n    camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0)),\n    materials: { \"m\": Diffuse(albedo: Constant((0.5, 0.5, 0.5))) },\n    entities: [\n",
+        );
+        for i in 0..30 {
+            text += &entity(i);
+        }
+        text += "    ],\n)\n";
+        let pieces = [
+            "1", "9", ",", ")", "(", "\"", "Entity(", " ", "// x\n", "/*", "*/", "r#\"", "'",
+        ];
+        let mut rng = crate::shading::rng::Rng::new(7, 11);
+        let mut below = |n: usize| rng.next_u32() as usize % n.max(1);
+        let (mut previous, _) = parse_scene_text(path, text.clone(), None).expect("parses");
+        let (mut reused, mut total) = (0, 0);
+        for round in 0..3000 {
+            let mut edited = text.clone();
+            let at = below(edited.len());
+            let at = (at..edited.len())
+                .find(|&k| edited.is_char_boundary(k))
+                .unwrap_or(0);
+            match round % 4 {
+                0 => edited.insert_str(at, pieces[below(pieces.len())]),
+                1 => {
+                    let end = (at + 1 + below(8)).min(edited.len());
+                    if edited.is_char_boundary(end) {
+                        edited.replace_range(at..end, "");
+                    }
+                }
+                2 => {
+                    // A digit changed: most such edits stay inside one entity.
+                    if let Some(k) = edited[at..].find(|c: char| c.is_ascii_digit()) {
+                        let k = at + k;
+                        edited.replace_range(k..k + 1, &below(10).to_string());
+                    }
+                }
+                _ => edited.insert_str(at, &entity(100 + round)),
+            }
+            let full = parse::<SceneDesc>(path, &edited);
+            let (result, kept) = match parse_scene_text(path, edited.clone(), Some(previous)) {
+                Ok((parsed, n)) => {
+                    let full = full.as_ref().expect("a full parse succeeds too");
+                    assert_eq!(
+                        format!("{:?}", parsed.desc()),
+                        format!("{full:?}"),
+                        "round {round}: {edited}"
+                    );
+                    // The spans carried over are those a fresh scan finds.
+                    if parsed.spans.is_some() {
+                        assert_eq!(parsed.spans, entity_spans(&parsed.text), "round {round}");
+                    }
+                    total += 1;
+                    if n < parsed.desc().entities.len() {
+                        reused += 1;
+                    }
+                    (Some(edited), parsed)
+                }
+                Err(e) => {
+                    let full = full.as_ref().expect_err("a full parse fails too");
+                    assert_eq!(e.to_string(), full.to_string(), "round {round}");
+                    let (again, _) = parse_scene_text(path, text.clone(), None).expect("parses");
+                    (None, again)
+                }
+            };
+            previous = kept;
+            if let Some(t) = result {
+                text = t;
+            }
+        }
+        assert!(
+            reused > total / 4,
+            "{reused} of {total} successful edits reused entities"
+        );
+    }
+}
