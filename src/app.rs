@@ -253,6 +253,29 @@ impl Renderer {
         Ok(info)
     }
 
+    /// Makes the asset cache trust files for which no change is reported through
+    /// [`Renderer::invalidate`] and whose metadata is unchanged, instead of reading every file at
+    /// every load (see [`AssetCache::set_reported_changes`]). For a caller that watches them.
+    pub fn set_reported_changes(&mut self, on: bool) {
+        self.assets.set_reported_changes(on);
+    }
+
+    /// Reports files or directories that may have changed since the last load: their assets
+    /// are read again at the next (see [`AssetCache::invalidate`]).
+    pub fn invalidate(&mut self, changed: &[std::path::PathBuf]) {
+        self.assets.invalidate(changed);
+    }
+
+    /// Reports that any file may have changed: the next load reads every asset again.
+    pub fn invalidate_all(&mut self) {
+        self.assets.invalidate_all();
+    }
+
+    /// Bytes of asset files read by the asset cache.
+    pub fn asset_bytes_read(&self) -> u64 {
+        self.assets.bytes_read()
+    }
+
     /// Queues an already loaded scene for the next frame.
     pub fn submit(&mut self, scene: LoadedScene) {
         self.world.resource_mut::<PendingScene>().0 = Some(scene);

@@ -857,3 +857,84 @@ fn editing_only_the_environment_map_rerenders_and_rebuilds_only_the_map() {
     );
     assert!(brighter == fresh_render(&f.scene), "not the fresh render");
 }
+
+/// Issue 24, goal 1: a reload reads only the asset files an event named (counted in bytes, the
+/// sizes taken from the file system).
+#[test]
+fn a_scene_edit_reads_no_asset_and_an_asset_edit_reads_only_that_asset() {
+    let size = |f: &Fixture, name: &str| std::fs::metadata(f.dir.join(name)).expect("stat").len();
+    let text = |wall: &str| {
+        custom(
+            &format!(
+                r#""wall": Light(emit: {wall}, intensity: 1.0, two_sided: true), "tex": Diffuse(albedo: Image(path: "ball.png")), "tri": Diffuse(albedo: {GREY})"#
+            ),
+            r#"Entity(name: "wall", material: "wall", shape: Quad(a: (-10, -10, 5), b: (10, -10, 5), c: (10, 10, 5), d: (-10, 10, 5))),
+        Entity(name: "ball", material: "tex", shape: Sphere(center: (0, 1.4, 0), radius: 0.3)),
+        Entity(name: "tri", material: "tri", shape: Mesh(path: "tri.obj")),
+        Entity(name: "model", gltf: "quad.gltf", transform: Transform(translate: (0, 30, 0)))"#,
+            4,
+        )
+    };
+    let tri = "v -2 -2 -9\nv 2 -2 -9\nv 0 -3 -9\nf 1 2 3\n";
+    let f = Fixture::open_with("asset-reads", &text(RED), |dir| {
+        write_png(&dir.join("ball.png"), [128, 128, 128]);
+        write_png(&dir.join("t.png"), [255, 0, 0]);
+        write_gltf_quad(dir);
+        std::fs::write(dir.join("tri.obj"), tri).expect("write mesh");
+    });
+    f.rendered();
+    assert_eq!(f.centre(), [255, 0, 0]);
+
+    // (a) The scene's text only: no asset is read.
+    f.write_scene(&text(BLUE));
+    let r = f.rendered();
+    assert_eq!(f.centre(), [0, 0, 255]);
+    assert_eq!(r.asset_bytes_read, 0, "{r:?}");
+
+    // (b) One asset: that file only (a glTF buffer: it and the glTF file, parsed again).
+    write_png(&f.dir.join("ball.png"), [0, 255, 0]);
+    let r = f.rendered();
+    assert_eq!(r.asset_bytes_read, size(&f, "ball.png"), "{r:?}");
+    std::fs::write(f.dir.join("tri.obj"), tri.replace("-9", "-8")).expect("write mesh");
+    let r = f.rendered();
+    assert_eq!(r.asset_bytes_read, size(&f, "tri.obj"), "{r:?}");
+    write_quad_buffer(&f.dir, 1.0);
+    let r = f.rendered();
+    assert!(r.bvh_rebuilt, "{r}");
+    assert_eq!(
+        r.asset_bytes_read,
+        size(&f, "quad.bin") + size(&f, "quad.gltf"),
+        "{r:?}"
+    );
+}
+
+/// Issue 24, goal 1 (c): a mesh rewritten with the same size and mtime is read again because
+/// its event names it.
+#[test]
+fn a_same_size_same_mtime_rewrite_with_an_event_is_read_again() {
+    let covering = "v -2 -2 0\nv 2 -2 0\nv 0 3 0\nf 1 2 3\n";
+    let aside = "v -2 -2 0\nv 2 -2 0\nv 9 3 0\nf 1 2 3\n";
+    let materials = format!(
+        r#""wall": Light(emit: {RED}, intensity: 1.0, two_sided: true), "tri": Light(emit: {BLUE}, intensity: 1.0, two_sided: true)"#
+    );
+    let entities = r#"Entity(name: "wall", material: "wall", shape: Quad(a: (-10, -10, 5), b: (10, -10, 5), c: (10, 10, 5), d: (-10, 10, 5))),
+        Entity(name: "tri", material: "tri", shape: Mesh(path: "tri.obj"))"#;
+    let f = Fixture::open_with("asset-reads-stamp", &custom(&materials, entities, 4), |dir| {
+        std::fs::write(dir.join("tri.obj"), covering).expect("write mesh");
+    });
+    f.rendered();
+    assert_eq!(f.centre(), [0, 0, 255]);
+    let mesh = f.dir.join("tri.obj");
+    let stamp = std::fs::metadata(&mesh)
+        .and_then(|m| m.modified())
+        .expect("mtime");
+    std::fs::write(&mesh, aside).expect("write mesh");
+    std::fs::File::options()
+        .write(true)
+        .open(&mesh)
+        .and_then(|file| file.set_modified(stamp))
+        .expect("restore the mtime");
+    let r = f.rendered();
+    assert_eq!(r.asset_bytes_read, aside.len() as u64, "{r:?}");
+    assert_eq!(f.centre(), [255, 0, 0]);
+}

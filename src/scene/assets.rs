@@ -1,7 +1,7 @@
 //! Decoded assets by path (images, meshes, environment maps), reused across loads while their
 //! files' bytes are unchanged.
 
-use std::collections::{HashMap, HashSet};
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
@@ -19,11 +19,16 @@ struct Cached<T> {
 /// Largest asset file read (a 8192 × 4096 float RGBA map, uncompressed, is 512 MiB).
 const MAX_ASSET_BYTES: u64 = 1 << 30;
 
-/// Decoded images, meshes and environment maps by path. Every load reads the file's bytes and decodes them again
-/// only when their hash differs from the cached one: content decides, not the modification time
-/// or the size, which a `cp -p`, a build tool or a `git checkout` on a coarse-mtime file system
-/// can leave unchanged for a different file. An edit to one texture or mesh decodes that file
-/// only; reading and hashing an unchanged file costs about 1 ms per 4 MB (SipHash).
+/// Decoded images, meshes and environment maps by path. A file's bytes are decoded again only
+/// when their hash differs from the cached one: content decides, not the modification time or
+/// the size, which a `cp -p`, a build tool or a `git checkout` on a coarse-mtime file system can
+/// leave unchanged for a different file. An edit to one texture or mesh decodes that file only.
+///
+/// Every load reads and hashes each file it asks for (once per load), unless the caller reports
+/// file changes ([`AssetCache::set_reported_changes`], the watcher): then a file is read again
+/// only after [`AssetCache::invalidate`] named it (or its symlink's target, or a directory
+/// above either), or when its metadata (length, times, device and inode of the file a symlink
+/// resolves to) changed since it was read.
 #[derive(Default)]
 pub struct AssetCache {
     images: HashMap<PathBuf, Cached<ImageTexture>>,
@@ -31,6 +36,9 @@ pub struct AssetCache {
     meshes: HashMap<PathBuf, Cached<MeshData>>,
     environments: HashMap<PathBuf, Cached<EnvironmentMap>>,
     gltfs: HashMap<PathBuf, CachedGltf>,
+    /// The scene file's last good parse, for the next load to re-parse only what changed.
+    parsed_scene: Option<super::incremental::ParsedScene>,
+    files: Files,
     decodes: u64,
     mesh_loads: u64,
     environment_builds: u64,
@@ -40,8 +48,130 @@ pub struct AssetCache {
     requested_set: HashSet<PathBuf>,
 }
 
-/// The bytes of the file at `path`: a regular file of at most [`MAX_ASSET_BYTES`].
-fn read_asset(path: &Path) -> Result<Vec<u8>, String> {
+/// What identifies the content of a file without reading it: metadata of the file a path
+/// resolves to (symlinks followed).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Stamp {
+    len: u64,
+    modified: Option<std::time::SystemTime>,
+    #[cfg(unix)]
+    unix: (u64, u64, i64, i64),
+}
+
+impl Stamp {
+    fn of(meta: &std::fs::Metadata) -> Self {
+        #[cfg(unix)]
+        use std::os::unix::fs::MetadataExt;
+        Self {
+            len: meta.len(),
+            modified: meta.modified().ok(),
+            #[cfg(unix)]
+            unix: (meta.dev(), meta.ino(), meta.ctime(), meta.ctime_nsec()),
+        }
+    }
+}
+
+/// A file as last read: its metadata then, the hash of its bytes, and whether a change was
+/// reported since.
+struct Record {
+    stamp: Stamp,
+    hash: u64,
+    stale: bool,
+}
+
+/// The files read, for telling which must be read again.
+#[derive(Default)]
+struct Files {
+    records: HashMap<PathBuf, Record>,
+    /// Paths as the watcher names them (canonical parent directory joined with the name; for a
+    /// symlink also its canonical target) → the paths the files were asked for by.
+    keys: BTreeMap<PathBuf, HashSet<PathBuf>>,
+    /// Whether changes are reported through [`AssetCache::invalidate`].
+    reported: bool,
+    /// Paths read during the current load (each is read once per load).
+    this_load: HashSet<PathBuf>,
+    bytes_read: u64,
+}
+
+/// The paths under which a watcher may report a change of `path`: its own path with the parent
+/// directory made canonical, and its canonical path (which differs for a symlink).
+fn change_keys(path: &Path) -> Vec<PathBuf> {
+    let mut keys = Vec::with_capacity(2);
+    if let Ok(absolute) = std::path::absolute(path) {
+        if let (Some(parent), Some(name)) = (absolute.parent(), absolute.file_name())
+            && let Ok(dir) = parent.canonicalize()
+        {
+            keys.push(dir.join(name));
+        }
+        keys.push(absolute);
+    }
+    if let Ok(target) = path.canonicalize()
+        && !keys.contains(&target)
+    {
+        keys.push(target);
+    }
+    keys
+}
+
+impl Files {
+    /// The hash of the bytes of `path`, and the bytes when they had to be read: a file is
+    /// trusted without reading when it was read during this load, or when changes are reported,
+    /// none was for it and its metadata is as when it was read.
+    fn current(&mut self, path: &Path) -> Result<(u64, Option<Vec<u8>>), String> {
+        if let Some(r) = self.records.get(path)
+            && !r.stale
+            && (self.this_load.contains(path)
+                || (self.reported
+                    && std::fs::metadata(path).is_ok_and(|m| Stamp::of(&m) == r.stamp)))
+        {
+            return Ok((r.hash, None));
+        }
+        let (hash, bytes) = self.read(path)?;
+        Ok((hash, Some(bytes)))
+    }
+
+    /// Reads `path`, records its metadata and hash, and returns the hash and the bytes.
+    fn read(&mut self, path: &Path) -> Result<(u64, Vec<u8>), String> {
+        let (meta, bytes) = read_asset(path)?;
+        self.bytes_read += bytes.len() as u64;
+        let hash = hash_bytes(&bytes);
+        let record = Record {
+            stamp: Stamp::of(&meta),
+            hash,
+            stale: false,
+        };
+        self.records.insert(path.to_path_buf(), record);
+        // Again at every read: a symlink may point elsewhere now (the old keys stay, at worst
+        // causing a needless read).
+        for key in change_keys(path) {
+            self.keys.entry(key).or_default().insert(path.to_path_buf());
+        }
+        self.this_load.insert(path.to_path_buf());
+        Ok((hash, bytes))
+    }
+
+    /// Marks stale every file read under a path or directory in `changed`.
+    fn invalidate(&mut self, changed: &[PathBuf]) {
+        for path in changed {
+            for key in change_keys(path).iter().chain([path]) {
+                let under = self
+                    .keys
+                    .range::<PathBuf, _>(key..)
+                    .take_while(|(k, _)| k.starts_with(key));
+                for (_, paths) in under {
+                    for p in paths {
+                        if let Some(r) = self.records.get_mut(p) {
+                            r.stale = true;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The metadata and bytes of the file at `path`: a regular file of at most [`MAX_ASSET_BYTES`].
+fn read_asset(path: &Path) -> Result<(std::fs::Metadata, Vec<u8>), String> {
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read: {e}"))?;
     if meta.is_dir() {
         return Err("is a directory, not a file".into());
@@ -56,7 +186,8 @@ fn read_asset(path: &Path) -> Result<Vec<u8>, String> {
             meta.len()
         ));
     }
-    std::fs::read(path).map_err(|e| format!("cannot read: {e}"))
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
+    Ok((meta, bytes))
 }
 
 /// Hash of a file's bytes.
@@ -69,17 +200,22 @@ fn hash_bytes(bytes: &[u8]) -> u64 {
 
 /// The cached value for `path`, or `load(bytes)` when the file is new or its bytes changed.
 fn cached<T>(
+    files: &mut Files,
     map: &mut HashMap<PathBuf, Cached<T>>,
     path: &Path,
     load: impl FnOnce(&[u8]) -> Result<T, String>,
 ) -> Result<(Arc<T>, bool), String> {
-    let bytes = read_asset(path)?;
-    let hash = hash_bytes(&bytes);
+    let (hash, bytes) = files.current(path)?;
     if let Some(c) = map.get(path)
         && c.hash == hash
     {
         return Ok((c.value.clone(), false));
     }
+    // Trusted but not decoded this way (the other encoding of an image): read it now.
+    let (hash, bytes) = match bytes {
+        Some(bytes) => (hash, bytes),
+        None => files.read(path)?,
+    };
     let value = Arc::new(load(&bytes)?);
     map.insert(
         path.to_path_buf(),
@@ -165,7 +301,7 @@ impl AssetCache {
     /// the cache (once per content of the file, not once per load of the scene).
     pub fn environment(&mut self, path: &Path) -> Result<Arc<EnvironmentMap>, String> {
         self.note(path);
-        let (value, fresh) = cached(&mut self.environments, path, |bytes| {
+        let (value, fresh) = cached(&mut self.files, &mut self.environments, path, |bytes| {
             decode_environment(path, bytes)
         })?;
         self.environment_builds += u64::from(fresh);
@@ -186,6 +322,35 @@ impl AssetCache {
     pub fn begin_load(&mut self) {
         self.requested.clear();
         self.requested_set.clear();
+        self.files.this_load.clear();
+    }
+
+    /// Whether the caller reports every change to the files through [`AssetCache::invalidate`]
+    /// (a watcher). Then a file is read again only when a change was reported for it or its
+    /// metadata changed; otherwise (the default) every load reads each file it asks for once.
+    pub fn set_reported_changes(&mut self, on: bool) {
+        self.files.reported = on;
+    }
+
+    /// Reports that the files or directories at `changed` may have changed: every asset file
+    /// at or under one of them (by its path with the parent directory made canonical, or by
+    /// its canonical path: a symlink is also named by its target's) is read again when next
+    /// asked for.
+    pub fn invalidate(&mut self, changed: &[PathBuf]) {
+        self.files.invalidate(changed);
+    }
+
+    /// Reports that any file may have changed (events were lost): every file is read again
+    /// when next asked for.
+    pub fn invalidate_all(&mut self) {
+        for r in self.files.records.values_mut() {
+            r.stale = true;
+        }
+    }
+
+    /// Bytes of asset files read so far.
+    pub fn bytes_read(&self) -> u64 {
+        self.files.bytes_read
     }
 
     /// Records that the load asked for `path` (a texture, a mesh or a prefab), whether or not
@@ -216,7 +381,9 @@ impl AssetCache {
             Encoding::Srgb => &mut self.images,
             Encoding::Linear => &mut self.linear_images,
         };
-        let (value, fresh) = cached(map, path, |bytes| decode_image(path, bytes, encoding))?;
+        let (value, fresh) = cached(&mut self.files, map, path, |bytes| {
+            decode_image(path, bytes, encoding)
+        })?;
         self.decodes += u64::from(fresh);
         Ok(value)
     }
@@ -226,8 +393,10 @@ impl AssetCache {
     /// are noted as asked for (see [`AssetCache::note`]), read or not.
     pub fn gltf(&mut self, path: &Path) -> Result<Arc<GltfAsset>, String> {
         self.note(path);
-        let bytes = read_asset(path).map_err(|e| format!("glTF {}: {e}", path.display()))?;
-        let hash = hash_bytes(&bytes);
+        let fail = |e: String| format!("glTF {}: {e}", path.display());
+        let (hash, bytes) = self.files.current(path).map_err(fail)?;
+        // Buffers read while checking, not to be read twice.
+        let mut read = HashMap::new();
         if let Some(c) = self.gltfs.get(path)
             && c.hash == hash
         {
@@ -235,22 +404,44 @@ impl AssetCache {
             for (buffer, _) in &value.buffers {
                 self.note(buffer);
             }
-            let unchanged = value
-                .buffers
-                .iter()
-                .all(|(p, h)| read_asset(p).is_ok_and(|b| hash_bytes(&b) == *h));
+            let mut unchanged = true;
+            for (p, h) in &value.buffers {
+                match self.files.current(p) {
+                    Ok((now, bytes)) => {
+                        if let Some(bytes) = bytes {
+                            read.insert(p.clone(), bytes);
+                        }
+                        if now != *h {
+                            unchanged = false;
+                            break;
+                        }
+                    }
+                    Err(_) => {
+                        unchanged = false;
+                        break;
+                    }
+                }
+            }
             if unchanged {
                 return Ok(value);
             }
         }
+        let (hash, bytes) = match bytes {
+            Some(bytes) => (hash, bytes),
+            None => self.files.read(path).map_err(fail)?,
+        };
         let dir = path.parent().unwrap_or(Path::new(""));
         let mut buffers = Vec::new();
         let mut asked = Vec::new();
+        let files = &mut self.files;
         let scene = read_gltf(path, &bytes, |relative| {
             let full = dir.join(relative);
             asked.push(full.clone());
-            let bytes = read_asset(&full)?;
-            buffers.push((full, hash_bytes(&bytes)));
+            let (hash, bytes) = match (files.current(&full)?, read.remove(&full)) {
+                ((hash, Some(bytes)), _) | ((hash, None), Some(bytes)) => (hash, bytes),
+                ((_, None), None) => files.read(&full)?,
+            };
+            buffers.push((full, hash));
             Ok(bytes)
         });
         for p in &asked {
@@ -272,10 +463,25 @@ impl AssetCache {
         Ok(value)
     }
 
+    /// Takes the scene file's last good parse (see [`super::incremental`]), if kept.
+    pub fn take_parsed_scene(&mut self) -> Option<super::incremental::ParsedScene> {
+        self.parsed_scene.take()
+    }
+
+    /// Keeps a scene file's parse for the next load.
+    pub fn keep_parsed_scene(&mut self, parsed: super::incremental::ParsedScene) {
+        self.parsed_scene = Some(parsed);
+    }
+
     /// The mesh at `path`, read now or taken from the cache.
     pub fn mesh(&mut self, path: &Path) -> Result<Arc<MeshData>, String> {
         self.note(path);
-        let (value, fresh) = cached(&mut self.meshes, path, super::mesh::parse_obj)?;
+        let (value, fresh) = cached(
+            &mut self.files,
+            &mut self.meshes,
+            path,
+            super::mesh::parse_obj,
+        )?;
         self.mesh_loads += u64::from(fresh);
         Ok(value)
     }

@@ -301,6 +301,8 @@ impl Watch {
         let mut renderer = Renderer::new(options.threads, plan)?;
         renderer.set_overrides(options.overrides);
         renderer.set_layout(options.layout);
+        // Every change to a dependency comes as an event, passed on before each load.
+        renderer.set_reported_changes(true);
         // The loop writes the image itself: it knows which writes are worth making (see
         // `OnDisk`) and times them apart from the ECS update.
         renderer.set_output(None, false);
@@ -582,6 +584,14 @@ impl Watch {
         let decodes = self.renderer.texture_decodes();
         let environments = self.renderer.environment_builds();
         let before = self.renderer.counters();
+        let bytes_read = self.renderer.asset_bytes_read();
+        // The cache reads again only the files named by events (all of them if events were lost)
+        // or whose metadata changed.
+        if p.overflow {
+            self.renderer.invalidate_all();
+        } else {
+            self.renderer.invalidate(&p.paths);
+        }
         // Read again at once if the load made us watch something new (a directory, or a file the
         // last load did not read): a change to it between the read and the watch would go
         // unnoticed, as its events were dropped until then.
@@ -602,6 +612,8 @@ impl Watch {
                     files.extend(self.renderer.requested());
                     let files = self.dependencies(files, out);
                     if self.watch_files(&files, out) && !std::mem::replace(&mut retried, true) {
+                        // Events for the newly watched files were dropped until now.
+                        self.renderer.invalidate_all();
                         continue;
                     }
                     return Err(Failure::Error(e.to_string(), e.source_line));
@@ -610,6 +622,7 @@ impl Watch {
             let files = self.dependencies(info.dependencies.clone(), out);
             self.good_files = files.clone();
             if self.watch_files(&files, out) && !std::mem::replace(&mut retried, true) {
+                self.renderer.invalidate_all();
                 continue;
             }
             break (info, parse);
@@ -655,6 +668,7 @@ impl Watch {
                     .renderer
                     .environment_builds()
                     .saturating_sub(environments),
+                asset_bytes_read: self.renderer.asset_bytes_read().saturating_sub(bytes_read),
                 parse,
                 counters: before,
                 ..ReloadReport::started(number, p.paths.clone(), info.settings.spp)

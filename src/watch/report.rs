@@ -31,6 +31,9 @@ pub struct ReloadReport {
     /// Environment maps decoded and given their distribution by the load (an unchanged map
     /// comes from the cache).
     pub environments_built: u64,
+    /// Bytes of asset files (textures, meshes, maps, glTF files and buffers) the load read: an
+    /// unchanged file is not read again.
+    pub asset_bytes_read: u64,
     /// Reading, parsing and validating the scene, textures included.
     pub parse: Duration,
     /// Applying the scene to the world and assigning materials (the BVH excluded).
@@ -68,6 +71,7 @@ impl ReloadReport {
             materials_synced: false,
             textures_decoded: 0,
             environments_built: 0,
+            asset_bytes_read: 0,
             parse: Duration::ZERO,
             ecs: Duration::ZERO,
             bvh: Duration::ZERO,
