@@ -29,6 +29,7 @@ use super::format::{
     CameraDesc, EntityDesc, MAX_COORDINATE, MaterialDesc, PrefabDesc, SceneDesc, SettingsDesc,
     ShapeDesc, TextureDesc,
 };
+use super::incremental::parse_scene_text;
 use super::locate::{Locator, Places, SourceText};
 
 /// Most entities a scene may expand to (prefabs can multiply quickly).
@@ -82,6 +83,9 @@ pub struct LoadStats {
     /// bounds), 8 bounding-box corners per mesh placement, every vertex only when the corners
     /// exceed the limit, and the few points of each analytic shape.
     pub limit_vertices: u64,
+    /// Entities of the scene file parsed: all of them on a first load, only those an edit
+    /// touched on a reload ([`super::incremental`]).
+    pub entities_parsed: u64,
 }
 
 /// A parsed, validated scene with its prefabs expanded and its assets loaded.
@@ -234,11 +238,28 @@ struct Expander<'a> {
 pub fn load_scene(path: &Path, assets: &mut AssetCache) -> Result<LoadedScene, SceneError> {
     let source = std::fs::read_to_string(path)
         .map_err(|e| SceneError::at(path, None, format!("cannot read scene: {e}")))?;
-    let desc: SceneDesc = parse(path, &source)?;
+    let text: Arc<str> = source.as_str().into();
+    let previous = assets.take_parsed_scene();
+    let (parsed, entities_parsed) = parse_scene_text(path, source, previous)?;
+    let loaded = expand_scene(path, text, parsed.desc(), entities_parsed, assets);
+    // The parse is good whatever the expansion finds: the next edit starts from it.
+    assets.keep_parsed_scene(parsed);
+    loaded
+}
+
+/// Expands the parsed scene `desc` of the file `path` (its text `text`, `entities_parsed` of
+/// its entities parsed by this load) into a [`LoadedScene`].
+fn expand_scene(
+    path: &Path,
+    text: Arc<str>,
+    desc: &SceneDesc,
+    entities_parsed: usize,
+    assets: &mut AssetCache,
+) -> Result<LoadedScene, SceneError> {
     let file = SourceFile {
         id: 0,
         path: path.to_path_buf(),
-        source: source.into(),
+        source: text,
     };
     let mut x = Expander {
         assets,
@@ -258,7 +279,10 @@ pub fn load_scene(path: &Path, assets: &mut AssetCache) -> Result<LoadedScene, S
         textures: HashMap::new(),
         chain: vec![std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())],
         slashed: false,
-        stats: LoadStats::default(),
+        stats: LoadStats {
+            entities_parsed: entities_parsed as u64,
+            ..LoadStats::default()
+        },
         gltf_bounds: HashMap::new(),
         warnings: Vec::new(),
         warned: HashSet::new(),
@@ -276,7 +300,7 @@ pub fn load_scene(path: &Path, assets: &mut AssetCache) -> Result<LoadedScene, S
     Ok(LoadedScene {
         path: path.to_path_buf(),
         camera: desc.camera,
-        settings: desc.settings,
+        settings: desc.settings.clone(),
         materials: x.materials,
         entities: x.entities,
         dependencies: x.dependencies,
