@@ -919,9 +919,13 @@ fn a_same_size_same_mtime_rewrite_with_an_event_is_read_again() {
     );
     let entities = r#"Entity(name: "wall", material: "wall", shape: Quad(a: (-10, -10, 5), b: (10, -10, 5), c: (10, 10, 5), d: (-10, 10, 5))),
         Entity(name: "tri", material: "tri", shape: Mesh(path: "tri.obj"))"#;
-    let f = Fixture::open_with("asset-reads-stamp", &custom(&materials, entities, 4), |dir| {
-        std::fs::write(dir.join("tri.obj"), covering).expect("write mesh");
-    });
+    let f = Fixture::open_with(
+        "asset-reads-stamp",
+        &custom(&materials, entities, 4),
+        |dir| {
+            std::fs::write(dir.join("tri.obj"), covering).expect("write mesh");
+        },
+    );
     f.rendered();
     assert_eq!(f.centre(), [0, 0, 255]);
     let mesh = f.dir.join("tri.obj");

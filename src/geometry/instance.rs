@@ -10,8 +10,8 @@ use glam::{Affine3A, Vec2, Vec3};
 
 use super::aabb::RayQuery;
 use super::bvh::{Bounds, Bvh};
-use super::surface::{Surface, Tangent, uv_derivatives};
 use super::ray::{Ray, gamma};
+use super::surface::{Surface, Tangent, uv_derivatives};
 use super::triangle::intersect_triangle;
 use crate::ecs::components::MeshData;
 
