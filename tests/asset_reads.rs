@@ -119,7 +119,7 @@ fn a_change_reported_for_a_symlinks_target_or_a_directory_reads_the_link_again()
 
     let canonical = target.canonicalize().expect("canonical");
     let read = cache.bytes_read();
-    cache.invalidate(&[canonical.clone()]);
+    cache.invalidate(std::slice::from_ref(&canonical));
     assert_eq!(first_x(&mut cache, &link), 1.0);
     assert_eq!(cache.bytes_read() - read, size(&target), "target named");
 
