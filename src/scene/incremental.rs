@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 
 use super::error::SceneError;
 use super::format::{EntityDesc, SceneDesc, parse};
+use super::locate::{block_comment_end, raw_string};
 
 /// A scene file's last good parse.
 pub struct ParsedScene {
@@ -162,26 +163,7 @@ fn lex(text: &str) -> Option<Vec<(usize, Lexeme)>> {
                     .position(|&c| c == b'\n')
                     .map_or(b.len(), |p| i + p);
             }
-            b'/' if b.get(i + 1) == Some(&b'*') => {
-                let mut depth = 0usize;
-                loop {
-                    if i >= b.len() {
-                        return None;
-                    }
-                    if b[i..].starts_with(b"/*") {
-                        depth += 1;
-                        i += 2;
-                    } else if b[i..].starts_with(b"*/") {
-                        depth -= 1;
-                        i += 2;
-                        if depth == 0 {
-                            break;
-                        }
-                    } else {
-                        i += 1;
-                    }
-                }
-            }
+            b'/' if b.get(i + 1) == Some(&b'*') => i = block_comment_end(b, i)?,
             b'"' => {
                 i = quoted(b, i + 1, b'"')?;
                 out.push((at, Lexeme::Other));
@@ -213,17 +195,7 @@ fn lex(text: &str) -> Option<Vec<(usize, Lexeme)>> {
                 let word = &b[at..i];
                 // Raw strings `r"…"`, `r#"…"#` and byte strings `b"…"`, `br#"…"#`.
                 if matches!(word, b"r" | b"br") && matches!(b.get(i), Some(b'"' | b'#')) {
-                    let hashes = b[i..].iter().take_while(|&&c| c == b'#').count();
-                    let open = i + hashes;
-                    if b.get(open) != Some(&b'"') {
-                        return None;
-                    }
-                    let mut closing = vec![b'"'];
-                    closing.extend(std::iter::repeat_n(b'#', hashes));
-                    let p = b[open + 1..]
-                        .windows(closing.len())
-                        .position(|w| w == closing.as_slice())?;
-                    i = open + 1 + p + closing.len();
+                    i = raw_string(b, i).filter(|r| r.closed)?.end;
                     out.push((at, Lexeme::Other));
                 } else if word == b"b" && b.get(i) == Some(&b'"') {
                     i = quoted(b, i + 1, b'"')?;

@@ -225,23 +225,7 @@ fn tokens<'a>(source: &'a str, from: usize, mut each: impl FnMut(Token<'a>) -> b
                     .position(|&c| c == b'\n')
                     .map_or(b.len(), |p| i + p);
             }
-            b'/' if b.get(i + 1) == Some(&b'*') => {
-                let mut depth = 0usize;
-                while i < b.len() {
-                    if b[i..].starts_with(b"/*") {
-                        depth += 1;
-                        i += 2;
-                    } else if b[i..].starts_with(b"*/") {
-                        depth -= 1;
-                        i += 2;
-                        if depth == 0 {
-                            break;
-                        }
-                    } else {
-                        i += 1;
-                    }
-                }
-            }
+            b'/' if b.get(i + 1) == Some(&b'*') => i = block_comment_end(b, i).unwrap_or(b.len()),
             b'\'' => {
                 // A character literal: `'x'` or `'\x'` (`'"'` would otherwise open a string).
                 i += if b.get(i + 1) == Some(&b'\\') { 4 } else { 3 };
@@ -253,21 +237,13 @@ fn tokens<'a>(source: &'a str, from: usize, mut each: impl FnMut(Token<'a>) -> b
                 }
                 let word = &b[start..i];
                 if word == b"r" && matches!(b.get(i), Some(b'"' | b'#')) {
-                    // A raw string `r#"…"#`: no escapes, closed by a quote and as many hashes.
-                    let hashes = b[i..].iter().take_while(|&&c| c == b'#').count();
-                    let open = i + hashes;
-                    if b.get(open) == Some(&b'"') {
-                        let mut closing = vec![b'"'];
-                        closing.extend(std::iter::repeat_n(b'#', hashes));
-                        let end = b[open + 1..]
-                            .windows(closing.len())
-                            .position(|w| w == closing.as_slice())
-                            .map_or(b.len(), |p| open + 1 + p);
-                        let text = source.get(open + 1..end).unwrap_or_default();
+                    if let Some(raw) = raw_string(b, i) {
+                        let end = raw.contents.end;
+                        let text = source.get(raw.contents).unwrap_or_default();
                         if !each(Token::Str(start, text)) {
                             return end - from;
                         }
-                        i = end + closing.len();
+                        i = raw.end;
                     }
                 } else if word == b"Entity" {
                     let next = b[i..].iter().position(|c| !c.is_ascii_whitespace());
@@ -280,6 +256,64 @@ fn tokens<'a>(source: &'a str, from: usize, mut each: impl FnMut(Token<'a>) -> b
         }
     }
     b.len().saturating_sub(from)
+}
+
+/// The offset past the `*/` that closes the (nestable) block comment opening at `from`, or
+/// `None` if the text ends first.
+pub(super) fn block_comment_end(b: &[u8], from: usize) -> Option<usize> {
+    let (mut i, mut depth) = (from, 0usize);
+    while i < b.len() {
+        if b[i..].starts_with(b"/*") {
+            depth += 1;
+            i += 2;
+        } else if b[i..].starts_with(b"*/") {
+            depth -= 1;
+            i += 2;
+            if depth == 0 {
+                return Some(i);
+            }
+        } else {
+            i += 1;
+        }
+    }
+    None
+}
+
+/// A raw string's contents and end.
+pub(super) struct RawString {
+    /// Its contents (no escapes); they run to the end of the text if it is not closed.
+    pub contents: std::ops::Range<usize>,
+    /// The offset past its closing quote and hashes (the end of the text if not closed).
+    pub end: usize,
+    /// Whether it is closed.
+    pub closed: bool,
+}
+
+/// The raw string `r#"…"#` whose hashes (or quote) start at `at`, just after its `r`: no
+/// escapes, closed by a quote and as many hashes. `None` if no quote follows the hashes.
+pub(super) fn raw_string(b: &[u8], at: usize) -> Option<RawString> {
+    let hashes = b[at..].iter().take_while(|&&c| c == b'#').count();
+    let open = at + hashes;
+    if b.get(open) != Some(&b'"') {
+        return None;
+    }
+    let mut closing = vec![b'"'];
+    closing.extend(std::iter::repeat_n(b'#', hashes));
+    let found = b[open + 1..]
+        .windows(closing.len())
+        .position(|w| w == closing.as_slice());
+    Some(match found {
+        Some(p) => RawString {
+            contents: open + 1..open + 1 + p,
+            end: open + 1 + p + closing.len(),
+            closed: true,
+        },
+        None => RawString {
+            contents: open + 1..b.len(),
+            end: b.len(),
+            closed: false,
+        },
+    })
 }
 
 #[cfg(test)]
