@@ -235,7 +235,11 @@ struct Expander<'a> {
 
 /// Reads, parses and validates the scene at `path`, expanding prefabs and loading textures and
 /// meshes through `assets`.
+///
+/// Each call is one load of the cache ([`AssetCache::begin_load`]): a file read by an earlier
+/// call is read again, unless a watcher reports changes to the cache.
 pub fn load_scene(path: &Path, assets: &mut AssetCache) -> Result<LoadedScene, SceneError> {
+    assets.begin_load();
     let source = std::fs::read_to_string(path)
         .map_err(|e| SceneError::at(path, None, format!("cannot read scene: {e}")))?;
     let text: Arc<str> = source.as_str().into();
