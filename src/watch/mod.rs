@@ -72,7 +72,6 @@
 //! # Ok::<(), rondo::watch::WatchError>(())
 //! ```
 
-use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -87,15 +86,17 @@ mod denoiser;
 mod error;
 mod files;
 mod options;
+mod pending;
 mod report;
 mod session;
 
 pub use denoiser::{DenoiseSink, Denoised, DenoisedFrame, HIGH_QUALITY_FROM_SPP};
 use denoiser::{DenoiseWorker, Denoising, WorkerNews};
 pub use error::WatchError;
+use files::IDLE_POLL;
 pub use files::*;
-use files::{IDLE_POLL, REPORTS_CLOSE};
 pub use options::WatchOptions;
+use pending::{Failure, Pending};
 pub use report::*;
 pub use session::WatchSession;
 
@@ -137,103 +138,6 @@ impl StopHandle {
     /// Whether [`StopHandle::stop`] was called.
     pub fn is_stopped(&self) -> bool {
         self.stopped.load(Ordering::SeqCst)
-    }
-}
-
-/// Why a load did not give a scene.
-enum Failure {
-    /// The scene file does not exist.
-    Missing,
-    /// The scene (or a file it reads) is bad: the error and the line it quotes.
-    Error(String, Option<String>),
-}
-
-/// The changes gathered since the last reload, until they are loaded.
-struct Pending {
-    /// The files concerned.
-    paths: Vec<PathBuf>,
-    /// When the latest event happened: about when the save ended.
-    last: Instant,
-    /// Files with an event that leaves them unfinished and no completing event since.
-    unfinished: HashSet<PathBuf>,
-    /// Those of them written through a descriptor still open: their close is waited for.
-    writing: HashSet<PathBuf>,
-    /// Whether an event completed a file.
-    completed: bool,
-    /// Whether anything but metadata may have changed (always, for the first load).
-    content: bool,
-    /// Whether events were lost.
-    overflow: bool,
-    /// Whether the watched directories must be set up afresh.
-    rearm: bool,
-    /// A failed load of these changes, reported at the given time unless another event comes.
-    failed: Option<(Failure, Instant)>,
-}
-
-impl Pending {
-    /// The first load: complete by definition.
-    fn initial() -> Self {
-        Self {
-            paths: Vec::new(),
-            last: Instant::now(),
-            unfinished: HashSet::new(),
-            writing: HashSet::new(),
-            completed: true,
-            content: true,
-            overflow: false,
-            rearm: false,
-            failed: None,
-        }
-    }
-
-    fn add(&mut self, change: Change) {
-        self.last = self.last.max(change.at);
-        self.failed = None;
-        self.overflow |= change.overflow;
-        self.rearm |= change.rearm;
-        self.content |= change.overflow;
-        if change.overflow {
-            // Lost events may have held the closes: wait for quiet instead.
-            self.writing.clear();
-        }
-        for (path, effect) in change.paths {
-            match effect {
-                Effect::Metadata => {}
-                Effect::Partial => {
-                    // Removed or renamed away: a writer still holding the old file no longer
-                    // writes this name.
-                    self.writing.remove(&path);
-                    self.unfinished.insert(path.clone());
-                    self.content = true;
-                }
-                Effect::Writing => {
-                    self.writing.insert(path.clone());
-                    self.unfinished.insert(path.clone());
-                    self.content = true;
-                }
-                Effect::Complete => {
-                    self.writing.remove(&path);
-                    self.unfinished.remove(&path);
-                    self.completed = true;
-                    self.content = true;
-                }
-            }
-            if !self.paths.contains(&path) {
-                self.paths.push(path);
-            }
-        }
-    }
-
-    /// When to act: report a failure, load now (every file complete), wait for the close of a
-    /// file a writer holds open (where the platform reports closes; at most
-    /// [`OPEN_WRITER_PATIENCE`] of quiet), or load once the files have been quiet for `window`.
-    fn due(&self, window: Duration) -> Instant {
-        match &self.failed {
-            Some((_, at)) => *at,
-            None if self.completed && self.unfinished.is_empty() && !self.overflow => self.last,
-            None if REPORTS_CLOSE && !self.writing.is_empty() => self.last + OPEN_WRITER_PATIENCE,
-            None => self.last + window,
-        }
     }
 }
 
