@@ -548,6 +548,55 @@ fn elements(
     Some((0..count).map(move |i| &bytes[offset + i * stride..offset + i * stride + size]))
 }
 
+/// The sparse substitutions of accessor `acc` (of `count` elements of `size` bytes): each
+/// target element's index, checked to be below `count`, with its new value's bytes. Empty for an
+/// accessor without sparse storage.
+fn sparse_values<'b>(
+    acc: &gltf::Accessor,
+    count: usize,
+    size: usize,
+    buffers: &'b [Vec<u8>],
+) -> Result<Vec<(usize, &'b [u8])>, String> {
+    let i = acc.index();
+    let Some(sparse) = acc.sparse() else {
+        return Ok(Vec::new());
+    };
+    let n = sparse.count();
+    let idx = sparse.indices();
+    let it = match idx.index_type() {
+        gltf::accessor::sparse::IndexType::U8 => DataType::U8,
+        gltf::accessor::sparse::IndexType::U16 => DataType::U16,
+        gltf::accessor::sparse::IndexType::U32 => DataType::U32,
+    };
+    let isize = component_size(it);
+    let ibytes =
+        view_bytes(&idx.view(), buffers).map_err(|e| format!("accessor {i} sparse: {e}"))?;
+    let vals = sparse.values();
+    let vbytes =
+        view_bytes(&vals.view(), buffers).map_err(|e| format!("accessor {i} sparse: {e}"))?;
+    let (Some(indices), Some(values)) = (
+        elements(ibytes, idx.offset(), isize, isize, n),
+        elements(vbytes, vals.offset(), size, size, n),
+    ) else {
+        return Err(format!(
+            "accessor {i}: sparse data outside its buffer views"
+        ));
+    };
+    indices
+        .zip(values)
+        .map(|(ib, vb)| {
+            let target = uint(ib, it) as usize;
+            if target < count {
+                Ok((target, vb))
+            } else {
+                Err(format!(
+                    "accessor {i}: sparse index {target} out of range (count {count})"
+                ))
+            }
+        })
+        .collect()
+}
+
 /// Reads accessor `acc` as `count × dims` floats, sparse substitution applied.
 fn read_floats(acc: &gltf::Accessor, dims: usize, buffers: &[Vec<u8>]) -> Result<Vec<f32>, String> {
     let i = acc.index();
@@ -591,35 +640,10 @@ fn read_floats(acc: &gltf::Accessor, dims: usize, buffers: &[Vec<u8>]) -> Result
             out.resize(count * dims, 0.0);
         }
     }
-    if let Some(sparse) = acc.sparse() {
-        let n = sparse.count();
-        let idx = sparse.indices();
-        let it = match idx.index_type() {
-            gltf::accessor::sparse::IndexType::U8 => DataType::U8,
-            gltf::accessor::sparse::IndexType::U16 => DataType::U16,
-            gltf::accessor::sparse::IndexType::U32 => DataType::U32,
-        };
-        let isize = component_size(it);
-        let ibytes =
-            view_bytes(&idx.view(), buffers).map_err(|e| format!("accessor {i} sparse: {e}"))?;
-        let indices = elements(ibytes, idx.offset(), isize, isize, n)
-            .ok_or_else(|| format!("accessor {i}: sparse indices outside their buffer view"))?;
-        let vals = sparse.values();
-        let vbytes =
-            view_bytes(&vals.view(), buffers).map_err(|e| format!("accessor {i} sparse: {e}"))?;
-        let values = elements(vbytes, vals.offset(), size, size, n)
-            .ok_or_else(|| format!("accessor {i}: sparse values outside their buffer view"))?;
-        for (ib, vb) in indices.zip(values) {
-            let target = uint(ib, it) as usize;
-            if target >= count {
-                return Err(format!(
-                    "accessor {i}: sparse index {target} out of range (count {count})"
-                ));
-            }
-            let mut v = Vec::with_capacity(dims);
-            read_elem(vb, &mut v);
-            out[target * dims..(target + 1) * dims].copy_from_slice(&v);
-        }
+    for (target, vb) in sparse_values(acc, count, size, buffers)? {
+        let mut v = Vec::with_capacity(dims);
+        read_elem(vb, &mut v);
+        out[target * dims..(target + 1) * dims].copy_from_slice(&v);
     }
     Ok(out)
 }
@@ -663,34 +687,8 @@ fn read_indices(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32>, S
             ));
         }
     };
-    if let Some(sparse) = acc.sparse() {
-        let n = sparse.count();
-        let idx = sparse.indices();
-        let it = match idx.index_type() {
-            gltf::accessor::sparse::IndexType::U8 => DataType::U8,
-            gltf::accessor::sparse::IndexType::U16 => DataType::U16,
-            gltf::accessor::sparse::IndexType::U32 => DataType::U32,
-        };
-        let isize = component_size(it);
-        let ibytes =
-            view_bytes(&idx.view(), buffers).map_err(|e| format!("accessor {i} sparse: {e}"))?;
-        let vals = sparse.values();
-        let vbytes =
-            view_bytes(&vals.view(), buffers).map_err(|e| format!("accessor {i} sparse: {e}"))?;
-        let (Some(indices), Some(values)) = (
-            elements(ibytes, idx.offset(), isize, isize, n),
-            elements(vbytes, vals.offset(), size, size, n),
-        ) else {
-            return Err(format!(
-                "accessor {i}: sparse data outside its buffer views"
-            ));
-        };
-        for (ib, vb) in indices.zip(values) {
-            let target = uint(ib, it) as usize;
-            *out.get_mut(target).ok_or_else(|| {
-                format!("accessor {i}: sparse index {target} out of range (count {count})")
-            })? = int(vb);
-        }
+    for (target, vb) in sparse_values(acc, count, size, buffers)? {
+        out[target] = int(vb);
     }
     Ok(out)
 }
