@@ -211,6 +211,133 @@ fn bench_render_renders_every_run() {
     assert!(seconds.iter().all(|&t| t > 0.0), "{log}");
 }
 
+/// A scene with a mesh at a relative path, a small sphere, two materials: every kind of edit of
+/// `rondo bench watch` has a target. (The red colour and the translation are those the bench
+/// looked for before it found its targets itself.)
+fn relative_mesh_scene(dir: &Path, mesh: &str) -> PathBuf {
+    std::fs::create_dir_all(dir.join("meshes")).expect("mkdir");
+    std::fs::write(
+        dir.join("meshes/tri.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .expect("write mesh");
+    write_scene(
+        dir,
+        "scene.ron",
+        &format!(
+            r#"Scene(
+    camera: Camera(position: (0, 1, -5), look_at: (0, 0, 0), fov: 40),
+    settings: Settings(width: 16, height: 16, spp: 2, max_depth: 2),
+    materials: {{
+        "red": Diffuse(albedo: Constant((0.65, 0.05, 0.05))),
+        "lamp": Light(emit: Constant((1, 1, 1)), intensity: 4),
+    }},
+    entities: [
+        Entity(name: "ball", material: "red", shape: Sphere(center: (0, 0.2, 0), radius: 0.2)),
+        Entity(name: "tri", material: "red", shape: Mesh(path: "{mesh}"),
+               transform: Transform(translate: (265, 0, 295))),
+        Entity(name: "light", material: "lamp", shape: Quad(a: (-1, 3, -1), b: (1, 3, -1), c: (1, 3, 1), d: (-1, 3, 1))),
+    ],
+)
+"#
+        ),
+    )
+}
+
+/// The names in `dir`, sorted.
+fn names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .expect("list")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn bench_watch_edits_a_scene_with_relative_paths_and_leaves_no_copy() {
+    let dir = temp_dir("cli-bench-watch");
+    let scene = relative_mesh_scene(&dir, "meshes/tri.obj");
+    let original = std::fs::read_to_string(&scene).expect("read");
+    let out = rondo(&[
+        "bench",
+        "watch",
+        text(&scene),
+        "--runs",
+        "2",
+        "--threads",
+        "1",
+    ]);
+    // Before, the edited copy was in a temporary directory, where `meshes/tri.obj` is not.
+    assert!(out.status.success(), "{}", stderr(&out));
+    let table = String::from_utf8_lossy(&out.stdout);
+    for kind in ["colour", "move-small", "move-mesh", "entity-material"] {
+        assert!(
+            table.lines().any(|l| l.trim_start().starts_with(kind)),
+            "{kind}: {table}"
+        );
+    }
+    assert!(table.contains("(sphere \"ball\")"), "{table}");
+    assert!(table.contains("(mesh entity \"tri\")"), "{table}");
+    assert_eq!(names(&dir), ["meshes", "scene.ron"], "a copy was left");
+    assert_eq!(std::fs::read_to_string(&scene).expect("read"), original);
+
+    // A scene that parses but does not load: the error, and the copy removed all the same.
+    let broken = relative_mesh_scene(&dir, "meshes/missing.obj");
+    let out = rondo(&[
+        "bench",
+        "watch",
+        text(&broken),
+        "--runs",
+        "1",
+        "--threads",
+        "1",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("missing.obj"), "{}", stderr(&out));
+    assert_eq!(names(&dir), ["meshes", "scene.ron"], "a copy was left");
+}
+
+#[test]
+fn bench_watch_stopped_by_ctrl_c_removes_its_copy() {
+    use std::io::BufRead as _;
+    let dir = temp_dir("cli-bench-watch-sigint");
+    let scene = relative_mesh_scene(&dir, "meshes/tri.obj");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .args([
+            "bench",
+            "watch",
+            text(&scene),
+            "--runs",
+            "100000",
+            "--threads",
+            "1",
+        ])
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start rondo");
+    // The first render's line: the copy exists and edits are being saved.
+    let mut lines = std::io::BufReader::new(child.stderr.take().expect("stderr")).lines();
+    let first = lines.next().and_then(Result::ok).unwrap_or_default();
+    assert!(first.starts_with("loaded:"), "{first}");
+    assert_eq!(names(&dir).len(), 3, "no copy beside the scene");
+    let sent = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(sent.success());
+    let rest: Vec<String> = lines.map_while(Result::ok).collect();
+    let status = wait_or_kill(&mut child, HANG_GUARD).expect("rondo did not stop on SIGINT");
+    assert_eq!(status.code(), Some(1), "{rest:?}");
+    assert!(
+        rest.iter().any(|l| l.contains("stopped by a signal")),
+        "{rest:?}"
+    );
+    assert_eq!(names(&dir), ["meshes", "scene.ron"], "a copy was left");
+}
+
 #[test]
 fn bench_environment_runs_on_a_tiny_map_and_writes_its_table_only_when_asked() {
     let dir = temp_dir("cli-bench-environment");

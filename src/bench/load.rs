@@ -22,9 +22,10 @@ use std::time::{Duration, Instant};
 
 use cpu_time::ProcessTime;
 
+use crate::bench::load_watch::Interrupt;
+pub use crate::bench::load_watch_table::{WatchRow, WatchTable, watch_markdown, watch_rows};
 use crate::scene::check::check_counted;
 use crate::scene::load::{AssetCache, load_scene, parse_scene};
-use crate::watch::{Report, WatchOptions, WatchSession};
 use crate::{Overrides, PassPlan, Renderer};
 
 /// The scene kinds, with what grows in each.
@@ -99,6 +100,9 @@ fn scene_text(materials: &str, entities: &str, size: f32) -> String {
 }
 
 const CLAY: &str = "        \"clay\": Diffuse(albedo: Constant((0.7, 0.6, 0.5))),\n";
+/// The flat scene's second material (its first entity's), so that one entity's material can be
+/// changed to another.
+const GLAZE: &str = "        \"glaze\": Diffuse(albedo: Constant((0.2, 0.3, 0.6))),\n";
 
 /// Writes the scene of `kind` with `n` of what grows into `dir`; returns its path.
 pub fn generate(kind: &str, n: usize, dir: &Path) -> Result<PathBuf, String> {
@@ -110,11 +114,13 @@ pub fn generate(kind: &str, n: usize, dir: &Path) -> Result<PathBuf, String> {
     let mut materials = String::from(CLAY);
     match kind {
         "flat" => {
+            materials.push_str(GLAZE);
             for k in 0..n {
                 let (x, z) = grid(k, side, 1.0);
+                let material = if k == 0 { "glaze" } else { "clay" };
                 let _ = writeln!(
                     entities,
-                    "        Entity(name: \"e{k}\", material: \"clay\", shape: Sphere(center: ({x}, 0.4, {z}), radius: 0.4)),"
+                    "        Entity(name: \"e{k}\", material: \"{material}\", shape: Sphere(center: ({x}, 0.4, {z}), radius: 0.4)),"
                 );
             }
         }
@@ -291,12 +297,12 @@ pub fn measure(kind: &'static str, count: usize, path: &Path) -> Result<Row, Str
 }
 
 /// Generates and measures every kind in `kinds` at every size of `sizes` (in a temporary
-/// directory under `dir`), calling `each` after each scene.
+/// directory under `dir`), calling `each` after each scene (its error stops the run).
 pub fn run(
     kinds: &[String],
     sizes: &[usize],
     dir: &Path,
-    mut each: impl FnMut(&Row),
+    mut each: impl FnMut(&Row) -> Result<(), String>,
 ) -> Result<Vec<Row>, String> {
     let mut rows = Vec::new();
     for &(kind, _) in KINDS.iter().filter(|k| kinds.iter().any(|w| w == k.0)) {
@@ -308,7 +314,7 @@ pub fn run(
             let path = generate(kind, n, &scene_dir)?;
             let row = measure(kind, n, &path)?;
             std::fs::remove_dir_all(&scene_dir).ok();
-            each(&row);
+            each(&row)?;
             rows.push(row);
         }
     }
@@ -356,64 +362,15 @@ pub fn markdown(rows: &[Row]) -> String {
     s
 }
 
-/// Wall and CPU time (of the whole process: the watch loop runs in it) of one wait.
-pub type WallCpu = (Duration, Duration);
-
-/// Watch mode on the `flat` scene of `n` entities: the time from starting to the first image
-/// (a cold load), then from saving a one-entity edit to its first image, for `edits` edits.
-pub fn watch_edit(n: usize, edits: usize, dir: &Path) -> Result<(WallCpu, Vec<WallCpu>), String> {
-    const WAIT: Duration = Duration::from_secs(300);
-    let path = generate("flat", n, dir)?;
-    let mut text = std::fs::read_to_string(&path).map_err(|e| e.to_string())?;
-    let mut options = WatchOptions::new(&path, dir.join("out.png"));
-    options.overrides = Overrides {
-        width: Some(16),
-        height: Some(12),
-        spp: Some(1),
-        ..Overrides::default()
-    };
-    let (start, cpu) = (Instant::now(), ProcessTime::now());
-    let session = WatchSession::start(options).map_err(|e| e.to_string())?;
-    let wrote = |after: Option<u64>| {
-        session.wait_for(
-            WAIT,
-            |r| matches!(r, Report::Wrote { reload, .. } if after.is_none_or(|a| *reload > a)),
-        )
-    };
-    let Ok(Report::Wrote { reload, at, .. }) = wrote(None) else {
-        return Err("no first image".into());
-    };
-    let cold = (at.saturating_duration_since(start), cpu.elapsed());
-    let mut last = reload;
-    let mut times = Vec::new();
-    let target = format!("\"e{}\"", n / 2);
-    for k in 0..edits {
-        // One entity's radius changes; everything else is byte-identical.
-        let line_start = text.find(&target).ok_or("no entity to edit")?;
-        let line_end = line_start + text[line_start..].find('\n').unwrap_or(0);
-        let line = &text[line_start..line_end];
-        let edited = if k % 2 == 0 {
-            line.replace("radius: 0.4", "radius: 0.3")
-        } else {
-            line.replace("radius: 0.3", "radius: 0.4")
-        };
-        text.replace_range(line_start..line_end, &edited);
-        std::fs::write(&path, &text).map_err(|e| e.to_string())?;
-        let (saved, cpu) = (Instant::now(), ProcessTime::now());
-        let Ok(Report::Wrote { reload, at, .. }) = wrote(Some(last)) else {
-            return Err("no image after an edit".into());
-        };
-        last = reload;
-        times.push((at.saturating_duration_since(saved), cpu.elapsed()));
-    }
-    session.stop().map_err(|e| e.to_string())?;
-    std::fs::remove_dir_all(dir).ok();
-    Ok((cold, times))
-}
-
-/// `rondo bench load`: a line per scene on stderr as it is measured, then the table on stdout;
-/// with `watch`, the watch-mode figures for the `flat` scene of that size (5 edits).
-pub fn main(kinds: &[String], sizes: &[usize], watch: Option<usize>) -> Result<(), String> {
+/// `rondo bench load`: a line per scene on stderr as it is measured, then the table on stdout
+/// (unless `load` is false); then, for `watch`'s sizes, the watch-mode table
+/// ([`crate::bench::load_watch_table`]; `Ctrl-C` stops it and removes the files).
+pub fn main(
+    kinds: &[String],
+    sizes: &[usize],
+    load: bool,
+    watch: &WatchTable,
+) -> Result<(), String> {
     if let Some(k) = kinds.iter().find(|k| !KINDS.iter().any(|(n, _)| n == k)) {
         let known: Vec<&str> = KINDS.iter().map(|k| k.0).collect();
         return Err(format!(
@@ -422,38 +379,30 @@ pub fn main(kinds: &[String], sizes: &[usize], watch: Option<usize>) -> Result<(
         ));
     }
     // A private directory of a fresh, unpredictable name: another user cannot plant files or
-    // symlinks where the scenes are written. Removed with its contents when dropped.
+    // symlinks where the scenes are written. Removed with its contents when dropped, also after
+    // Ctrl-C (the first one stops the benchmark; see `Interrupt`).
     let temp = tempfile::Builder::new()
         .prefix("rondo-bench-load-")
         .tempdir()
         .map_err(|e| format!("cannot create a temporary directory: {e}"))?;
-    let rows = run(kinds, sizes, &temp.path().join("load"), |r| {
-        eprintln!(
-            "{} {}: first image {:.1} ms CPU ({:.1} ms wall), check {:.1} ms CPU",
-            r.kind,
-            r.count,
-            r.first_image.as_secs_f64() * 1e3,
-            r.first_image_wall.as_secs_f64() * 1e3,
-            r.check.as_secs_f64() * 1e3
-        );
-    });
-    println!("{}", markdown(&rows?));
-    if let Some(n) = watch {
-        let (cold, edits) = watch_edit(n, 5, &temp.path().join("watch"))?;
-        let ms = |(wall, cpu): &WallCpu| {
-            format!(
-                "{:.0} ms ({:.0} ms CPU)",
-                wall.as_secs_f64() * 1e3,
-                cpu.as_secs_f64() * 1e3
-            )
-        };
-        let edits: Vec<String> = edits.iter().map(ms).collect();
-        println!(
-            "watch, flat scene of {n} entities: cold start to first image {}; save of a one-entity edit to its first image {} (debounce {} ms included)",
-            ms(&cold),
-            edits.join(", "),
-            crate::watch::DEBOUNCE.as_millis()
-        );
+    let interrupt = Interrupt::install();
+    if load {
+        let rows = run(kinds, sizes, &temp.path().join("load"), |r| {
+            eprintln!(
+                "{} {}: first image {:.1} ms CPU ({:.1} ms wall), check {:.1} ms CPU",
+                r.kind,
+                r.count,
+                r.first_image.as_secs_f64() * 1e3,
+                r.first_image_wall.as_secs_f64() * 1e3,
+                r.check.as_secs_f64() * 1e3
+            );
+            interrupt.check()
+        });
+        println!("{}", markdown(&rows?));
+    }
+    if !watch.sizes.is_empty() {
+        let rows = watch_rows(watch, &temp.path().join("watch"), &interrupt)?;
+        println!("{}", watch_markdown(&rows, watch.edits));
     }
     Ok(())
 }

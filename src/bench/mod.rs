@@ -10,3 +10,5 @@ pub mod instances;
 pub mod layout;
 pub mod layout_rows;
 pub mod load;
+pub mod load_watch;
+pub mod load_watch_table;

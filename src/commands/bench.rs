@@ -11,7 +11,6 @@ use super::render::summary;
 use rondo::Renderer;
 use rondo::bench::layout;
 use rondo::cli::check_output_dir;
-use rondo::watch::{Report, WatchOptions, WatchSession};
 
 pub fn layout(
     out: PathBuf,
@@ -119,47 +118,94 @@ pub fn summary_from(r: &Renderer, wall: Duration, rays: u64) -> String {
     )
 }
 
-/// `rondo bench watch`: edits a temporary copy of the scene and times each save to the first
-/// and to the full-quality image, as seen by the watch loop's own reports.
-pub fn watch(scene: &Path, runs: usize, first_spp: u32, options: &RenderArgs) -> Result<()> {
-    let kinds = [
-        ("material", "(0.65, 0.05, 0.05)", "(0.05, 0.05, 0.65)"),
-        (
-            "geometry",
-            "translate: (265, 0, 295)",
-            "translate: (265, 0, 305)",
-        ),
-    ];
+/// `rondo bench watch`: times each kind of edit the scene has a target for (or those of
+/// `kinds`), from each save to the first and to the full-quality image, as seen by the watch
+/// loop's own reports.
+///
+/// The edits are saved to a copy beside the scene, so that its relative paths (meshes,
+/// textures, prefabs, glTF files) resolve as in the original: a file created exclusively under
+/// an unpredictable name (`.rondo-bench-XXXXXX.ron`, never an existing file), written through a
+/// handle checked to be that file, and removed when the benchmark ends, fails or is stopped by
+/// Ctrl-C. The image goes to a private temporary directory.
+pub fn watch(
+    scene: &Path,
+    runs: usize,
+    first_spp: u32,
+    kinds: &[String],
+    options: &RenderArgs,
+) -> Result<()> {
+    use rondo::bench::load_watch::{self, Interrupt, Kind};
     let original = std::fs::read_to_string(scene)
         .with_context(|| format!("{}: cannot read", scene.display()))?;
-    for (kind, from, _) in kinds {
-        if !original.contains(from) {
-            bail!(
-                "{}: no `{from}` to edit for the {kind} edit",
-                scene.display()
-            );
+    let mut edits = load_watch::find_edits(scene, &original).map_err(anyhow::Error::msg)?;
+    if !kinds.is_empty() {
+        for name in kinds {
+            let kind = Kind::from_name(name).context("checked by the argument parser")?;
+            if !edits.iter().any(|e| e.kind == kind) {
+                bail!("{}: nothing to edit for a {name} edit", scene.display());
+            }
         }
+        edits.retain(|e| kinds.iter().any(|k| k == e.kind.name()));
     }
-    // A private directory of a fresh, unpredictable name (no planted files or symlinks),
-    // removed with its contents when dropped.
+    if edits.is_empty() {
+        bail!(
+            "{}: nothing to edit (no material colour, sphere, moved entity, mesh or second material)",
+            scene.display()
+        );
+    }
+    let dir = match scene.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let mut copy = tempfile::Builder::new()
+        .prefix(".rondo-bench-")
+        .suffix(".ron")
+        .tempfile_in(dir)
+        .with_context(|| {
+            format!(
+                "cannot create the edited copy of the scene in {}",
+                dir.display()
+            )
+        })?;
+    {
+        use std::io::Write as _;
+        copy.write_all(original.as_bytes())
+            .and_then(|()| copy.flush())
+            .with_context(|| format!("{}: cannot write", copy.path().display()))?;
+    }
+    // A private directory of a fresh, unpredictable name (no planted files or symlinks) for the
+    // image, removed with its contents when dropped.
     let temp = tempfile::Builder::new()
         .prefix("rondo-bench-watch-")
         .tempdir()
         .context("cannot create a temporary directory")?;
-    let dir = temp.path().to_path_buf();
-    let rows = time_edits(
-        &dir,
+    let watch_options =
+        options.watch_options(copy.path(), &temp.path().join("out.png"), first_spp)?;
+    let interrupt = Interrupt::install();
+    let save = |text: &str| {
+        use std::io::Write as _;
+        // Opened again by path and checked to be the file created above (tempfile's `reopen`),
+        // then truncated and written: an in-place save that ends with a close, as an editor's.
+        let mut file = copy.reopen()?;
+        file.set_len(0)?;
+        file.write_all(text.as_bytes())
+    };
+    let timed = load_watch::time_edits(
+        watch_options,
         &original,
-        &kinds,
+        &edits,
         runs,
-        options.watch_options(&dir.join("scene.ron"), &dir.join("out.png"), first_spp)?,
+        &interrupt,
+        save,
+        |line| eprintln!("{line}"),
     );
+    drop(copy);
     drop(temp);
-    let rows = rows?;
-    let stats = |v: &mut Vec<Duration>| {
-        v.sort();
+    let (_, timings) = timed.map_err(anyhow::Error::msg)?;
+    let stats = |v: &[Duration]| {
+        let (median, min) = load_watch::median_min(v);
         let ms = |d: Duration| d.as_secs_f64() * 1e3;
-        format!("{:8.1} ms (min {:8.1})", ms(v[v.len() / 2]), ms(v[0]))
+        format!("{:8.1} ms (min {:8.1})", ms(median), ms(min))
     };
     println!(
         "watch latency, save -> image written, {} (loaded when the save completes, else after {} ms quiet; first pass {first_spp} spp), median of {} edits:",
@@ -167,72 +213,16 @@ pub fn watch(scene: &Path, runs: usize, first_spp: u32, options: &RenderArgs) ->
         rondo::watch::DEBOUNCE.as_millis(),
         runs.max(1)
     );
-    for (kind, mut first_image, mut full) in rows {
+    for t in timings {
         println!(
-            "  {kind:<8} edit: first image {}, full quality {}",
-            stats(&mut first_image),
-            stats(&mut full)
+            "  {:<15} edit: first image {}, full quality {}  ({})",
+            t.kind.name(),
+            stats(&t.first_image),
+            stats(&t.full),
+            t.target
         );
     }
     Ok(())
-}
-
-/// Per edit kind: the latencies from each save to the first image and to the full-quality one.
-pub type EditTimes = Vec<(&'static str, Vec<Duration>, Vec<Duration>)>;
-
-/// Times `runs` edits of each kind, each replacing `from` by `to` (or back) in a copy of the
-/// scene under `dir`.
-pub fn time_edits(
-    dir: &Path,
-    original: &str,
-    kinds: &[(&'static str, &str, &str)],
-    runs: usize,
-    options: WatchOptions,
-) -> Result<EditTimes> {
-    const WAIT: Duration = Duration::from_secs(120);
-    let copy = dir.join("scene.ron");
-    std::fs::write(&copy, original)?;
-    let session = WatchSession::start(options)?;
-    let finished = |min: u64| {
-        session.wait_for(
-            WAIT,
-            |r| matches!(r, Report::Rendered(r) if r.completed() && r.number >= min),
-        )
-    };
-    let Ok(Report::Rendered(first)) = finished(0) else {
-        bail!("the first render did not finish");
-    };
-    eprintln!("{first}");
-    let mut reload = first.number;
-    let mut text = original.to_string();
-    let mut rows = Vec::new();
-    for &(kind, from, to) in kinds {
-        let (mut first_image, mut full) = (Vec::new(), Vec::new());
-        for _ in 0..runs.max(1) {
-            text = if text.contains(from) {
-                text.replace(from, to)
-            } else {
-                text.replace(to, from)
-            };
-            std::fs::write(&copy, &text)?;
-            let saved = std::time::Instant::now();
-            let Ok(Report::Wrote { reload: r, at, .. }) = session.wait_for(
-                WAIT,
-                |r| matches!(r, Report::Wrote { reload: n, .. } if *n > reload),
-            ) else {
-                bail!("no image after a {kind} edit");
-            };
-            let Ok(Report::Rendered(report)) = finished(r) else {
-                bail!("the render after a {kind} edit did not finish");
-            };
-            reload = report.number;
-            first_image.push(at.saturating_duration_since(saved));
-            full.push(saved.elapsed());
-            eprintln!("{kind}: {report}");
-        }
-        rows.push((kind, first_image, full));
-    }
-    Ok(rows)
 }
 
 /// `rondo bench accuracy`: runs the sweep, printing a line per render, then the summary.

@@ -133,14 +133,32 @@ pub enum BenchCommand {
             default_value = "1000,10000,100000,1000000"
         )]
         sizes: Vec<usize>,
-        /// Also time watch mode on the flat scene of this size (cold start, one-entity edits).
+        /// Also time watch mode on the flat scene of this size (as one of --watch-sizes).
         #[arg(long)]
         watch: Option<usize>,
+        /// Time watch mode on the flat scenes of these sizes: cold start, and each kind of edit
+        /// (material colour, move a sphere, one entity's material; move the mesh with
+        /// --big-mesh), save to first image, with the growth per 10×.
+        #[arg(long, value_delimiter = ',')]
+        watch_sizes: Vec<usize>,
+        /// With the watch sizes: measure each again with a generated OBJ of about this many
+        /// triangles placed once (1000000: the big mesh, ~80 MB).
+        #[arg(long, value_name = "TRIANGLES", value_parser = clap::value_parser!(u64).range(2..=rondo::bench::load_watch_table::MAX_BIG_MESH as u64))]
+        big_mesh: Option<u64>,
+        /// Saves timed per kind of edit in watch mode.
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=1000))]
+        edits: u64,
+        /// Skip the load table (only the watch-mode one).
+        #[arg(long)]
+        no_load: bool,
     },
-    /// Latency of `watch`: from a saved edit to the first and to the full-quality image, for a
-    /// material edit and a geometry edit of the Cornell box (edited in a temporary copy).
+    /// Latency of `watch`: from a saved edit to the first and to the full-quality image, for
+    /// each kind of edit the scene has a target for: a material colour (colour), a small sphere
+    /// moved, or an entity if there is no sphere (move-small), the biggest mesh moved
+    /// (move-mesh), one entity's material (entity-material). The edits are saved to a copy
+    /// beside the scene (relative paths resolve), removed at the end.
     Watch {
-        /// Scene file (.ron): the Cornell box, or a scene with the same red material and tall box.
+        /// Scene file (.ron).
         #[arg(default_value = "scenes/cornell.ron")]
         scene: PathBuf,
         /// Edits per kind.
@@ -149,9 +167,19 @@ pub enum BenchCommand {
         /// Samples per pixel of the first pass.
         #[arg(long, default_value_t = 1, value_parser = at_least_one_u32())]
         first_spp: u32,
+        /// Time only these kinds of edit (comma-separated; each must have a target in the scene).
+        #[arg(long, value_delimiter = ',', value_parser = edit_kinds())]
+        kinds: Vec<String>,
         #[command(flatten)]
         options: RenderArgs,
     },
+}
+
+/// The names of the watch benchmarks' kinds of edit.
+fn edit_kinds() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(
+        rondo::bench::load_watch::KINDS.map(rondo::bench::load_watch::Kind::name),
+    )
 }
 
 /// Runs one benchmark.
@@ -185,7 +213,19 @@ pub fn run(what: BenchCommand) -> Result<()> {
             kinds,
             sizes,
             watch,
-        } => rondo::bench::load::main(&kinds, &sizes, watch).map_err(anyhow::Error::msg),
+            mut watch_sizes,
+            big_mesh,
+            edits,
+            no_load,
+        } => {
+            watch_sizes.extend(watch);
+            let table = rondo::bench::load::WatchTable {
+                sizes: watch_sizes,
+                big_mesh: big_mesh.map(|t| t as usize),
+                edits: edits as usize,
+            };
+            rondo::bench::load::main(&kinds, &sizes, !no_load, &table).map_err(anyhow::Error::msg)
+        }
         BenchCommand::Accuracy {
             scene,
             reference,
@@ -215,7 +255,8 @@ pub fn run(what: BenchCommand) -> Result<()> {
             scene,
             runs,
             first_spp,
+            kinds,
             options,
-        } => super::bench::watch(&scene, runs, first_spp, &options),
+        } => super::bench::watch(&scene, runs, first_spp, &kinds, &options),
     }
 }
