@@ -20,6 +20,7 @@ pub mod geometry;
 pub mod layers;
 pub mod lights;
 pub mod metrics;
+pub mod model;
 pub mod output_file;
 pub mod partial;
 pub mod render;

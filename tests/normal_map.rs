@@ -12,11 +12,11 @@ use std::sync::Arc;
 
 use common::{point_camera, point_estimate, render, temp_dir, with, write_scene};
 use glam::{Affine3A, DVec3, Mat3, Quat, Vec2, Vec3};
-use rondo::ecs::components::MeshData;
 use rondo::geometry::instance::MeshBlas;
 use rondo::geometry::packed::{Geometry, Primitive};
 use rondo::geometry::ray::Ray;
 use rondo::geometry::surface::Tangent;
+use rondo::model::MeshData;
 use rondo::scene::format::Method;
 use rondo::{Overrides, PassPlan, Renderer};
 

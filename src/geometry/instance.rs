@@ -13,7 +13,7 @@ use super::bvh::{Bounds, Bvh};
 use super::ray::{Ray, gamma};
 use super::surface::{Surface, Tangent, uv_derivatives};
 use super::triangle::intersect_triangle;
-use crate::ecs::components::MeshData;
+use crate::model::MeshData;
 
 /// A mesh's triangles in object space, in BVH order, with their BVH. Compared by identity: two
 /// placements are of the same mesh when they share one `MeshBlas`.

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 use super::gltf::{GltfImage, GltfScene, read_gltf};
-use crate::ecs::components::MeshData;
+use crate::model::MeshData;
 use crate::shading::texture::ImageTexture;
 use crate::sky::EnvironmentMap;
 

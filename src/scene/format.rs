@@ -9,7 +9,7 @@ use glam::{Affine3A, EulerRot, Mat3, Quat, Vec3};
 use serde::de::{DeserializeOwned, Error as _};
 use serde::{Deserialize, Deserializer};
 
-use crate::ecs::components::Shape;
+use crate::model::Shape;
 use crate::scene::error::{SceneError, VALUE, number, vector};
 use crate::shading::sampler::SamplerKind;
 use crate::shading::texture::{Filter, Wrap};

@@ -24,7 +24,7 @@ use glam::{Affine3A, Mat4, Quat, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
-use crate::ecs::components::MeshData;
+use crate::model::MeshData;
 
 /// Most triangles (all primitives together) one file may produce.
 pub const MAX_TRIANGLES: usize = 1 << 26;

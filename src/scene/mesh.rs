@@ -17,7 +17,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::ecs::components::MeshData;
+use crate::model::MeshData;
 
 /// Most triangles one OBJ file may produce (the limit of glTF files too).
 pub const MAX_TRIANGLES: usize = crate::scene::gltf::MAX_TRIANGLES;

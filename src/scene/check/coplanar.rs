@@ -7,8 +7,8 @@ use std::hash::{BuildHasherDefault, Hasher};
 
 use glam::{Vec2, Vec3};
 
-use crate::ecs::components::Shape;
 use crate::geometry::packed::Primitive;
+use crate::model::Shape;
 use crate::scene::load::LoadedScene;
 use crate::shading::material::Material;
 use crate::systems::world_primitives;

@@ -23,10 +23,10 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
-use crate::ecs::components::{MeshData, MeshRef, Shape, Transform};
 use crate::geometry::instance::BlasCache;
 use crate::geometry::packed::{Geometry, Primitive};
 use crate::geometry::ray::{Ray, gamma, spawn_origin};
+use crate::model::{MeshData, MeshRef, Shape, Transform};
 use crate::shading::material::Material;
 use crate::shading::rng::Rng;
 use crate::shading::sampling::{Frame, cosine_hemisphere};
@@ -471,7 +471,7 @@ mod tests {
     use glam::{Affine3A, Quat};
 
     use super::*;
-    use crate::ecs::components::Transform;
+    use crate::model::Transform;
     use crate::scene::format::{CameraDesc, SettingsDesc};
     use crate::scene::load::LoadedEntity;
 

@@ -14,7 +14,7 @@ use std::sync::Arc;
 use glam::{Affine3A, Vec3};
 
 use super::{Anchor, Expander, Origin, Placed, Scope, SourceFile};
-use crate::ecs::components::{MeshRef, Shape, Transform};
+use crate::model::{MeshRef, Shape, Transform};
 use crate::scene::assets::{Encoding, GltfAsset};
 use crate::scene::error::SceneError;
 use crate::scene::format::EntityDesc;
@@ -209,7 +209,7 @@ impl Expander<'_> {
     }
 
     /// Object-space bounds of a glTF primitive, computed once per load of its data.
-    fn gltf_bounds(&mut self, data: &Arc<crate::ecs::components::MeshData>) -> [Vec3; 2] {
+    fn gltf_bounds(&mut self, data: &Arc<crate::model::MeshData>) -> [Vec3; 2] {
         let id = Arc::as_ptr(data) as usize;
         if let Some(b) = self.gltf_bounds.get(&id) {
             return *b;

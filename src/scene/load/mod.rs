@@ -16,7 +16,7 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Vec3};
 
-use crate::ecs::components::{MeshData, MeshRef, Shape, Transform};
+use crate::model::{MeshData, MeshRef, Shape, Transform};
 use crate::shading::material::Material;
 use crate::shading::texture::{ImageTexture, Sampling, Texture};
 use crate::sky::{EnvironmentLight, Sky, Sun};

@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use crate::ecs::components::{Shape, Transform};
+use crate::model::{Shape, Transform};
 
 /// An upper bound of [`world_reach`] for a mesh with object-space `bounds`, from the box's 8
 /// corners: each world coordinate is affine in the object point, so its extremes over the box
@@ -73,7 +73,7 @@ mod tests {
     use glam::Affine3A;
 
     use super::*;
-    use crate::ecs::components::{MeshData, MeshRef};
+    use crate::model::{MeshData, MeshRef};
 
     #[test]
     fn corners_bound_every_vertex_of_a_transformed_mesh() {
