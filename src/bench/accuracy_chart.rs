@@ -10,7 +10,7 @@ use std::path::Path;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
-use super::accuracy::{AccuracyError, AccuracyReport, AccuracyRow, Metric, curve_name};
+use super::accuracy_rows::{AccuracyError, AccuracyReport, AccuracyRow, Metric, curve_name};
 use crate::scene::format::Method;
 use crate::shading::sampler::SamplerKind;
 
@@ -185,7 +185,7 @@ pub fn short(v: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::accuracy::MethodFit;
+    use crate::bench::accuracy_rows::MethodFit;
 
     #[test]
     fn axis_labels_keep_three_significant_digits() {
@@ -198,7 +198,7 @@ mod tests {
 
     #[test]
     fn denoised_renders_are_a_dashed_curve_without_a_slope() {
-        let row = crate::bench::accuracy::test_row;
+        let row = crate::bench::accuracy_rows::test_row;
         let fit = MethodFit {
             method: Method::Mis,
             sampler: SamplerKind::Sobol,

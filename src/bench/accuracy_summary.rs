@@ -2,8 +2,8 @@
 //! metric and, when the sweep denoised, the denoised measurements and the error level from
 //! which on the raw render is the better choice ([`crossover`]).
 
-use super::accuracy::{AccuracyReport, AccuracyRow, MethodFit, Metric, curve_name, slope};
 use super::accuracy_chart::short;
+use super::accuracy_rows::{AccuracyReport, AccuracyRow, MethodFit, Metric, curve_name, slope};
 use crate::scene::format::Method;
 use crate::shading::sampler::SamplerKind;
 
@@ -210,7 +210,7 @@ fn denoised_markdown(report: &AccuracyReport) -> String {
 mod tests {
     use super::*;
 
-    use crate::bench::accuracy::test_row as row;
+    use crate::bench::accuracy_rows::test_row as row;
 
     fn close(a: f64, b: f64) -> bool {
         (a - b).abs() <= 1e-9 * b.abs().max(1.0)
@@ -319,7 +319,7 @@ mod tests {
         ];
         let fits = Metric::ALL
             .iter()
-            .map(|&m| super::super::accuracy::fit(Method::Mis, SamplerKind::Sobol, m, &rows))
+            .map(|&m| super::super::accuracy_rows::fit(Method::Mis, SamplerKind::Sobol, m, &rows))
             .collect();
         let md = summary_markdown(&AccuracyReport {
             width: 1,

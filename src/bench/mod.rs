@@ -3,6 +3,7 @@
 
 pub mod accuracy;
 pub mod accuracy_chart;
+pub mod accuracy_rows;
 pub mod accuracy_summary;
 pub mod chart;
 pub mod environment;
