@@ -447,4 +447,63 @@ mod tests {
         );
         assert!(plan.files.contains(&canonical.join("b.ron")));
     }
+
+    #[test]
+    fn watch_keys_are_canonical_directory_plus_name() {
+        let dir = std::env::temp_dir();
+        let canonical = dir.canonicalize().expect("temp dir exists");
+        let (d, key) = watch_key(&dir.join(".").join("a.ron")).expect("temp dir exists");
+        assert_eq!(d, canonical);
+        assert_eq!(key, canonical.join("a.ron"));
+        let missing = watch_key(&dir.join("no-such-dir-rondo").join("a.ron"));
+        assert!(
+            missing.is_err(),
+            "a missing directory is an error, not a panic"
+        );
+    }
+
+    #[test]
+    fn watching_a_file_not_watched_before_asks_for_a_second_read() {
+        // The race behind it (seen in `watch_differential`, seed 14): a reload reads a prefab the
+        // last scene did not use, the prefab's directory is deleted before the watcher knows the
+        // file, so the deletion's events are dropped and the image shows a prefab that is gone.
+        let temp = tempfile::Builder::new()
+            .prefix("rondo-set-files-")
+            .tempdir()
+            .expect("temp dir");
+        let dir = temp.path();
+        std::fs::create_dir_all(dir.join("prefabs")).expect("mkdir");
+        let (scene, wall, door) = (
+            dir.join("scene.ron"),
+            dir.join("prefabs/wall.ron"),
+            dir.join("prefabs/door.ron"),
+        );
+        let (tx, _rx) = std::sync::mpsc::channel();
+        let mut w = FileWatcher::new(Arc::new(AtomicBool::new(false)), tx).expect("watcher");
+        assert!(w.set_files(std::slice::from_ref(&scene)).0, "first files");
+        assert!(
+            !w.set_files(std::slice::from_ref(&scene)).0,
+            "the same files"
+        );
+        assert!(
+            w.set_files(&[scene.clone(), wall.clone()]).0,
+            "a new directory"
+        );
+        assert!(
+            w.set_files(&[scene.clone(), wall.clone(), door.clone()]).0,
+            "a new file in a watched directory"
+        );
+        assert!(
+            !w.set_files(&[scene.clone(), wall.clone()]).0,
+            "fewer files"
+        );
+        // The race itself: the last scene used no prefab, and the prefab read just now has lost
+        // its directory before being watched.
+        w.set_files(std::slice::from_ref(&scene));
+        std::fs::remove_dir_all(dir.join("prefabs")).expect("rm -rf");
+        assert!(
+            w.set_files(&[scene.clone(), wall.clone()]).0,
+            "a new file whose directory is gone: the missing directory is new to watch for"
+        );
+    }
 }

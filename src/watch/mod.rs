@@ -9,6 +9,11 @@
 //!   image after each pass, and describe each step as a [`Report`]. [`WatchSession`] runs it on a
 //!   thread for tests and tools.
 //!
+//! One file per concept: the loop and the render of each pass in `mod.rs`; file events and the
+//! watched set in `files.rs`; the changes waiting to be loaded in `pending.rs`; loading them in
+//! `reload.rs`; [`Report`]s in `report.rs`; the denoise thread in `denoiser.rs`; the thread
+//! harness in `session.rs`.
+//!
 //! # What is watched
 //!
 //! Directories, not files, because editors save in different ways. Vim and many IDEs write a
@@ -87,6 +92,7 @@ mod error;
 mod files;
 mod options;
 mod pending;
+mod reload;
 mod report;
 mod session;
 
@@ -96,7 +102,7 @@ pub use error::WatchError;
 use files::IDLE_POLL;
 pub use files::*;
 pub use options::WatchOptions;
-use pending::{Failure, Pending};
+use pending::Pending;
 pub use report::*;
 pub use session::WatchSession;
 
@@ -408,181 +414,6 @@ impl Watch {
         }
     }
 
-    /// Acts on due changes: reports a failure that stood, or loads. A failed load is kept
-    /// pending, to be reported three windows later unless another event comes first.
-    fn act(&mut self, mut p: Pending, out: &mut Emitter<'_>) -> Option<Pending> {
-        if let Some((failure, _)) = p.failed.take() {
-            match failure {
-                Failure::Missing => {
-                    if !std::mem::replace(&mut self.missing, true) {
-                        let path = self.options.scene.clone();
-                        out.emit(Report::SceneMissing { path }, None);
-                    }
-                }
-                Failure::Error(message, source_line) => {
-                    self.last_error = Some(message.clone());
-                    out.emit(
-                        Report::Failed {
-                            message,
-                            source_line,
-                        },
-                        None,
-                    );
-                }
-            }
-            return None;
-        }
-        match self.reload(&p, out) {
-            Ok(()) => None,
-            Err(failure) => {
-                let message = match &failure {
-                    Failure::Missing => format!("{}: missing", self.options.scene.display()),
-                    Failure::Error(m, _) => m.clone(),
-                };
-                out.emit(Report::Deferred { message }, None);
-                p.failed = Some((failure, Instant::now() + 3 * self.options.debounce));
-                Some(p)
-            }
-        }
-    }
-
-    /// Watches `files`; returns whether anything new is watched (see [`FileWatcher::set_files`]).
-    fn watch_files(&mut self, files: &[PathBuf], out: &mut Emitter<'_>) -> bool {
-        let (dirs, count) = (self.watcher.directories(), self.watcher.file_count());
-        let (added, warnings) = self.watcher.set_files(files);
-        for message in warnings {
-            out.emit(Report::Warning { message }, None);
-        }
-        if self.watcher.directories() != dirs || self.watcher.file_count() != count {
-            out.emit(self.watching_report(), None);
-        }
-        added
-    }
-
-    /// The dependencies of a load to watch: all but the output image (which we write).
-    fn dependencies(&mut self, dependencies: Vec<PathBuf>, out: &mut Emitter<'_>) -> Vec<PathBuf> {
-        let mut files = Vec::with_capacity(dependencies.len());
-        for dep in dependencies {
-            let is_output = self.output_key.is_some()
-                && watch_key(&dep).ok().map(|(_, k)| k) == self.output_key;
-            if !is_output {
-                files.push(dep);
-            } else if !std::mem::replace(&mut self.warned_output, true) {
-                let message = format!(
-                    "{}: the output image is also a texture of the scene; its writes do not trigger reloads",
-                    dep.display()
-                );
-                out.emit(Report::Warning { message }, None);
-            }
-        }
-        files
-    }
-
-    /// Loads the scene after a change. On success the new scene is queued and a new job starts;
-    /// on failure the old scene keeps rendering (if it was not finished), the image on disk is
-    /// left alone, and the files the failed load asked for are watched too.
-    fn reload(&mut self, p: &Pending, out: &mut Emitter<'_>) -> Result<(), Failure> {
-        // The pass this change interrupted is gone; the next one must run.
-        self.cancel.store(false, Ordering::SeqCst);
-        let scene = self.options.scene.clone();
-        let decodes = self.renderer.texture_decodes();
-        let environments = self.renderer.environment_builds();
-        let before = self.renderer.counters();
-        let bytes_read = self.renderer.asset_bytes_read();
-        // The cache reads again only the files named by events (all of them if events were lost)
-        // or whose metadata changed.
-        if p.overflow {
-            self.renderer.invalidate_all();
-        } else {
-            self.renderer.invalidate(&p.paths);
-        }
-        // Read again at once if the load made us watch something new (a directory, or a file the
-        // last load did not read): a change to it between the read and the watch would go
-        // unnoticed, as its events were dropped until then.
-        let mut retried = false;
-        let (info, parse) = loop {
-            if matches!(std::fs::metadata(&scene), Err(e) if e.kind() == std::io::ErrorKind::NotFound)
-            {
-                return Err(Failure::Missing);
-            }
-            self.missing = false;
-            let start = Instant::now();
-            let result = self.renderer.load(&scene);
-            let parse = start.elapsed();
-            let info = match result {
-                Ok(info) => info,
-                Err(e) => {
-                    let mut files = self.good_files.clone();
-                    files.extend(self.renderer.requested());
-                    let files = self.dependencies(files, out);
-                    if self.watch_files(&files, out) && !std::mem::replace(&mut retried, true) {
-                        // Events for the newly watched files were dropped until now.
-                        self.renderer.invalidate_all();
-                        continue;
-                    }
-                    return Err(Failure::Error(e.to_string(), e.source_line));
-                }
-            };
-            let files = self.dependencies(info.dependencies.clone(), out);
-            self.good_files = files.clone();
-            if self.watch_files(&files, out) && !std::mem::replace(&mut retried, true) {
-                self.renderer.invalidate_all();
-                continue;
-            }
-            break (info, parse);
-        };
-        self.last_error = None;
-        for message in &info.warnings {
-            out.emit(
-                Report::Warning {
-                    message: message.clone(),
-                },
-                None,
-            );
-        }
-        self.denoising = match self.options.denoise.or(info.settings.denoise) {
-            Some(false) => Denoising::Off,
-            Some(true) => Denoising::Output,
-            None if self.denoise_sink.is_some() => Denoising::Viewer,
-            None => Denoising::Off,
-        };
-        self.renderer.set_features(self.denoising != Denoising::Off);
-        if let Some(worker) = &self.denoiser {
-            worker.cancel();
-        }
-
-        if let Some(old) = self.job.take() {
-            out.emit(Report::Rendered(old.report), None);
-        }
-        let number = self.reloads;
-        self.reloads += 1;
-        out.emit(
-            Report::Started {
-                reload: number,
-                trigger: p.paths.clone(),
-                spp: info.settings.spp,
-                saved: p.last,
-            },
-            None,
-        );
-        self.job = Some(Job {
-            report: ReloadReport {
-                textures_decoded: self.renderer.texture_decodes().saturating_sub(decodes),
-                environments_built: self
-                    .renderer
-                    .environment_builds()
-                    .saturating_sub(environments),
-                asset_bytes_read: self.renderer.asset_bytes_read().saturating_sub(bytes_read),
-                parse,
-                counters: before,
-                ..ReloadReport::started(number, p.paths.clone(), info.settings.spp)
-            },
-            saved: p.last,
-            before,
-        });
-        Ok(())
-    }
-
     /// Runs one frame of the current job: applies the scene if new, renders a pass, writes the
     /// image if it improved, and finishes the job when the film is complete.
     fn step(&mut self, out: &mut Emitter<'_>) {
@@ -685,76 +516,7 @@ impl Watch {
 
 #[cfg(test)]
 mod tests {
-    use super::files::Filter;
-    use notify::EventKind;
-    use notify::event::CreateKind;
-
     use super::*;
-
-    /// Issue 25, item 16: a file written through a descriptor still open is loaded at its close
-    /// (where the platform reports closes), however long the writer pauses before it; a file
-    /// only created or removed, or written where closes are not reported, waits for quiet.
-    #[test]
-    fn a_file_being_written_is_loaded_at_its_close() {
-        let window = DEBOUNCE;
-        let t = Instant::now();
-        let mut p = Pending::initial();
-        p.completed = false;
-        p.last = t;
-        p.add(change("/d/scene.ron", Effect::Writing, t));
-        let held = if REPORTS_CLOSE {
-            t + OPEN_WRITER_PATIENCE
-        } else {
-            t + window
-        };
-        assert_eq!(p.due(window), held, "held until the writer closes");
-        assert!(OPEN_WRITER_PATIENCE > 10 * window);
-        p.add(change("/d/scene.ron", Effect::Writing, t));
-        assert_eq!(p.due(window), held, "more writes, still open");
-        p.add(change("/d/scene.ron", Effect::Complete, t));
-        assert_eq!(p.due(window), t, "closed: load at once");
-
-        let mut p = Pending::initial();
-        p.completed = false;
-        p.last = t;
-        p.add(change("/d/scene.ron", Effect::Writing, t));
-        p.add(change("/d/scene.ron", Effect::Partial, t));
-        assert_eq!(p.due(window), t + window, "removed: no writer of this name");
-
-        let mut p = Pending::initial();
-        p.completed = false;
-        p.last = t;
-        p.add(change("/d/scene.ron", Effect::Writing, t));
-        p.add(Change {
-            paths: Vec::new(),
-            rearm: true,
-            overflow: true,
-            at: t,
-        });
-        assert_eq!(
-            p.due(window),
-            t + window,
-            "events lost: the close may be too"
-        );
-    }
-
-    #[test]
-    fn a_reload_superseded_before_its_first_frame_says_which_file_changed() {
-        let mut r = ReloadReport::started(4, vec![PathBuf::from("/d/scene.ron")], 16);
-        let line = r.to_string();
-        assert!(
-            line.starts_with("reload 4: scene.ron changed | superseded")
-                && !line.contains("no changes"),
-            "{line}"
-        );
-        r.applied = true;
-        r.changes.reordered = true;
-        r.first_pass = Some((1, Duration::from_millis(9)));
-        r.preview = true;
-        let line = r.to_string();
-        assert!(line.contains("entities reordered |"), "{line}");
-        assert!(line.contains("first pass 9.00 ms (preview)"), "{line}");
-    }
 
     #[test]
     fn a_reload_superseded_after_applying_its_change_makes_the_next_image_a_new_scene() {
@@ -818,102 +580,5 @@ mod tests {
             [(0, false, true), (1, false, true), (3, true, true)],
             "the first image of each scene, with whether its reload changed nothing"
         );
-    }
-
-    #[test]
-    fn watch_keys_are_canonical_directory_plus_name() {
-        let dir = std::env::temp_dir();
-        let canonical = dir.canonicalize().expect("temp dir exists");
-        let (d, key) = watch_key(&dir.join(".").join("a.ron")).expect("temp dir exists");
-        assert_eq!(d, canonical);
-        assert_eq!(key, canonical.join("a.ron"));
-        let missing = watch_key(&dir.join("no-such-dir-rondo").join("a.ron"));
-        assert!(
-            missing.is_err(),
-            "a missing directory is an error, not a panic"
-        );
-    }
-
-    #[test]
-    fn watching_a_file_not_watched_before_asks_for_a_second_read() {
-        // The race behind it (seen in `watch_differential`, seed 14): a reload reads a prefab the
-        // last scene did not use, the prefab's directory is deleted before the watcher knows the
-        // file, so the deletion's events are dropped and the image shows a prefab that is gone.
-        let temp = tempfile::Builder::new()
-            .prefix("rondo-set-files-")
-            .tempdir()
-            .expect("temp dir");
-        let dir = temp.path();
-        std::fs::create_dir_all(dir.join("prefabs")).expect("mkdir");
-        let (scene, wall, door) = (
-            dir.join("scene.ron"),
-            dir.join("prefabs/wall.ron"),
-            dir.join("prefabs/door.ron"),
-        );
-        let (tx, _rx) = std::sync::mpsc::channel();
-        let mut w = FileWatcher::new(Arc::new(AtomicBool::new(false)), tx).expect("watcher");
-        assert!(w.set_files(std::slice::from_ref(&scene)).0, "first files");
-        assert!(
-            !w.set_files(std::slice::from_ref(&scene)).0,
-            "the same files"
-        );
-        assert!(
-            w.set_files(&[scene.clone(), wall.clone()]).0,
-            "a new directory"
-        );
-        assert!(
-            w.set_files(&[scene.clone(), wall.clone(), door.clone()]).0,
-            "a new file in a watched directory"
-        );
-        assert!(
-            !w.set_files(&[scene.clone(), wall.clone()]).0,
-            "fewer files"
-        );
-        // The race itself: the last scene used no prefab, and the prefab read just now has lost
-        // its directory before being watched.
-        w.set_files(std::slice::from_ref(&scene));
-        std::fs::remove_dir_all(dir.join("prefabs")).expect("rm -rf");
-        assert!(
-            w.set_files(&[scene.clone(), wall.clone()]).0,
-            "a new file whose directory is gone: the missing directory is new to watch for"
-        );
-    }
-
-    /// A change to `path` with `effect`, received `at`.
-    fn change(path: &str, effect: Effect, at: Instant) -> Change {
-        Change {
-            paths: vec![(PathBuf::from(path), effect)],
-            rearm: false,
-            overflow: false,
-            at,
-        }
-    }
-
-    /// The flaky `issue14_case3` test: a directory created, then a file written into it. Were
-    /// the creation complete, the loop would arm the directory and read at once, possibly
-    /// after the write but before its events arrive; those events then load the same file
-    /// again and report a second render, which a waiter takes for the render of its next save.
-    /// The directory's files follow it: the read waits for them to be quiet.
-    #[test]
-    fn a_created_directory_is_read_once_its_files_are_quiet() {
-        let mut f = Filter::default();
-        f.arms.insert(PathBuf::from("/d/prefabs"));
-        f.files.insert(PathBuf::from("/d/prefabs/wall.ron"));
-        let event = notify::Event::new(EventKind::Create(CreateKind::Folder))
-            .add_path(PathBuf::from("/d/prefabs"));
-        let created = f.change(&event).expect("relevant");
-        assert!(created.rearm);
-        let t = created.at;
-        let mut p = Pending::initial();
-        p.completed = false;
-        p.last = t;
-        p.add(created);
-        assert_eq!(p.due(DEBOUNCE), t + DEBOUNCE, "not read at the creation");
-        // The file's write, its events absorbed before the read.
-        let t2 = t + DEBOUNCE / 2;
-        p.add(change("/d/prefabs/wall.ron", Effect::Partial, t2));
-        p.add(change("/d/prefabs/wall.ron", Effect::Writing, t2));
-        p.add(change("/d/prefabs/wall.ron", Effect::Complete, t2));
-        assert_eq!(p.due(DEBOUNCE), t2 + DEBOUNCE, "read once, after the write");
     }
 }

@@ -332,3 +332,26 @@ impl Report {
 /// [`Watch::run`](super::Watch::run) callback does, with the film of a [`Report::Wrote`] (`None`
 /// for the other reports). Runs on the render thread.
 pub type Observer = Box<dyn FnMut(&Report, Option<&Film>) + Send>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_reload_superseded_before_its_first_frame_says_which_file_changed() {
+        let mut r = ReloadReport::started(4, vec![PathBuf::from("/d/scene.ron")], 16);
+        let line = r.to_string();
+        assert!(
+            line.starts_with("reload 4: scene.ron changed | superseded")
+                && !line.contains("no changes"),
+            "{line}"
+        );
+        r.applied = true;
+        r.changes.reordered = true;
+        r.first_pass = Some((1, Duration::from_millis(9)));
+        r.preview = true;
+        let line = r.to_string();
+        assert!(line.contains("entities reordered |"), "{line}");
+        assert!(line.contains("first pass 9.00 ms (preview)"), "{line}");
+    }
+}
