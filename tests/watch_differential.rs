@@ -5,11 +5,10 @@
 //! error. The scene is sometimes lit by an environment map (`env/sky.exr` or `env/sky.hdr`) and
 //! a sun.
 //!
-//! Renders are deterministic for any pass split, which makes the fresh render an exact oracle.
-//! The watch runs in-process ([`WatchSession`]) on the real notify watcher: the `rondo watch`
-//! binary adds only the printing of [`Report::line`], so running it would test nothing more.
-//! Waits are for reports, with a deadline that only guards against hangs; the sleeps are the
-//! gaps between edits, part of the generated input.
+//! The driver and the oracle are in `common/watch_diff.rs` (shared with the big scenes and
+//! assets of `watch_differential_big.rs`). The watch runs in-process on the real notify watcher:
+//! the `rondo watch` binary adds only the printing of report lines, so running it would test
+//! nothing more.
 //!
 //! `RONDO_DIFF_SEQUENCES` sets the number of random sequences (default 240, split over four
 //! watch sessions); `RONDO_DIFF_SEED` the seed. A failure prints the seed, the sequence and the
@@ -20,10 +19,7 @@ mod common;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use rondo::watch::{Report, WatchOptions, WatchSession};
-
-/// Upper bound of the wait for the watch to settle after a sequence.
-const WAIT: Duration = Duration::from_secs(20);
+use common::watch_diff::{Rng, Save, Watcher, env_number};
 
 const COLOURS: [(&str, [u8; 3]); 3] = [
     ("(1.0, 0.0, 0.0)", [255, 0, 0]),
@@ -108,27 +104,6 @@ const SUN_POWERS: [&str; 3] = [
     "radiance: 40.0",
     "irradiance: 1.5, colour: (1, 0.6, 0.3)",
 ];
-
-/// splitmix64: a small seeded generator, enough for test inputs.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-
-    fn chance(&mut self, percent: u64) -> bool {
-        self.next() % 100 < percent
-    }
-}
 
 /// What the scene file says.
 #[derive(Clone, Debug)]
@@ -267,69 +242,6 @@ struct SunText {
     direction: usize,
     diameter: usize,
     power: usize,
-}
-
-/// How a file is saved.
-#[derive(Clone, Copy, Debug)]
-enum Save {
-    /// Truncate and write in place (most tools).
-    InPlace,
-    /// Write a temporary file and rename it over the original (vim, many IDEs).
-    Rename,
-    /// Delete, then create (some tools, `git checkout`).
-    Recreate,
-    /// In place, keeping the old modification time (`cp -p`, build tools).
-    KeepMtime,
-    /// In place in two halves with a pause between (a slow writer).
-    Split(u64),
-}
-
-impl Save {
-    fn random(rng: &mut Rng) -> Self {
-        match rng.below(6) {
-            0 | 1 => Self::InPlace,
-            2 => Self::Rename,
-            3 => Self::Recreate,
-            4 => Self::KeepMtime,
-            _ => Self::Split(rng.below(90) as u64),
-        }
-    }
-
-    fn write(self, path: &Path, bytes: &[u8]) {
-        use std::io::Write;
-        match self {
-            Self::InPlace => std::fs::write(path, bytes).expect("write"),
-            Self::Rename => {
-                let name = path.file_name().expect("name").to_string_lossy();
-                let tmp = path.with_file_name(format!(".{name}.tmp~"));
-                std::fs::write(&tmp, bytes).expect("write temp");
-                std::fs::rename(&tmp, path).expect("rename");
-            }
-            Self::Recreate => {
-                let _ = std::fs::remove_file(path);
-                std::fs::write(path, bytes).expect("write");
-            }
-            Self::KeepMtime => {
-                let stamp = std::fs::metadata(path).and_then(|m| m.modified()).ok();
-                std::fs::write(path, bytes).expect("write");
-                if let Some(stamp) = stamp {
-                    std::fs::File::options()
-                        .write(true)
-                        .open(path)
-                        .and_then(|f| f.set_modified(stamp))
-                        .expect("set mtime");
-                }
-            }
-            Self::Split(pause) => {
-                let mut file = std::fs::File::create(path).expect("create");
-                let (head, tail) = bytes.split_at(bytes.len() / 2);
-                file.write_all(head).expect("write");
-                file.flush().expect("flush");
-                std::thread::sleep(Duration::from_millis(pause));
-                file.write_all(tail).expect("write");
-            }
-        }
-    }
 }
 
 /// The directories the scene's files live in.
@@ -632,33 +544,20 @@ impl Op {
     }
 }
 
-/// What a fresh render of the files gives: the image, or the error.
-fn fresh(scene: &Path) -> Result<image::RgbImage, String> {
-    let mut r = rondo::Renderer::new(Some(1), rondo::PassPlan::Single).expect("thread pool");
-    r.load(scene).map_err(|e| e.to_string())?;
-    r.render_to_completion();
-    Ok(r.film().to_srgb8())
-}
-
-/// What the watch shows, as told by its reports.
-#[derive(Clone, Debug, PartialEq)]
-enum Shown {
-    /// Between a change and its outcome.
-    Busy,
-    /// A complete render: the image on disk.
-    Image,
-    /// The error of the last save.
-    Error(String),
-    /// The scene file is missing.
-    Missing,
-}
-
 /// A watch session on a directory of its own, with the initial files.
-struct Bench {
-    dir: common::TestDir,
-    session: Option<WatchSession>,
-    shown: Shown,
-    reports: Vec<String>,
+struct Bench(Watcher);
+
+impl std::ops::Deref for Bench {
+    type Target = Watcher;
+    fn deref(&self) -> &Watcher {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for Bench {
+    fn deref_mut(&mut self) -> &mut Watcher {
+        &mut self.0
+    }
 }
 
 impl Bench {
@@ -698,97 +597,25 @@ impl Bench {
             truncated: false,
         };
         std::fs::write(dir.join("scene.ron"), text.text()).expect("write scene");
-        let mut options = WatchOptions::new(dir.join("scene.ron"), dir.join("out.png"));
-        options.threads = Some(1);
-        let session = WatchSession::start(options).expect("start watching");
-        let mut bench = Self {
-            dir,
-            session: Some(session),
-            shown: Shown::Busy,
-            reports: Vec::new(),
-        };
-        bench
-            .settle("the first render")
-            .unwrap_or_else(|e| panic!("{e}"));
-        bench
+        Self(Watcher::start(dir))
     }
 
-    fn observe(&mut self, report: &Report) {
-        if let Some(line) = report.line() {
-            self.reports.push(line);
-        }
-        match report {
-            Report::Started { .. } | Report::Deferred { .. } => self.shown = Shown::Busy,
-            Report::Rendered(r) if r.completed() => self.shown = Shown::Image,
-            Report::Failed { message, .. } => self.shown = Shown::Error(message.clone()),
-            Report::SceneMissing { .. } => self.shown = Shown::Missing,
-            _ => {}
-        }
-    }
-
-    /// Whether what the watch shows is what a fresh render gives.
-    fn matches(&self, expected: &Result<image::RgbImage, String>) -> bool {
-        match (&self.shown, expected) {
-            (Shown::Image, Ok(image)) => {
-                image::open(self.dir.join("out.png")).is_ok_and(|shown| shown.to_rgb8() == *image)
-            }
-            (Shown::Error(shown), Err(error)) => shown == error,
-            _ => false,
-        }
-    }
-
-    /// Waits until the watch shows what a fresh render of the files gives.
-    fn settle(&mut self, what: &str) -> Result<(), String> {
-        let expected = fresh(&self.dir.join("scene.ron"));
-        let deadline = Instant::now() + WAIT;
-        while !self.matches(&expected) {
-            let left = deadline.saturating_duration_since(Instant::now());
-            let session = self.session.as_ref().expect("session running");
-            match session.next_report(left) {
-                Some(report) => self.observe(&report),
-                None => {
-                    return Err(format!(
-                        "{what}: the watch shows {:?}, a fresh render gives {}; reports:\n{}",
-                        self.shown,
-                        match &expected {
-                            Ok(_) => "an image (different)".to_string(),
-                            Err(e) => format!("the error `{e}`"),
-                        },
-                        self.reports.join("\n")
-                    ));
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// [`Bench::play`], for `ops` that change what a fresh render gives (checked): a watch that
-    /// missed them would still show the old result.
+    /// [`Watcher::play_change`] of `ops`.
     fn play_change(&mut self, ops: &[Op]) -> Result<(), String> {
-        let before = fresh(&self.dir.join("scene.ron"));
-        for op in ops {
-            op.apply(&self.dir);
-        }
-        if fresh(&self.dir.join("scene.ron")) == before {
-            return Err(format!("{ops:?} left the fresh render as it was"));
-        }
-        self.reports.clear();
-        self.settle(&format!("after {ops:?}"))
+        self.0.play_change(&format!("after {ops:?}"), |dir| {
+            for op in ops {
+                op.apply(dir);
+            }
+        })
     }
 
-    /// Plays `ops`, then waits for the watch to show what a fresh render shows.
+    /// [`Watcher::play`] of `ops`.
     fn play(&mut self, ops: &[Op]) -> Result<(), String> {
-        self.reports.clear();
-        for op in ops {
-            op.apply(&self.dir);
-        }
-        self.settle(&format!("after {ops:?}"))
-    }
-}
-
-impl Drop for Bench {
-    fn drop(&mut self) {
-        common::end_watch(self.session.take());
+        self.0.play(&format!("after {ops:?}"), |dir| {
+            for op in ops {
+                op.apply(dir);
+            }
+        })
     }
 }
 
@@ -810,13 +637,6 @@ fn random_sequence(rng: &mut Rng, dir: &Path) -> Vec<Op> {
         ops.push(Op::Gap(gap));
     }
     ops
-}
-
-fn env_number(name: &str, default: u64) -> u64 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
 }
 
 #[test]

@@ -5,6 +5,7 @@
 )]
 
 pub mod gltf_doc;
+pub mod watch_diff;
 
 use std::path::{Path, PathBuf};
 
