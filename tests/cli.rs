@@ -339,6 +339,49 @@ fn bench_watch_stopped_by_ctrl_c_removes_its_copy() {
 }
 
 #[test]
+fn bench_load_times_each_kind_of_edit_with_and_without_a_big_mesh() {
+    // The old flags still work: the load table of one kind and size, and `--watch N`.
+    let out = rondo(&[
+        "bench", "load", "--kinds", "flat", "--sizes", "10", "--watch", "10", "--edits", "1",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let table = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(table.contains("| flat | 10 | 0.0 | 10 |"), "{table}");
+    assert!(table.contains("| scene | entities | file MB | cold start ms | colour | move-small | move-mesh | entity-material |"), "{table}");
+
+    let out = rondo(&[
+        "bench",
+        "load",
+        "--no-load",
+        "--watch-sizes",
+        "10,100",
+        "--big-mesh",
+        "200",
+        "--edits",
+        "2",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let table = String::from_utf8_lossy(&out.stdout).into_owned();
+    let rows: Vec<Vec<&str>> = table
+        .lines()
+        .filter(|l| l.starts_with("| flat"))
+        .map(|l| l.split('|').map(str::trim).collect())
+        .collect();
+    // `| scene | entities | MB | cold | colour | move-small | move-mesh | entity-material |`:
+    // every kind timed where the scene has its target, the mesh moved only where there is one,
+    // and the growth given from 10 to 100 entities.
+    assert_eq!(rows.len(), 4, "{table}");
+    for row in &rows {
+        let with_mesh = row[1].contains("OBJ");
+        assert!(!with_mesh || row[1] == "flat + 200-triangle OBJ", "{table}");
+        for (column, cell) in row[5..9].iter().enumerate() {
+            assert_eq!(*cell == "–", column == 2 && !with_mesh, "{table}");
+        }
+        assert_eq!(row[2] == "100", row[4].contains('×'), "{table}");
+    }
+}
+
+#[test]
 fn bench_environment_runs_on_a_tiny_map_and_writes_its_table_only_when_asked() {
     let dir = temp_dir("cli-bench-environment");
     let args = [

@@ -15,6 +15,8 @@
 //! - `first image`: from a fresh renderer to the first pass (`load` + the frame), what a user
 //!   waits for;
 //! - `check`: `rondo check`'s rules on the loaded scene, warnings located.
+//!
+//! Watch-mode edit latency over the `flat` scenes is in [`super::load_watch_table`].
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -22,8 +24,6 @@ use std::time::{Duration, Instant};
 
 use cpu_time::ProcessTime;
 
-use crate::bench::load_watch::Interrupt;
-pub use crate::bench::load_watch_table::{WatchRow, WatchTable, watch_markdown, watch_rows};
 use crate::scene::check::check_counted;
 use crate::scene::load::{AssetCache, load_scene, parse_scene};
 use crate::{Overrides, PassPlan, Renderer};
@@ -360,49 +360,4 @@ pub fn markdown(rows: &[Row]) -> String {
         );
     }
     s
-}
-
-/// `rondo bench load`: a line per scene on stderr as it is measured, then the table on stdout
-/// (unless `load` is false); then, for `watch`'s sizes, the watch-mode table
-/// ([`crate::bench::load_watch_table`]; `Ctrl-C` stops it and removes the files).
-pub fn main(
-    kinds: &[String],
-    sizes: &[usize],
-    load: bool,
-    watch: &WatchTable,
-) -> Result<(), String> {
-    if let Some(k) = kinds.iter().find(|k| !KINDS.iter().any(|(n, _)| n == k)) {
-        let known: Vec<&str> = KINDS.iter().map(|k| k.0).collect();
-        return Err(format!(
-            "unknown kind {k:?} (expected {})",
-            known.join(", ")
-        ));
-    }
-    // A private directory of a fresh, unpredictable name: another user cannot plant files or
-    // symlinks where the scenes are written. Removed with its contents when dropped, also after
-    // Ctrl-C (the first one stops the benchmark; see `Interrupt`).
-    let temp = tempfile::Builder::new()
-        .prefix("rondo-bench-load-")
-        .tempdir()
-        .map_err(|e| format!("cannot create a temporary directory: {e}"))?;
-    let interrupt = Interrupt::install();
-    if load {
-        let rows = run(kinds, sizes, &temp.path().join("load"), |r| {
-            eprintln!(
-                "{} {}: first image {:.1} ms CPU ({:.1} ms wall), check {:.1} ms CPU",
-                r.kind,
-                r.count,
-                r.first_image.as_secs_f64() * 1e3,
-                r.first_image_wall.as_secs_f64() * 1e3,
-                r.check.as_secs_f64() * 1e3
-            );
-            interrupt.check()
-        });
-        println!("{}", markdown(&rows?));
-    }
-    if !watch.sizes.is_empty() {
-        let rows = watch_rows(watch, &temp.path().join("watch"), &interrupt)?;
-        println!("{}", watch_markdown(&rows, watch.edits));
-    }
-    Ok(())
 }

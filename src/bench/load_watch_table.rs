@@ -7,7 +7,8 @@ use std::path::Path;
 use std::time::Duration;
 
 use super::load::generate;
-use super::load_watch::{Interrupt, KINDS, Kind, Timing, find_edits, median_min, time_edits};
+use super::load_watch::{KINDS, Kind, find_edits};
+use super::load_watch_time::{Interrupt, Timing, median_min, time_edits};
 use crate::Overrides;
 use crate::watch::WatchOptions;
 
@@ -29,7 +30,7 @@ pub struct WatchTable {
 /// The figures of one scene.
 #[derive(Clone, Debug)]
 pub struct WatchRow {
-    /// Flat named spheres.
+    /// Entities: flat named spheres (one fewer with the mesh, which comes first).
     pub entities: usize,
     /// Triangles of the big mesh, if the scene has it.
     pub mesh: Option<usize>,
@@ -104,20 +105,22 @@ pub fn watch_rows(
         interrupt.check()?;
         let scene_dir = dir.join(format!("flat-{n}"));
         let plain = generate("flat", n, &scene_dir)?;
-        let mut scenes = vec![(plain.clone(), None)];
+        let mut scenes = vec![(plain, None)];
         if let Some(triangles) = mesh {
-            let text = std::fs::read_to_string(&plain).map_err(|e| e.to_string())?;
+            // n − 1 spheres and the mesh: n entities, within the limit of a scene at 10⁶.
+            let mesh_dir = scene_dir.join("mesh");
+            let path = generate("flat", n.saturating_sub(1), &mesh_dir)?;
+            let text = std::fs::read_to_string(&path).map_err(|e| e.to_string())?;
             let entity = "        Entity(name: \"big\", material: \"clay\", shape: Mesh(path: \"big.obj\"), transform: Transform(translate: (0, 1, 0))),\n";
             let with_mesh = text.replacen(
                 "    entities: [\n",
                 &format!("    entities: [\n{entity}"),
                 1,
             );
-            let path = scene_dir.join("scene-mesh.ron");
             std::fs::write(&path, with_mesh).map_err(|e| format!("{}: {e}", path.display()))?;
             // A hard link: the mesh is written once for all sizes.
-            std::fs::hard_link(&big, scene_dir.join("big.obj"))
-                .map_err(|e| format!("{}: {e}", scene_dir.display()))?;
+            std::fs::hard_link(&big, mesh_dir.join("big.obj"))
+                .map_err(|e| format!("{}: {e}", mesh_dir.display()))?;
             scenes.push((path, Some(triangles)));
         }
         for (path, mesh) in scenes {

@@ -13,3 +13,4 @@ pub mod layout_rows;
 pub mod load;
 pub mod load_watch;
 pub mod load_watch_table;
+pub mod load_watch_time;

@@ -1,4 +1,4 @@
-//! `rondo bench …`: the benchmark drivers (layout, instances, render, watch, accuracy,
+//! `rondo bench …`: the benchmark drivers (layout, instances, render, watch, load, accuracy,
 //! environment).
 
 use std::path::{Path, PathBuf};
@@ -10,6 +10,7 @@ use super::args::RenderArgs;
 use super::render::summary;
 use rondo::Renderer;
 use rondo::bench::layout;
+use rondo::bench::load_watch_table::WatchTable;
 use rondo::cli::check_output_dir;
 
 pub fn layout(
@@ -134,7 +135,8 @@ pub fn watch(
     kinds: &[String],
     options: &RenderArgs,
 ) -> Result<()> {
-    use rondo::bench::load_watch::{self, Interrupt, Kind};
+    use rondo::bench::load_watch::{self, Kind};
+    use rondo::bench::load_watch_time::{self, Interrupt};
     let original = std::fs::read_to_string(scene)
         .with_context(|| format!("{}: cannot read", scene.display()))?;
     let mut edits = load_watch::find_edits(scene, &original).map_err(anyhow::Error::msg)?;
@@ -190,7 +192,7 @@ pub fn watch(
         file.set_len(0)?;
         file.write_all(text.as_bytes())
     };
-    let timed = load_watch::time_edits(
+    let timed = load_watch_time::time_edits(
         watch_options,
         &original,
         &edits,
@@ -203,7 +205,7 @@ pub fn watch(
     drop(temp);
     let (_, timings) = timed.map_err(anyhow::Error::msg)?;
     let stats = |v: &[Duration]| {
-        let (median, min) = load_watch::median_min(v);
+        let (median, min) = load_watch_time::median_min(v);
         let ms = |d: Duration| d.as_secs_f64() * 1e3;
         format!("{:8.1} ms (min {:8.1})", ms(median), ms(min))
     };
@@ -221,6 +223,47 @@ pub fn watch(
             stats(&t.full),
             t.target
         );
+    }
+    Ok(())
+}
+
+/// `rondo bench load`: a line per scene on stderr as it is measured, then the table on stdout
+/// (unless `with_load` is false); then, for `watch`'s sizes, the watch-mode table. Scenes are
+/// written to a private temporary directory (a fresh, unpredictable name: no planted files or
+/// symlinks), removed at the end, on an error, or after Ctrl-C (whose first press stops the
+/// benchmark).
+pub fn load(kinds: &[String], sizes: &[usize], with_load: bool, watch: &WatchTable) -> Result<()> {
+    use rondo::bench::{load, load_watch_table, load_watch_time::Interrupt};
+    if let Some(k) = kinds
+        .iter()
+        .find(|k| !load::KINDS.iter().any(|(n, _)| n == k))
+    {
+        let known: Vec<&str> = load::KINDS.iter().map(|k| k.0).collect();
+        bail!("unknown kind {k:?} (expected {})", known.join(", "));
+    }
+    let temp = tempfile::Builder::new()
+        .prefix("rondo-bench-load-")
+        .tempdir()
+        .context("cannot create a temporary directory")?;
+    let interrupt = Interrupt::install();
+    if with_load {
+        let rows = load::run(kinds, sizes, &temp.path().join("load"), |r| {
+            eprintln!(
+                "{} {}: first image {:.1} ms CPU ({:.1} ms wall), check {:.1} ms CPU",
+                r.kind,
+                r.count,
+                r.first_image.as_secs_f64() * 1e3,
+                r.first_image_wall.as_secs_f64() * 1e3,
+                r.check.as_secs_f64() * 1e3
+            );
+            interrupt.check()
+        });
+        println!("{}", load::markdown(&rows.map_err(anyhow::Error::msg)?));
+    }
+    if !watch.sizes.is_empty() {
+        let rows = load_watch_table::watch_rows(watch, &temp.path().join("watch"), &interrupt)
+            .map_err(anyhow::Error::msg)?;
+        println!("{}", load_watch_table::watch_markdown(&rows, watch.edits));
     }
     Ok(())
 }

@@ -219,12 +219,12 @@ pub fn run(what: BenchCommand) -> Result<()> {
             no_load,
         } => {
             watch_sizes.extend(watch);
-            let table = rondo::bench::load::WatchTable {
+            let table = rondo::bench::load_watch_table::WatchTable {
                 sizes: watch_sizes,
                 big_mesh: big_mesh.map(|t| t as usize),
                 edits: edits as usize,
             };
-            rondo::bench::load::main(&kinds, &sizes, !no_load, &table).map_err(anyhow::Error::msg)
+            super::bench::load(&kinds, &sizes, !no_load, &table)
         }
         BenchCommand::Accuracy {
             scene,
