@@ -58,6 +58,9 @@ pub struct PackedGeometry {
     /// Place meshes as instances of one shared BVH (the default) instead of copying their
     /// triangles into the scene BVH.
     pub instancing: bool,
+    /// Whether the BVHs were refitted rather than built: fit for a preview only. The build
+    /// follows before any real sample is traced.
+    pub provisional: bool,
 }
 
 impl Default for PackedGeometry {
@@ -67,6 +70,7 @@ impl Default for PackedGeometry {
             owners: Vec::new(),
             blas_cache: BlasCache::default(),
             instancing: true,
+            provisional: false,
         }
     }
 }
@@ -117,6 +121,9 @@ impl ChangeSummary {
 pub struct Counters {
     /// BVH (geometry) builds so far.
     pub bvh_builds: u64,
+    /// BVH refits so far: moves shown in a preview without a build
+    /// ([`PackedGeometry::provisional`]).
+    pub bvh_refits: u64,
     /// Material assignments so far.
     pub material_syncs: u64,
     /// Render passes completed so far (a live preview counts as one).

@@ -249,6 +249,44 @@ impl Bvh {
         (Self { bvh, depth, wide }, order)
     }
 
+    /// Refits every box of the tree to new primitive positions, keeping its shape: `leaf(slots)`
+    /// gives the box around the primitives now in a leaf's slots. Linear in the nodes; nothing
+    /// is rebuilt, so a primitive that moved far leaves the tree valid but looser than a fresh
+    /// build's.
+    pub fn refit(&mut self, leaf: impl Fn(Range<usize>) -> Bounds) {
+        for node in self.bvh.nodes.iter_mut().filter(|n| n.is_leaf()) {
+            let first = node.first_index as usize;
+            let (min, max) = leaf(first..first + node.prim_count as usize);
+            node.set_aabb(Aabb::new(min.into(), max.into()));
+        }
+        self.bvh.refit_all();
+        // A wide node's inner children come after it (see `collapse`): children first.
+        for w in (0..self.wide.len()).rev() {
+            let mut node = self.wide[w];
+            for k in (0..WIDTH).filter(|k| node.valid >> k & 1 == 1) {
+                let child = node.child[k] as usize;
+                let (min, max) = if node.count[k] > 0 {
+                    leaf(child..child + node.count[k] as usize)
+                } else {
+                    let c = &self.wide[child];
+                    let lanes = (0..WIDTH).filter(|j| c.valid >> j & 1 == 1);
+                    lanes.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), j| {
+                        let b = |axis: usize| c.bounds[axis][j];
+                        (
+                            lo.min(Vec3::new(b(0), b(1), b(2))),
+                            hi.max(Vec3::new(b(3), b(4), b(5))),
+                        )
+                    })
+                };
+                for axis in 0..3 {
+                    node.bounds[axis][k] = min[axis];
+                    node.bounds[3 + axis][k] = max[axis];
+                }
+            }
+            self.wide[w] = node;
+        }
+    }
+
     /// Number of nodes (0 for an empty BVH).
     pub fn node_count(&self) -> usize {
         self.bvh.nodes.len()

@@ -242,6 +242,62 @@ impl BvhPlan {
     }
 }
 
+/// Primitives sorted by kind, in input order: spheres and triangles with their owners (to be laid
+/// out in BVH order), planes and mesh placements ready.
+struct Parts<'a> {
+    spheres: Vec<(u32, &'a Primitive)>,
+    triangles: Vec<(u32, &'a Primitive)>,
+    planes: Vec<PlaneRecord>,
+    placements: Vec<(u32, Arc<MeshBlas>, Affine3A)>,
+}
+
+impl<'a> Parts<'a> {
+    fn of(primitives: &'a [(u32, Primitive)]) -> Self {
+        let mut parts = Parts {
+            spheres: Vec::new(),
+            triangles: Vec::new(),
+            planes: Vec::new(),
+            placements: Vec::new(),
+        };
+        for (owner, prim) in primitives {
+            match prim {
+                Primitive::Instance {
+                    blas,
+                    world_from_object,
+                } => {
+                    parts
+                        .placements
+                        .push((*owner, blas.clone(), *world_from_object));
+                }
+                Primitive::Sphere { .. } => parts.spheres.push((*owner, prim)),
+                Primitive::Triangle { .. } => parts.triangles.push((*owner, prim)),
+                &Primitive::Plane { point, normal } => {
+                    let (tangent, bitangent) = normal.any_orthonormal_pair();
+                    parts.planes.push(PlaneRecord {
+                        point,
+                        normal,
+                        tangent,
+                        bitangent,
+                        owner: *owner,
+                    });
+                }
+            }
+        }
+        parts
+    }
+
+    /// The owners of the spheres and of the triangles, in input order.
+    fn owners(&self) -> (Vec<u32>, Vec<u32>) {
+        (
+            self.spheres.iter().map(|s| s.0).collect(),
+            self.triangles.iter().map(|t| t.0).collect(),
+        )
+    }
+}
+
+/// The box that grows to any other: the start of a union.
+const EMPTY: Bounds = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+
 /// All geometry of a scene, packed for tracing in layout `L` (see [`super::layout`]). Built from
 /// [`Primitive`]s with their owners.
 ///
@@ -259,6 +315,8 @@ pub struct Geometry<L: Layout = DefaultLayout> {
     pub sphere_frame: Vec<Mat3>,
     /// BVH over the spheres.
     pub sphere_bvh: Bvh,
+    /// The sphere in each slot, as its index among the spheres packed (see [`Geometry::refit`]).
+    sphere_order: Vec<u32>,
     /// Triangle vertices in BVH order.
     pub triangles: L::Triangles,
     /// Owner slot per triangle.
@@ -270,6 +328,8 @@ pub struct Geometry<L: Layout = DefaultLayout> {
     pub triangle_normal: Vec<Vec3>,
     /// BVH over the triangles.
     pub triangle_bvh: Bvh,
+    /// The triangle in each slot, as its index among the triangles packed.
+    triangle_order: Vec<u32>,
     /// Infinite planes.
     pub planes: Vec<PlaneRecord>,
     /// Mesh placements with their top-level BVH.
@@ -294,76 +354,108 @@ impl<L: Layout> Geometry<L> {
     /// Lays out `primitives` in the slot order of `plan`, which must have been built from the
     /// same primitives.
     pub fn pack_with(primitives: &[(u32, Primitive)], plan: BvhPlan) -> Self {
-        let mut spheres = Vec::with_capacity(plan.sphere_order.len());
-        let mut triangles = Vec::with_capacity(plan.triangle_order.len());
-        let mut planes = Vec::new();
-        let mut placements = Vec::new();
-        for (owner, prim) in primitives {
-            match prim {
-                Primitive::Instance {
-                    blas,
-                    world_from_object,
-                } => {
-                    placements.push((*owner, blas.clone(), *world_from_object));
-                }
-                Primitive::Sphere { .. } => spheres.push((*owner, prim)),
-                Primitive::Triangle { .. } => triangles.push((*owner, prim)),
-                &Primitive::Plane { point, normal } => {
-                    let (tangent, bitangent) = normal.any_orthonormal_pair();
-                    planes.push(PlaneRecord {
-                        point,
-                        normal,
-                        tangent,
-                        bitangent,
-                        owner: *owner,
-                    });
-                }
-            }
-        }
+        let parts = Parts::of(primitives);
+        let (sphere_owners, triangle_owners) = parts.owners();
         assert_eq!(
-            (spheres.len(), triangles.len()),
+            (parts.spheres.len(), parts.triangles.len()),
             (plan.sphere_order.len(), plan.triangle_order.len()),
             "BvhPlan built from other primitives"
         );
-
         let mut g = Geometry::<L> {
             sphere_bvh: plan.sphere_bvh,
+            sphere_order: plan.sphere_order,
             triangle_bvh: plan.triangle_bvh,
-            planes,
-            instances: InstanceSet::build(placements),
+            triangle_order: plan.triangle_order,
             ..Default::default()
         };
-        g.spheres.reserve(spheres.len());
-        g.sphere_owner.reserve(spheres.len());
-        g.sphere_frame.reserve(spheres.len());
-        for &i in &plan.sphere_order {
-            if let (
-                owner,
-                &Primitive::Sphere {
-                    center,
-                    radius,
-                    frame,
-                },
-            ) = spheres[i as usize]
-            {
-                g.spheres.push(center, radius);
-                g.sphere_owner.push(owner);
-                g.sphere_frame.push(frame);
-            }
-        }
-        g.triangles.reserve(triangles.len());
-        g.triangle_owner.reserve(triangles.len());
-        g.triangle_uv.reserve(triangles.len());
-        g.triangle_normal.reserve(triangles.len());
-        for &i in &plan.triangle_order {
-            if let (owner, &Primitive::Triangle { p, uv }) = triangles[i as usize] {
-                g.triangles.push(p);
-                g.triangle_owner.push(owner);
-                g.triangle_uv.push(uv);
-                g.triangle_normal.push(triangle_normal(p));
-            }
-        }
+        g.lay_out(parts);
+        g.sphere_owner = g
+            .sphere_order
+            .iter()
+            .map(|&i| sphere_owners[i as usize])
+            .collect();
+        g.triangle_owner = g
+            .triangle_order
+            .iter()
+            .map(|&i| triangle_owners[i as usize])
+            .collect();
         g
+    }
+
+    /// Moves the primitives to where `primitives` puts them, keeping the BVHs' trees and only
+    /// refitting their boxes, if `primitives` is the same sequence as the one packed (the same
+    /// owners, with the same number of spheres and of triangles each, in the same order);
+    /// otherwise changes nothing and returns `false`. Planes and mesh placements are taken as
+    /// given (they have no BVH of their own here; the instances' top level is rebuilt).
+    ///
+    /// A refitted tree finds the same hits as a fresh build, but may visit equally distant
+    /// primitives in another order: use it where that cannot matter (a preview).
+    pub fn refit(&mut self, primitives: &[(u32, Primitive)]) -> bool {
+        let parts = Parts::of(primitives);
+        let (sphere_owners, triangle_owners) = parts.owners();
+        let same = |order: &[u32], owner: &[u32], new: &[u32]| {
+            order.len() == new.len() && order.iter().zip(owner).all(|(&i, &o)| new[i as usize] == o)
+        };
+        if !same(&self.sphere_order, &self.sphere_owner, &sphere_owners)
+            || !same(&self.triangle_order, &self.triangle_owner, &triangle_owners)
+        {
+            return false;
+        }
+        self.lay_out(parts);
+        let spheres = &self.spheres;
+        self.sphere_bvh.refit(|slots| {
+            spheres.leaf(slots).fold(EMPTY, |(lo, hi), (c, r)| {
+                (lo.min(c - Vec3::splat(r)), hi.max(c + Vec3::splat(r)))
+            })
+        });
+        let triangles = &self.triangles;
+        self.triangle_bvh.refit(|slots| {
+            triangles.leaf(slots).fold(EMPTY, |(lo, hi), [a, b, c]| {
+                (lo.min(a).min(b).min(c), hi.max(a).max(b).max(c))
+            })
+        });
+        true
+    }
+
+    /// Fills the arrays from `parts` in the slot order of `sphere_order` and `triangle_order`
+    /// (all but the owners), and the planes and instances.
+    fn lay_out(&mut self, parts: Parts<'_>) {
+        let Parts {
+            spheres,
+            triangles,
+            planes,
+            placements,
+        } = parts;
+        self.planes = planes;
+        self.instances = InstanceSet::build(placements);
+        self.spheres = L::Spheres::default();
+        self.spheres.reserve(spheres.len());
+        self.sphere_frame.clear();
+        self.sphere_frame.reserve(spheres.len());
+        for &i in &self.sphere_order {
+            if let &Primitive::Sphere {
+                center,
+                radius,
+                frame,
+            } = spheres[i as usize].1
+            {
+                self.spheres.push(center, radius);
+                self.sphere_frame.push(frame);
+            }
+        }
+        self.triangles = L::Triangles::default();
+        self.triangles.reserve(triangles.len());
+        self.triangle_uv.clear();
+        self.triangle_uv.reserve(triangles.len());
+        self.triangle_normal.clear();
+        self.triangle_normal.reserve(triangles.len());
+        for &i in &self.triangle_order {
+            if let &Primitive::Triangle { p, uv } = triangles[i as usize].1 {
+                self.triangles.push(p);
+                self.triangle_uv.push(uv);
+                self.triangle_normal.push(triangle_normal(p));
+            }
+        }
     }
 
     /// The same geometry in layout `M`: slot for slot the same values and the same BVHs, so
@@ -384,11 +476,13 @@ impl<L: Layout> Geometry<L> {
             sphere_owner: self.sphere_owner.clone(),
             sphere_frame: self.sphere_frame.clone(),
             sphere_bvh: self.sphere_bvh.clone(),
+            sphere_order: self.sphere_order.clone(),
             triangles,
             triangle_owner: self.triangle_owner.clone(),
             triangle_uv: self.triangle_uv.clone(),
             triangle_normal: self.triangle_normal.clone(),
             triangle_bvh: self.triangle_bvh.clone(),
+            triangle_order: self.triangle_order.clone(),
             planes: self.planes.clone(),
             instances: self.instances.clone(),
         }

@@ -34,45 +34,48 @@ impl ParsedScene {
     }
 }
 
-/// Parses `text`, the contents of the scene file `path`, reusing `previous` (the last good
-/// parse of the same file) for the entities an edit left alone. Returns the parse and the
-/// number of entities parsed.
-pub fn parse_scene_text(
+/// Parses `text`, the contents of the scene file `path`, into `parsed`, reusing what it holds
+/// (the last good parse of the same file) for the entities an edit left alone. Returns the
+/// parse with the number of entities parsed. On an error `parsed` is left as it was, so the edit that mends a
+/// broken save still starts from the last good parse.
+pub fn parse_scene_text<'a>(
     path: &Path,
     text: String,
-    previous: Option<ParsedScene>,
-) -> Result<(ParsedScene, usize), SceneError> {
-    if let Some(previous) = previous.filter(|p| p.path == path)
-        && let Some(parsed) = splice(previous, &text)
+    parsed: &'a mut Option<ParsedScene>,
+) -> Result<(&'a ParsedScene, usize), SceneError> {
+    let mut previous = parsed.take();
+    let spliced = match previous.as_mut().filter(|p| p.path == path) {
+        Some(p) => splice(p, &text),
+        None => None,
+    };
+    if let Some(n) = spliced
+        && let Some(mut scene) = previous.take()
     {
-        let (scene, parsed) = parsed;
-        return Ok((
-            ParsedScene {
-                path: path.to_path_buf(),
-                text,
-                ..scene
-            },
-            parsed,
-        ));
+        scene.text = text;
+        return Ok((parsed.insert(scene), n));
     }
-    let desc: SceneDesc = parse(path, &text)?;
+    let desc: SceneDesc = match parse(path, &text) {
+        Ok(desc) => desc,
+        Err(e) => {
+            *parsed = previous;
+            return Err(e);
+        }
+    };
     let spans = entity_spans(&text).filter(|s| s.len() == desc.entities.len());
-    let parsed = desc.entities.len();
-    Ok((
-        ParsedScene {
-            path: path.to_path_buf(),
-            text,
-            desc,
-            spans,
-        },
-        parsed,
-    ))
+    let n = desc.entities.len();
+    let scene = parsed.insert(ParsedScene {
+        path: path.to_path_buf(),
+        text,
+        desc,
+        spans,
+    });
+    Ok((scene, n))
 }
 
-/// `previous` updated to `text` by re-parsing only the entities the edit touched, or `None` when
-/// the edit is not confined to whole entities (see the module's doc). The returned parse still
-/// holds the old text; the caller puts the new one in.
-fn splice(previous: ParsedScene, text: &str) -> Option<(ParsedScene, usize)> {
+/// Updates `previous` to `text` by re-parsing only the entities the edit touched and returns
+/// how many it parsed, or returns `None`, changing nothing, when the edit is not confined to
+/// whole entities (see the module's doc). The text itself is left for the caller to put in.
+fn splice(previous: &mut ParsedScene, text: &str) -> Option<usize> {
     let spans = previous.spans.as_ref()?;
     let (old, new) = (previous.text.as_bytes(), text.as_bytes());
     let prefix = old.iter().zip(new).take_while(|(a, b)| a == b).count();
@@ -117,17 +120,9 @@ fn splice(previous: ParsedScene, text: &str) -> Option<(ParsedScene, usize)> {
     for r in &spans[last + 1..] {
         new_spans.push(shift(r)?);
     }
-    let ParsedScene { path, mut desc, .. } = previous;
-    desc.entities.splice(first..=last, entities);
-    Some((
-        ParsedScene {
-            path,
-            text: String::new(),
-            desc,
-            spans: Some(new_spans),
-        },
-        parsed,
-    ))
+    previous.desc.entities.splice(first..=last, entities);
+    previous.spans = Some(new_spans);
+    Some(parsed)
 }
 
 /// One significant lexical item of RON text: blanks, comments and the insides of strings and
@@ -353,21 +348,23 @@ mod tests {
     #[test]
     fn an_edit_inside_one_entity_reparses_only_it_and_equals_a_full_parse() {
         let path = Path::new("s.ron");
-        let (first, n) = parse_scene_text(path, SCENE.to_string(), None).expect("parses");
+        let mut kept = None;
+        let (_, n) = parse_scene_text(path, SCENE.to_string(), &mut kept).expect("parses");
         assert_eq!(n, 3);
         let edited = SCENE.replace(
             "center: (2, 0, 0), radius: 1",
             "center: (2, 1, 0), radius: 0.5",
         );
-        let (second, n) = parse_scene_text(path, edited.clone(), Some(first)).expect("parses");
+        let (_, n) = parse_scene_text(path, edited.clone(), &mut kept).expect("parses");
         assert_eq!(n, 1, "only the edited entity is parsed");
         let reference = full(&edited);
-        assert_eq!(format!("{:?}", second.desc()), format!("{reference:?}"));
+        let desc = |kept: &Option<ParsedScene>| format!("{:?}", kept.as_ref().map(|p| p.desc()));
+        assert_eq!(desc(&kept), format!("{:?}", Some(reference)));
         // A second edit, of another entity, works from the spliced parse.
         let again = edited.replace("\"c\"", "\"cc\"");
-        let (third, n) = parse_scene_text(path, again.clone(), Some(second)).expect("parses");
+        let (_, n) = parse_scene_text(path, again.clone(), &mut kept).expect("parses");
         assert_eq!(n, 1);
-        assert_eq!(format!("{:?}", third.desc()), format!("{:?}", full(&again)));
+        assert_eq!(desc(&kept), format!("{:?}", Some(full(&again))));
     }
 
     #[test]
@@ -387,8 +384,9 @@ mod tests {
             ),
         ];
         for edited in cases {
-            let (first, _) = parse_scene_text(path, SCENE.to_string(), None).expect("parses");
-            match parse_scene_text(path, edited.clone(), Some(first)) {
+            let mut kept = None;
+            parse_scene_text(path, SCENE.to_string(), &mut kept).expect("parses");
+            match parse_scene_text(path, edited.clone(), &mut kept) {
                 Ok((parsed, _)) => {
                     assert_eq!(
                         format!("{:?}", parsed.desc()),
@@ -401,9 +399,10 @@ mod tests {
                 }
             }
         }
-        let (first, _) = parse_scene_text(path, SCENE.to_string(), None).expect("parses");
+        let mut kept = None;
+        parse_scene_text(path, SCENE.to_string(), &mut kept).expect("parses");
         let split = SCENE.replace("(name: \"c\"", "Entity(name: \"c\"");
-        let (_, n) = parse_scene_text(path, split, Some(first)).expect("parses");
+        let (_, n) = parse_scene_text(path, split, &mut kept).expect("parses");
         assert_eq!(
             n, 1,
             "renaming the struct of one entity is an edit inside it"
@@ -411,15 +410,22 @@ mod tests {
     }
 
     #[test]
-    fn a_broken_entity_is_the_error_a_full_parse_gives() {
+    fn a_broken_entity_is_the_error_a_full_parse_gives_and_keeps_the_last_good_parse() {
         let path = Path::new("s.ron");
-        let (first, _) = parse_scene_text(path, SCENE.to_string(), None).expect("parses");
+        let mut kept = None;
+        parse_scene_text(path, SCENE.to_string(), &mut kept).expect("parses");
         let broken = SCENE.replace("(4, 0, 0), radius: 1", "(4, 0, 0), radius: oops");
-        let e = parse_scene_text(path, broken.clone(), Some(first))
+        let e = parse_scene_text(path, broken.clone(), &mut kept)
             .err()
             .expect("fails");
         let reference = parse::<SceneDesc>(path, &broken).expect_err("fails too");
         assert_eq!(e.to_string(), reference.to_string());
+        // The mended save starts from the parse before the broken one.
+        let mended = SCENE.replace("(4, 0, 0), radius: 1", "(4, 0, 0), radius: 2");
+        let (_, n) = parse_scene_text(path, mended.clone(), &mut kept).expect("parses");
+        assert_eq!(n, 1, "one entity parsed after the broken save");
+        let desc = kept.as_ref().map(|p| format!("{:?}", p.desc()));
+        assert_eq!(desc, Some(format!("{:?}", full(&mended))));
     }
 
     #[test]
@@ -442,7 +448,8 @@ mod tests {
         ];
         let mut rng = crate::shading::rng::Rng::new(7, 11);
         let mut below = |n: usize| rng.next_u32() as usize % n.max(1);
-        let (mut previous, _) = parse_scene_text(path, text.clone(), None).expect("parses");
+        let mut kept = None;
+        parse_scene_text(path, text.clone(), &mut kept).expect("parses");
         let (mut reused, mut total) = (0, 0);
         for round in 0..3000 {
             let mut edited = text.clone();
@@ -468,7 +475,7 @@ mod tests {
                 _ => edited.insert_str(at, &entity(100 + round)),
             }
             let full = parse::<SceneDesc>(path, &edited);
-            let (result, kept) = match parse_scene_text(path, edited.clone(), Some(previous)) {
+            match parse_scene_text(path, edited.clone(), &mut kept) {
                 Ok((parsed, n)) => {
                     let full = full.as_ref().expect("a full parse succeeds too");
                     assert_eq!(
@@ -484,18 +491,15 @@ mod tests {
                     if n < parsed.desc().entities.len() {
                         reused += 1;
                     }
-                    (Some(edited), parsed)
+                    text = edited;
                 }
                 Err(e) => {
                     let full = full.as_ref().expect_err("a full parse fails too");
                     assert_eq!(e.to_string(), full.to_string(), "round {round}");
-                    let (again, _) = parse_scene_text(path, text.clone(), None).expect("parses");
-                    (None, again)
+                    // The last good parse is kept: the next edit starts from `text` again.
+                    let parsed = kept.as_ref().expect("kept");
+                    assert_eq!(parsed.text, text, "round {round}");
                 }
-            };
-            previous = kept;
-            if let Some(t) = result {
-                text = t;
             }
         }
         assert!(

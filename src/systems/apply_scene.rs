@@ -9,6 +9,7 @@ use crate::ecs::resources::{
     ActiveCamera, ActiveSky, ChangeSummary, MaterialTable, PendingScene, RenderSettings,
     SceneVersion,
 };
+use crate::scene::load::LoadedEntity;
 
 /// The components a reload compares and writes.
 type SceneEntity = (
@@ -18,6 +19,16 @@ type SceneEntity = (
     &'static mut Transform,
     &'static mut MaterialRef,
     &'static mut SceneOrder,
+);
+
+/// One entity's components as the reload query yields them.
+type SceneEntityItem<'w> = (
+    Entity,
+    &'w EntityName,
+    Mut<'w, Shape>,
+    Mut<'w, Transform>,
+    Mut<'w, MaterialRef>,
+    Mut<'w, SceneOrder>,
 );
 
 /// Diffs the pending scene against the world by entity name: unchanged entities are not touched
@@ -43,36 +54,49 @@ pub fn apply_scene(
         return;
     };
     let mut report = ChangeSummary::default();
-    let mut incoming: HashMap<&str, usize> = scene
-        .entities
-        .iter()
-        .enumerate()
-        .map(|(i, e)| (e.name.as_str(), i))
-        .collect();
-
+    let n = scene.entities.len();
+    // An entity usually keeps its place in the list: it is matched there by name, and only the
+    // rest (the strays) go through a map of the names left unmatched. A one-entity edit of a big
+    // scene so hashes a handful of names, not all of them.
+    let mut matched = vec![false; n];
+    let mut strays = Vec::new();
     // (old order, new order) of the entities kept, to tell a reorder from the shifts that
     // additions and removals cause.
-    let mut kept: Vec<(u32, u32)> = Vec::new();
-    for (entity, name, mut shape, mut transform, mut material, mut order) in &mut entities {
-        let Some(i) = incoming.remove(name.0.as_str()) else {
-            commands.entity(entity).despawn();
-            report.removed += 1;
-            continue;
-        };
-        let new = &scene.entities[i];
-        let a = shape.set_if_neq(new.shape.clone());
-        let b = transform.set_if_neq(new.transform);
-        let c = material.set_if_neq(MaterialRef(new.material.clone()));
-        kept.push((order.0, i as u32));
-        order.set_if_neq(SceneOrder(i as u32));
-        if a || b || c {
-            report.changed += 1;
+    let mut kept: Vec<(u32, u32)> = Vec::with_capacity(n);
+    for item in &mut entities {
+        let i = item.5.0 as usize;
+        match scene.entities.get(i) {
+            Some(new) if new.name == item.1.0 => {
+                matched[i] = true;
+                kept.push((item.5.0, i as u32));
+                report.changed += usize::from(update(item, new, i));
+            }
+            _ => strays.push(item.0),
         }
     }
-    let mut fresh: Vec<usize> = incoming.into_values().collect();
-    fresh.sort_unstable();
-    for i in fresh {
-        let e = &scene.entities[i];
+    if !strays.is_empty() {
+        let mut incoming: HashMap<&str, usize> = (0..n)
+            .filter(|&i| !matched[i])
+            .map(|i| (scene.entities[i].name.as_str(), i))
+            .collect();
+        for entity in strays {
+            let Ok(item) = entities.get_mut(entity) else {
+                continue;
+            };
+            let Some(i) = incoming.remove(item.1.0.as_str()) else {
+                commands.entity(entity).despawn();
+                report.removed += 1;
+                continue;
+            };
+            matched[i] = true;
+            kept.push((item.5.0, i as u32));
+            report.changed += usize::from(update(item, &scene.entities[i], i));
+        }
+    }
+    for (i, e) in scene.entities.iter().enumerate() {
+        if matched[i] {
+            continue;
+        }
         commands.spawn((
             EntityName(e.name.clone()),
             e.shape.clone(),
@@ -93,4 +117,24 @@ pub fn apply_scene(
         version.0 += 1;
     }
     *summary = report;
+}
+
+/// Writes the components of an entity that differ from `new`, now at place `at` of the list:
+/// whether its shape, transform or material changed. Nothing is cloned or flagged when equal.
+fn update(
+    (_, _, mut shape, mut transform, mut material, mut order): SceneEntityItem,
+    new: &LoadedEntity,
+    at: usize,
+) -> bool {
+    let a = *shape != new.shape;
+    if a {
+        *shape = new.shape.clone();
+    }
+    let b = transform.set_if_neq(new.transform);
+    let c = material.0 != new.material;
+    if c {
+        material.0.clone_from(&new.material);
+    }
+    order.set_if_neq(SceneOrder(at as u32));
+    a || b || c
 }

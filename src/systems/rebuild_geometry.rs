@@ -5,8 +5,12 @@ use std::time::Instant;
 use bevy_ecs::prelude::*;
 use glam::{Mat3, Vec2, Vec3};
 
+use super::render_frame::preview_block;
 use crate::ecs::components::{SceneOrder, Shape, Transform};
-use crate::ecs::resources::{Counters, PackedGeometry, Timings};
+use crate::ecs::resources::{
+    Accumulation, Counters, PackedGeometry, PassPlan, Preview, RenderControl, RenderSettings,
+    Timings,
+};
 use crate::geometry::packed::{Geometry, Primitive};
 
 const QUAD_UV: [Vec2; 4] = [Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y];
@@ -14,24 +18,41 @@ const QUAD_UV: [Vec2; 4] = [Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y];
 /// Entities whose shape, transform or place in the scene was added or changed.
 type GeometryChanged = Or<(Changed<Shape>, Changed<Transform>, Changed<SceneOrder>)>;
 
-/// Run condition: a `Shape` or `Transform` was added, changed or removed since the last check.
+/// Run condition: a `Shape` or `Transform` was added, changed or removed since the last check,
+/// or the geometry is [`PackedGeometry::provisional`] and the next pass is not a preview.
 pub fn geometry_changed(
     changed: Query<(), GeometryChanged>,
     mut removed: RemovedComponents<Shape>,
+    packed: Res<PackedGeometry>,
+    acc: Res<Accumulation>,
 ) -> bool {
     let removed_any = removed.read().count() > 0;
-    removed_any || !changed.is_empty()
+    removed_any || !changed.is_empty() || (packed.provisional && acc.preview != Preview::Due)
 }
 
 /// Rebuilds [`PackedGeometry`] from every entity, in scene order (so the result depends only on
 /// the scene file, not on the history of edits). Runs only under [`geometry_changed`].
+///
+/// When entities only moved or changed size (the same primitives, owner by owner) and the next
+/// pass is a live preview, the BVHs are refitted instead ([`Geometry::refit`]): the preview comes
+/// without a build, and the geometry stays provisional until the build that follows the preview,
+/// before any real sample, so images never depend on the history of edits.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the entities, the packed geometry, and what decides refit or build"
+)]
 pub fn rebuild_geometry(
     entities: Query<(Entity, &SceneOrder, &Shape, &Transform)>,
+    changed: Query<(), GeometryChanged>,
+    mut removed: RemovedComponents<Shape>,
+    settings: Res<RenderSettings>,
+    control: Res<RenderControl>,
     mut packed: ResMut<PackedGeometry>,
     mut counters: ResMut<Counters>,
     mut timings: ResMut<Timings>,
 ) {
     let start = Instant::now();
+    let edited = removed.read().count() > 0 || !changed.is_empty();
     let mut sorted: Vec<_> = entities.iter().collect();
     sorted.sort_by_key(|e| *e.1);
     let mut primitives = Vec::new();
@@ -59,10 +80,23 @@ pub fn rebuild_geometry(
         }
     }
     packed.blas_cache.retain(&meshes);
-    packed.geometry = Geometry::build(&primitives);
-    packed.owners = sorted.iter().map(|e| e.0).collect();
+    let s = &settings.0;
+    let preview_next = match control.plan {
+        PassPlan::Progressive { .. } => preview_block(control.preview_block, s.width, s.height) > 1,
+        PassPlan::Single => false,
+    };
+    let same_owners = packed.owners.len() == sorted.len()
+        && packed.owners.iter().zip(&sorted).all(|(a, b)| *a == b.0);
+    if edited && preview_next && same_owners && packed.geometry.refit(&primitives) {
+        packed.provisional = true;
+        counters.bvh_refits += 1;
+    } else {
+        packed.geometry = Geometry::build(&primitives);
+        packed.owners = sorted.iter().map(|e| e.0).collect();
+        packed.provisional = false;
+        counters.bvh_builds += 1;
+    }
     counters.mesh_bvh_builds = packed.blas_cache.builds();
-    counters.bvh_builds += 1;
     timings.bvh = start.elapsed();
 }
 

@@ -93,6 +93,11 @@ pub fn render_frame(
         acc.preview = Preview::Done;
     }
     let preview = acc.preview == Preview::Due;
+    if packed.provisional && !preview {
+        // A refitted tree is for previews only: the build comes first (see
+        // `rebuild_geometry`).
+        return;
+    }
     let done = acc.film.samples;
     let end = match control.plan {
         PassPlan::Single => s.spp,
@@ -112,7 +117,7 @@ pub fn render_frame(
     // The layout is matched once per pass: `render_pass` and everything below it is
     // monomorphised per layout, so no ray pays for the choice. A layout other than the default
     // renders a copy kept in `relaid` until the geometry is rebuilt.
-    let builds = counters.bvh_builds;
+    let builds = counters.bvh_builds + counters.bvh_refits;
     macro_rules! pass {
         ($layout:ty) => {{
             let view = SceneView {

@@ -22,6 +22,9 @@ pub struct ReloadReport {
     pub changes: ChangeSummary,
     /// Whether the geometry and its BVH were rebuilt.
     pub bvh_rebuilt: bool,
+    /// Whether the BVH was refitted to moved primitives for the preview instead (the build
+    /// follows the preview: see `systems::rebuild_geometry`).
+    pub bvh_refit: bool,
     /// Primitives in the geometry.
     pub primitives: usize,
     /// Whether material assignments were rebuilt.
@@ -38,7 +41,7 @@ pub struct ReloadReport {
     pub parse: Duration,
     /// Applying the scene to the world and assigning materials (the BVH excluded).
     pub ecs: Duration,
-    /// Packing geometry and building the BVH (zero if not rebuilt).
+    /// Packing geometry and building (or refitting) the BVH (zero if neither).
     pub bvh: Duration,
     /// The first pass: its sample count and duration.
     pub first_pass: Option<(u32, Duration)>,
@@ -67,6 +70,7 @@ impl ReloadReport {
             applied: false,
             changes: ChangeSummary::default(),
             bvh_rebuilt: false,
+            bvh_refit: false,
             primitives: 0,
             materials_synced: false,
             textures_decoded: 0,
@@ -159,6 +163,11 @@ impl fmt::Display for ReloadReport {
         let mut rebuilt = Vec::new();
         if self.bvh_rebuilt {
             rebuilt.push(format!("BVH ({} primitives)", self.primitives));
+        } else if self.bvh_refit {
+            rebuilt.push(format!(
+                "BVH refitted for the preview ({} primitives)",
+                self.primitives
+            ));
         }
         if self.materials_synced {
             rebuilt.push("materials".into());
@@ -178,6 +187,8 @@ impl fmt::Display for ReloadReport {
         write!(f, "parse {}, ECS {}, ", human(self.parse), human(self.ecs))?;
         if self.bvh_rebuilt {
             write!(f, "BVH {}, ", human(self.bvh))?;
+        } else if self.bvh_refit {
+            write!(f, "BVH refit {}, ", human(self.bvh))?;
         } else {
             write!(f, "BVH -, ")?;
         }

@@ -245,11 +245,14 @@ pub fn load_scene(path: &Path, assets: &mut AssetCache) -> Result<LoadedScene, S
     let source = std::fs::read_to_string(path)
         .map_err(|e| SceneError::at(path, None, format!("cannot read scene: {e}")))?;
     let text: Arc<str> = source.as_str().into();
-    let previous = assets.take_parsed_scene();
-    let (parsed, entities_parsed) = parse_scene_text(path, source, previous)?;
-    let loaded = expand_scene(path, text, parsed.desc(), entities_parsed, assets);
-    // The parse is good whatever the expansion finds: the next edit starts from it.
-    assets.keep_parsed_scene(parsed);
+    // The parse is kept whatever the expansion finds, and a failed parse keeps the last good
+    // one: the next edit starts from it.
+    let mut kept = assets.take_parsed_scene();
+    let loaded = parse_scene_text(path, source, &mut kept)
+        .and_then(|(scene, n)| expand_scene(path, text, scene.desc(), n, assets));
+    if let Some(scene) = kept {
+        assets.keep_parsed_scene(scene);
+    }
     loaded
 }
 
@@ -538,7 +541,9 @@ impl Expander<'_> {
                 return Err(file.error(again, None, format!("duplicate entity name \"{local}\"")));
             }
             self.slashed |= local.contains('/');
-            let name = format!("{prefix}{local}");
+            let mut name = String::with_capacity(prefix.len() + local.len());
+            name.push_str(prefix);
+            name.push_str(&local);
             let origin = Origin {
                 file: file.id,
                 index: i as u32,
