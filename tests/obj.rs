@@ -201,7 +201,16 @@ fn random_obj(rng: &mut Rng, wild: bool) -> String {
     let mut out = String::new();
     for _ in 0..lines {
         let end = if below(rng, 5) == 0 { "\r\n" } else { "\n" };
-        let sep = if below(rng, 6) == 0 { "\t" } else { " " };
+        // Whitespace of both kinds: ASCII (tab, vertical tab, form feed) and not (no-break
+        // space, ideographic space).
+        let sep = match below(rng, 16) {
+            0 => "\t",
+            1 => "\x0b",
+            2 => "\x0c ",
+            3 => "\u{a0}",
+            4 => " \u{3000}",
+            _ => " ",
+        };
         let line = match below(rng, 20) {
             0..=5 => {
                 v += 1;

@@ -41,17 +41,18 @@ impl std::fmt::Debug for MeshBlas {
 }
 
 impl MeshBlas {
-    /// Builds the BVH of a mesh. The gathers around the build are maps in parallel: the same result for any thread count.
+    /// Builds the BVH of a mesh. The gathers around the build are maps in parallel: the same
+    /// result for any thread count. The triangles' corners are gathered once, in BVH order.
     pub fn build(mesh: &MeshData) -> Self {
         use rayon::prelude::*;
-        let tris: Vec<[Vec3; 3]> = mesh
+        let corners = |t: &[u32; 3]| t.map(|i| mesh.positions[i as usize]);
+        let bounds: Vec<Bounds> = mesh
             .triangles
             .par_iter()
-            .map(|t| t.map(|i| mesh.positions[i as usize]))
-            .collect();
-        let bounds: Vec<Bounds> = tris
-            .par_iter()
-            .map(|p| (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2])))
+            .map(|t| {
+                let p = corners(t);
+                (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]))
+            })
             .collect();
         let (bvh, order) = Bvh::build(&bounds);
         let all = bounds
@@ -72,7 +73,10 @@ impl MeshBlas {
                 .collect()
         });
         Self {
-            triangles: order.par_iter().map(|&i| tris[i as usize]).collect(),
+            triangles: order
+                .par_iter()
+                .map(|&k| corners(&mesh.triangles[k as usize]))
+                .collect(),
             normals,
             uvs,
             bvh,

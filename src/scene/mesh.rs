@@ -197,8 +197,52 @@ fn parse_chunk(bytes: &[u8], budget: &AtomicUsize) -> Result<Chunk, (usize, Stri
     Ok(chunk)
 }
 
+/// The words of a line, split at whitespace as [`str::split_whitespace`] does; without
+/// decoding characters when the line is ASCII (nearly always).
+enum Words<'a> {
+    Ascii(&'a str),
+    Other(std::str::SplitWhitespace<'a>),
+}
+
+impl<'a> Words<'a> {
+    fn new(line: &'a str) -> Self {
+        if line.is_ascii() {
+            Words::Ascii(line)
+        } else {
+            Words::Other(line.split_whitespace())
+        }
+    }
+}
+
+impl<'a> Iterator for Words<'a> {
+    type Item = &'a str;
+
+    fn next(&mut self) -> Option<&'a str> {
+        // The ASCII characters with Unicode's White_Space property.
+        let space = |b: &u8| matches!(b, b'\t'..=b'\r' | b' ');
+        match self {
+            Words::Other(words) => words.next(),
+            Words::Ascii(rest) => {
+                let bytes = rest.as_bytes();
+                let Some(start) = bytes.iter().position(|b| !space(b)) else {
+                    *rest = "";
+                    return None;
+                };
+                let end = bytes[start..]
+                    .iter()
+                    .position(space)
+                    .map_or(bytes.len(), |n| start + n);
+                // Byte offsets of an ASCII string are character boundaries.
+                let word = &rest[start..end];
+                *rest = &rest[end..];
+                Some(word)
+            }
+        }
+    }
+}
+
 /// Parses `n` floats from `words`.
-fn floats<const N: usize>(words: &mut std::str::SplitWhitespace) -> Result<[f32; N], String> {
+fn floats<const N: usize>(words: &mut Words) -> Result<[f32; N], String> {
     let mut out = [0.0; N];
     for o in &mut out {
         let w = words.next().ok_or("too few numbers")?;
@@ -214,7 +258,7 @@ fn parse_line(
     face: &mut Vec<[i64; 3]>,
     budget: &AtomicUsize,
 ) -> Result<(), String> {
-    let mut words = line.split_whitespace();
+    let mut words = Words::new(line);
     match words.next() {
         Some("v") => {
             let [x, y, z] = floats::<3>(&mut words).map_err(|e| format!("vertex: {e}"))?;
