@@ -9,9 +9,10 @@ use std::time::Instant;
 
 use super::denoiser::Denoising;
 use super::files::watch_key;
+use super::job::Job;
 use super::pending::{Failure, Pending};
 use super::report::{ReloadReport, Report};
-use super::{Emitter, Job, Watch};
+use super::{Emitter, Watch};
 
 impl Watch {
     /// Acts on due changes: reports a failure that stood, or loads. A failed load is kept
