@@ -78,7 +78,8 @@ impl Watch {
             r.applied = true;
             r.changes = self.renderer.change_summary();
             r.bvh_rebuilt = counters.bvh_builds > job.before.bvh_builds;
-            r.bvh = if r.bvh_rebuilt {
+            r.bvh_refit = counters.bvh_refits > job.before.bvh_refits;
+            r.bvh = if r.bvh_rebuilt || r.bvh_refit {
                 timings.bvh
             } else {
                 Duration::ZERO
