@@ -17,8 +17,10 @@ pub(super) enum Failure {
 
 /// The changes gathered since the last reload, until they are loaded.
 pub(super) struct Pending {
-    /// The files concerned.
+    /// The files concerned, in the order first seen.
     pub(super) paths: Vec<PathBuf>,
+    /// The same files as a set: each event's path is looked up once, not along the list.
+    listed: HashSet<PathBuf>,
     /// When the latest event happened: about when the save ended.
     pub(super) last: Instant,
     /// Files with an event that leaves them unfinished and no completing event since.
@@ -42,6 +44,7 @@ impl Pending {
     pub(super) fn initial() -> Self {
         Self {
             paths: Vec::new(),
+            listed: HashSet::new(),
             last: Instant::now(),
             unfinished: HashSet::new(),
             writing: HashSet::new(),
@@ -85,7 +88,7 @@ impl Pending {
                     self.content = true;
                 }
             }
-            if !self.paths.contains(&path) {
+            if self.listed.insert(path.clone()) {
                 self.paths.push(path);
             }
         }
