@@ -550,7 +550,8 @@ impl Expander<'_> {
                 prefix: prefix.len() as u32,
                 named: e.name.is_some(),
             };
-            let transform = parent * e.transform.unwrap_or_default().matrix();
+            // No transform is the identity: `parent` exactly, without composing one.
+            let transform = e.transform.map_or(parent, |t| parent * t.matrix());
             match (&e.shape, &e.prefab, &e.gltf) {
                 (Some(shape), None, None) => {
                     self.place_shape(file, e, shape, scope, name, transform, origin)?
