@@ -113,7 +113,13 @@ pub fn time_edits(
                         Report::Wrote { .. } | Report::Rendered(_) | Report::Failed { .. }
                     )
                 })
-                .map_err(|_| format!("{scene}: no image within {} s", WAIT.as_secs()))?;
+                .map_err(|_| {
+                    // A signal stops the session, which ends the wait: say so, not a timeout.
+                    interrupt
+                        .check()
+                        .err()
+                        .unwrap_or_else(|| format!("{scene}: no image within {} s", WAIT.as_secs()))
+                })?;
             interrupt.check()?;
             match report {
                 Report::Failed { message, .. } => return Err(message),
