@@ -5,7 +5,9 @@
 //! everything that differs lies within a run of whole entities of the old text, only that run,
 //! as it now reads, is parsed (as a RON list) and spliced into the old description. Everything
 //! else is byte-identical and was parsed in the same context (the list), so the result is what a
-//! full parse gives. Whenever that cannot be shown cheaply (the edit touches text between
+//! full parse gives. An edit wholly outside the list (a material, the camera, the settings) parses
+//! the file with the list read as `[]` and keeps the entities, when the text around the list
+//! still lexes on its own and still hands the list to `entities`. Whenever that cannot be shown cheaply (the edit touches text between
 //! entities or outside the list, the run no longer parses as a list of whole entities, the file
 //! uses RON `#![enable(…)]` attributes), the whole file is parsed, so errors keep their exact
 //! `file:line:col`.
@@ -22,9 +24,18 @@ pub struct ParsedScene {
     path: PathBuf,
     text: String,
     desc: SceneDesc,
-    /// Byte span of each entity of `desc.entities` in `text` (`None`: not found, so the next
-    /// edit parses the whole file).
-    spans: Option<Vec<Range<usize>>>,
+    /// Where the entities are in `text` (`None`: not found, so the next edit parses the whole
+    /// file).
+    spans: Option<Spans>,
+}
+
+/// Where a scene file's entities are written.
+#[derive(Clone, Debug, PartialEq)]
+struct Spans {
+    /// Byte span of each entity of the list.
+    entities: Vec<Range<usize>>,
+    /// Byte span of the list, from its `[` to just after its `]`.
+    list: Range<usize>,
 }
 
 impl ParsedScene {
@@ -45,7 +56,7 @@ pub fn parse_scene_text<'a>(
 ) -> Result<(&'a ParsedScene, usize), SceneError> {
     let mut previous = parsed.take();
     let spliced = match previous.as_mut().filter(|p| p.path == path) {
-        Some(p) => splice(p, &text),
+        Some(p) => splice(p, &text).or_else(|| splice_outside(p, &text)),
         None => None,
     };
     if let Some(n) = spliced
@@ -61,7 +72,7 @@ pub fn parse_scene_text<'a>(
             return Err(e);
         }
     };
-    let spans = entity_spans(&text).filter(|s| s.len() == desc.entities.len());
+    let spans = entity_spans(&text).filter(|s| s.entities.len() == desc.entities.len());
     let n = desc.entities.len();
     let scene = parsed.insert(ParsedScene {
         path: path.to_path_buf(),
@@ -76,18 +87,12 @@ pub fn parse_scene_text<'a>(
 /// how many it parsed, or returns `None`, changing nothing, when the edit is not confined to
 /// whole entities (see the module's doc). The text itself is left for the caller to put in.
 fn splice(previous: &mut ParsedScene, text: &str) -> Option<usize> {
-    let spans = previous.spans.as_ref()?;
+    let Spans {
+        entities: spans,
+        list,
+    } = previous.spans.as_ref()?;
     let (old, new) = (previous.text.as_bytes(), text.as_bytes());
-    let prefix = old.iter().zip(new).take_while(|(a, b)| a == b).count();
-    let room = old.len().min(new.len()) - prefix;
-    let suffix = old
-        .iter()
-        .rev()
-        .zip(new.iter().rev())
-        .take(room)
-        .take_while(|(a, b)| a == b)
-        .count();
-    let old_end = old.len() - suffix;
+    let (prefix, old_end) = changed(old, new);
     // The first entity that ends after the common prefix, and the last that starts before the
     // common suffix (for a pure insertion, before the byte after it): the edit must lie within
     // them.
@@ -120,9 +125,86 @@ fn splice(previous: &mut ParsedScene, text: &str) -> Option<usize> {
     for r in &spans[last + 1..] {
         new_spans.push(shift(r)?);
     }
+    let list = list.start..shift(list)?.end;
     previous.desc.entities.splice(first..=last, entities);
-    previous.spans = Some(new_spans);
+    previous.spans = Some(Spans {
+        entities: new_spans,
+        list,
+    });
     Some(parsed)
+}
+
+/// The bytes of `old` that `new` changed: the length of their common prefix, and where the
+/// common suffix starts in `old`.
+fn changed(old: &[u8], new: &[u8]) -> (usize, usize) {
+    let prefix = old.iter().zip(new).take_while(|(a, b)| a == b).count();
+    let room = old.len().min(new.len()) - prefix;
+    let suffix = old
+        .iter()
+        .rev()
+        .zip(new.iter().rev())
+        .take(room)
+        .take_while(|(a, b)| a == b)
+        .count();
+    (prefix, old.len() - suffix)
+}
+
+/// Updates `previous` to `text` when the edit lies wholly before or after the entity list (a
+/// material, the camera, the settings): the file is parsed with the list read as `[]`, and the
+/// entities are kept. Returns 0 entities parsed, or `None`, changing nothing, unless the text
+/// around the list still lexes on its own and still gives the list to `entities` at the scene's
+/// top level (then the list's bytes read as before, in the same context).
+fn splice_outside(previous: &mut ParsedScene, text: &str) -> Option<usize> {
+    let spans = previous.spans.as_ref()?;
+    let (old, new) = (previous.text.as_bytes(), text.as_bytes());
+    let (prefix, old_end) = changed(old, new);
+    let delta = new.len() as isize - old.len() as isize;
+    let before = old_end <= spans.list.start;
+    if !before && prefix < spans.list.end {
+        return None;
+    }
+    let moved = |x: usize| {
+        if before {
+            x.checked_add_signed(delta)
+        } else {
+            Some(x)
+        }
+    };
+    let list = moved(spans.list.start)?..moved(spans.list.end)?;
+    let (head, tail) = (text.get(..list.start)?, text.get(list.end..)?);
+    if head.contains("#!") || tail.contains("#!") {
+        return None;
+    }
+    let lexemes = lex(head)?;
+    lex(tail)?;
+    // `entities` `:` at depth 1, right before the list.
+    let [.., (_, Lexeme::Word(a, b)), (_, Lexeme::Colon)] = lexemes[..] else {
+        return None;
+    };
+    let depth = lexemes.iter().fold(0isize, |d, (_, l)| match l {
+        Lexeme::Open => d + 1,
+        Lexeme::Close => d - 1,
+        _ => d,
+    });
+    if &head[a..b] != "entities" || depth != 1 {
+        return None;
+    }
+    let desc: SceneDesc = parse(&previous.path, &format!("{head}[]{tail}")).ok()?;
+    if !desc.entities.is_empty() {
+        return None;
+    }
+    let shifted = spans
+        .entities
+        .iter()
+        .map(|r| Some(moved(r.start)?..moved(r.end)?))
+        .collect::<Option<Vec<_>>>()?;
+    let entities = std::mem::take(&mut previous.desc.entities);
+    previous.desc = SceneDesc { entities, ..desc };
+    previous.spans = Some(Spans {
+        entities: shifted,
+        list,
+    });
+    Some(0)
 }
 
 /// One significant lexical item of RON text: blanks, comments and the insides of strings and
@@ -273,9 +355,9 @@ fn value(text: &str, lexemes: &[(usize, Lexeme)], mut k: usize) -> Option<(usize
     None
 }
 
-/// Spans of the entities of a scene text's `entities` list, or `None` if the text uses RON
-/// attributes or its list is not found as expected.
-fn entity_spans(text: &str) -> Option<Vec<Range<usize>>> {
+/// Spans of the entities of a scene text's `entities` list and of the list itself, or `None` if
+/// the text uses RON attributes or its list is not found as expected.
+fn entity_spans(text: &str) -> Option<Spans> {
     if text.contains("#!") {
         return None;
     }
@@ -302,7 +384,12 @@ fn entity_spans(text: &str) -> Option<Vec<Range<usize>>> {
     let mut spans = Vec::new();
     loop {
         match lexemes.get(k)?.1 {
-            Lexeme::Close => return Some(spans),
+            Lexeme::Close => {
+                return Some(Spans {
+                    entities: spans,
+                    list: lexemes.get(list? - 1)?.0..lexemes[k].0 + 1,
+                });
+            }
             _ => {
                 let (start, end, next) = value(text, &lexemes, k)?;
                 spans.push(start..end);
@@ -338,7 +425,9 @@ mod tests {
     #[test]
     fn entity_spans_cover_each_entity_whatever_the_comments_and_strings() {
         let spans = entity_spans(SCENE).expect("found");
-        let texts: Vec<&str> = spans.iter().map(|r| &SCENE[r.clone()]).collect();
+        let texts: Vec<&str> = spans.entities.iter().map(|r| &SCENE[r.clone()]).collect();
+        let list = &SCENE[spans.list];
+        assert!(list.starts_with("[\n        Entity(name: \"a\"") && list.ends_with(']'));
         assert_eq!(texts.len(), 3);
         assert!(texts[0].starts_with("Entity(name: \"a\"") && texts[0].ends_with("radius: 1))"));
         assert!(texts[1].starts_with("Entity(name: \"b)\""));
@@ -426,6 +515,55 @@ mod tests {
         assert_eq!(n, 1, "one entity parsed after the broken save");
         let desc = kept.as_ref().map(|p| format!("{:?}", p.desc()));
         assert_eq!(desc, Some(format!("{:?}", full(&mended))));
+    }
+
+    #[test]
+    fn an_edit_outside_the_list_parses_no_entity_and_equals_a_full_parse() {
+        let path = Path::new("s.ron");
+        let cases = [
+            // A material, before the list: the spans move.
+            SCENE.replace("(0.5, 0.5, 0.5)", "(0.25, 0.5, 0.5)"),
+            SCENE.replace("(0.5, 0.5, 0.5)", "(0.5, 0.5, 0.5), roughness: 1"),
+            // The camera, and a comment after the list.
+            SCENE.replace("(0, 0, -5)", "(0, 1, -50)"),
+            SCENE.replace("    ],\n)", "    ], // done\n)"),
+        ];
+        for edited in cases {
+            let mut kept = None;
+            parse_scene_text(path, SCENE.to_string(), &mut kept).expect("parses");
+            match parse_scene_text(path, edited.clone(), &mut kept) {
+                Ok((parsed, n)) => {
+                    assert_eq!(n, 0, "no entity parsed: {edited}");
+                    assert_eq!(
+                        format!("{:?}", parsed.desc()),
+                        format!("{:?}", full(&edited))
+                    );
+                    assert_eq!(parsed.spans, entity_spans(&edited));
+                }
+                Err(e) => {
+                    let reference = parse::<SceneDesc>(path, &edited).expect_err("fails too");
+                    assert_eq!(e.to_string(), reference.to_string());
+                }
+            }
+        }
+        // Text before the list that would swallow it (an open raw string, a comment) is not
+        // read around it: the whole file is parsed, as a full parse reads it.
+        for opener in ["r#\"", "/*", "\""] {
+            let edited = SCENE.replace("camera:", &format!("{opener}camera:"));
+            let mut kept = None;
+            parse_scene_text(path, SCENE.to_string(), &mut kept).expect("parses");
+            let ours = parse_scene_text(path, edited.clone(), &mut kept)
+                .map(|(p, n)| (format!("{:?}", p.desc()), n));
+            let reference = parse::<SceneDesc>(path, &edited).map(|d| format!("{d:?}"));
+            match (ours, reference) {
+                (Ok((ours, n)), Ok(reference)) => {
+                    assert_eq!(ours, reference);
+                    assert_eq!(n, 3, "parsed in full");
+                }
+                (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
+                (a, b) => panic!("{opener}: {a:?} against {b:?}"),
+            }
+        }
     }
 
     #[test]

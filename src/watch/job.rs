@@ -93,6 +93,8 @@ impl Watch {
             }
         }
         r.counters = counters;
+        // A refitted preview is followed by the build before real samples.
+        r.bvh_rebuilt |= counters.bvh_builds > job.before.bvh_builds;
         let complete = self.renderer.is_complete();
         if counters.passes == passes && !complete {
             // Cancelled: a change is on its way (or we are stopping). The film starts over.

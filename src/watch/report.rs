@@ -20,10 +20,10 @@ pub struct ReloadReport {
     pub applied: bool,
     /// What the scene diff changed in the world.
     pub changes: ChangeSummary,
-    /// Whether the geometry and its BVH were rebuilt.
+    /// Whether the geometry and its BVH were rebuilt (at once, or after a refitted preview).
     pub bvh_rebuilt: bool,
-    /// Whether the BVH was refitted to moved primitives for the preview instead (the build
-    /// follows the preview: see `systems::rebuild_geometry`).
+    /// Whether the first frame refitted the BVH to moved primitives for the preview (the build
+    /// follows before real samples: see `systems::rebuild_geometry`).
     pub bvh_refit: bool,
     /// Primitives in the geometry.
     pub primitives: usize,
@@ -161,13 +161,17 @@ impl fmt::Display for ReloadReport {
             changed.push("no changes".into());
         }
         let mut rebuilt = Vec::new();
-        if self.bvh_rebuilt {
-            rebuilt.push(format!("BVH ({} primitives)", self.primitives));
-        } else if self.bvh_refit {
-            rebuilt.push(format!(
-                "BVH refitted for the preview ({} primitives)",
+        match (self.bvh_refit, self.bvh_rebuilt) {
+            (true, true) => rebuilt.push(format!(
+                "BVH boxes refit for the preview, then the BVH ({} primitives)",
                 self.primitives
-            ));
+            )),
+            (true, false) => rebuilt.push(format!(
+                "BVH boxes refit for the preview ({} primitives)",
+                self.primitives
+            )),
+            (false, true) => rebuilt.push(format!("BVH ({} primitives)", self.primitives)),
+            (false, false) => {}
         }
         if self.materials_synced {
             rebuilt.push("materials".into());
@@ -185,10 +189,10 @@ impl fmt::Display for ReloadReport {
         };
         write!(f, "{} | rebuilt {rebuilt} | ", changed.join(", "))?;
         write!(f, "parse {}, ECS {}, ", human(self.parse), human(self.ecs))?;
-        if self.bvh_rebuilt {
-            write!(f, "BVH {}, ", human(self.bvh))?;
-        } else if self.bvh_refit {
+        if self.bvh_refit {
             write!(f, "BVH refit {}, ", human(self.bvh))?;
+        } else if self.bvh_rebuilt {
+            write!(f, "BVH {}, ", human(self.bvh))?;
         } else {
             write!(f, "BVH -, ")?;
         }
