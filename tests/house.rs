@@ -19,12 +19,7 @@ use common::temp_dir;
 
 /// Folder circles that remain, each with why: the test fails when one of them goes (remove it
 /// here) or another appears.
-const KNOWN_FOLDER_CIRCLES: &[(&str, &str)] = &[
-    // `scene/check` places shapes with `systems::world_primitives` (in the geometry rebuild
-    // system), and the systems apply loaded scenes. The function would move to a module below
-    // both (it needs `geometry::packed::Primitive` and the data model).
-    ("scene", "systems"),
-];
+const KNOWN_FOLDER_CIRCLES: &[(&str, &str)] = &[];
 
 /// A token of Rust source with comments and literals removed.
 #[derive(Clone, Debug, PartialEq, Eq)]

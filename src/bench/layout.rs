@@ -49,7 +49,7 @@ use crate::shading::material::Material;
 use crate::shading::rng::Rng;
 use crate::shading::sampler::SamplerKind;
 use crate::shading::texture::Texture;
-use crate::systems::world_primitives;
+use crate::geometry::world::world_primitives;
 
 use super::chart;
 use super::layout_rows::{Kind, Row, WORKLOADS, spread};

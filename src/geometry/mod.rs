@@ -12,3 +12,4 @@ pub mod sphere;
 pub mod store;
 pub mod surface;
 pub mod triangle;
+pub mod world;

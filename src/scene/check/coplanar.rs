@@ -11,7 +11,7 @@ use crate::geometry::packed::Primitive;
 use crate::model::Shape;
 use crate::scene::load::LoadedScene;
 use crate::shading::material::Material;
-use crate::systems::world_primitives;
+use crate::geometry::world::world_primitives;
 
 /// Tolerance of [`WarningKind::CoplanarOverlap`](super::WarningKind::CoplanarOverlap), relative
 /// to the larger surface's size.

@@ -30,7 +30,7 @@ use crate::model::{MeshData, MeshRef, Shape, Transform};
 use crate::shading::material::Material;
 use crate::shading::rng::Rng;
 use crate::shading::sampling::{Frame, cosine_hemisphere};
-use crate::systems::world_primitives;
+use crate::geometry::world::world_primitives;
 
 mod coplanar;
 
