@@ -358,14 +358,7 @@ pub fn run(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::accuracy_rows::test_row;
-
-    fn row(method: Method, seconds: f64, rmse: f64) -> AccuracyRow {
-        AccuracyRow {
-            method,
-            ..test_row(false, 1, seconds, rmse)
-        }
-    }
+    use crate::bench::accuracy_rows::test_method_row as row;
 
     #[test]
     fn the_csv_keeps_its_old_columns_and_adds_denoised_lamp_out_and_image_at_the_end() {

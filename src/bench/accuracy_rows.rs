@@ -255,16 +255,20 @@ pub(crate) fn test_row(denoised: bool, spp: u32, seconds: f64, rmse: f64) -> Acc
     }
 }
 
+/// A raw 1-spp row of `method` taking `seconds`, every error metric at `rmse`, for tests.
+#[cfg(test)]
+pub(crate) fn test_method_row(method: Method, seconds: f64, rmse: f64) -> AccuracyRow {
+    AccuracyRow {
+        method,
+        ..test_row(false, 1, seconds, rmse)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn row(method: Method, seconds: f64, rmse: f64) -> AccuracyRow {
-        AccuracyRow {
-            method,
-            ..test_row(false, 1, seconds, rmse)
-        }
-    }
+    use test_method_row as row;
 
     #[test]
     fn fit_recovers_the_slope_and_the_error_at_one_second() {
