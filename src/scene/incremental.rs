@@ -223,11 +223,11 @@ enum Lexeme {
     Other,
 }
 
-/// The lexemes of `text` with their byte offsets, or `None` for text that does not lex (an
-/// unterminated string, comment or character).
-fn lex(text: &str) -> Option<Vec<(usize, Lexeme)>> {
+/// Calls `each` with every lexeme of `text` and its byte offset, until it returns `false`;
+/// `None` for text that does not lex (an unterminated string, comment or character). Nothing is
+/// collected, so a scan of a big file allocates nothing.
+fn lex_each(text: &str, mut each: impl FnMut(usize, Lexeme) -> bool) -> Option<()> {
     let b = text.as_bytes();
-    let mut out = Vec::new();
     let mut i = 0;
     while i < b.len() {
         let c = b[i];
@@ -243,27 +243,39 @@ fn lex(text: &str) -> Option<Vec<(usize, Lexeme)>> {
             b'/' if b.get(i + 1) == Some(&b'*') => i = block_comment_end(b, i)?,
             b'"' => {
                 i = quoted(b, i + 1, b'"')?;
-                out.push((at, Lexeme::Other));
+                if !each(at, Lexeme::Other) {
+                    return Some(());
+                }
             }
             b'\'' => {
                 i = quoted(b, i + 1, b'\'')?;
-                out.push((at, Lexeme::Other));
+                if !each(at, Lexeme::Other) {
+                    return Some(());
+                }
             }
             b'(' | b'[' | b'{' => {
                 i += 1;
-                out.push((at, Lexeme::Open));
+                if !each(at, Lexeme::Open) {
+                    return Some(());
+                }
             }
             b')' | b']' | b'}' => {
                 i += 1;
-                out.push((at, Lexeme::Close));
+                if !each(at, Lexeme::Close) {
+                    return Some(());
+                }
             }
             b',' => {
                 i += 1;
-                out.push((at, Lexeme::Comma));
+                if !each(at, Lexeme::Comma) {
+                    return Some(());
+                }
             }
             b':' => {
                 i += 1;
-                out.push((at, Lexeme::Colon));
+                if !each(at, Lexeme::Colon) {
+                    return Some(());
+                }
             }
             c if c.is_ascii_alphabetic() || c == b'_' => {
                 while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
@@ -273,12 +285,18 @@ fn lex(text: &str) -> Option<Vec<(usize, Lexeme)>> {
                 // Raw strings `r"…"`, `r#"…"#` and byte strings `b"…"`, `br#"…"#`.
                 if matches!(word, b"r" | b"br") && matches!(b.get(i), Some(b'"' | b'#')) {
                     i = raw_string(b, i).filter(|r| r.closed)?.end;
-                    out.push((at, Lexeme::Other));
+                    if !each(at, Lexeme::Other) {
+                        return Some(());
+                    }
                 } else if word == b"b" && b.get(i) == Some(&b'"') {
                     i = quoted(b, i + 1, b'"')?;
-                    out.push((at, Lexeme::Other));
+                    if !each(at, Lexeme::Other) {
+                        return Some(());
+                    }
                 } else {
-                    out.push((at, Lexeme::Word(at, i)));
+                    if !each(at, Lexeme::Word(at, i)) {
+                        return Some(());
+                    }
                 }
             }
             _ => {
@@ -287,10 +305,23 @@ fn lex(text: &str) -> Option<Vec<(usize, Lexeme)>> {
                 while i < b.len() && b[i] & 0xC0 == 0x80 {
                     i += 1;
                 }
-                out.push((at, Lexeme::Other));
+                if !each(at, Lexeme::Other) {
+                    return Some(());
+                }
             }
         }
     }
+    Some(())
+}
+
+/// The lexemes of `text` with their byte offsets, or `None` for text that does not lex (for the
+/// small texts an edit touches).
+fn lex(text: &str) -> Option<Vec<(usize, Lexeme)>> {
+    let mut out = Vec::new();
+    lex_each(text, |at, l| {
+        out.push((at, l));
+        true
+    })?;
     Some(out)
 }
 
@@ -356,51 +387,84 @@ fn value(text: &str, lexemes: &[(usize, Lexeme)], mut k: usize) -> Option<(usize
 }
 
 /// Spans of the entities of a scene text's `entities` list and of the list itself, or `None` if
-/// the text uses RON attributes or its list is not found as expected.
+/// the text uses RON attributes or its list is not found as expected. One pass over the
+/// lexemes, none kept: `entities` `:` `[` at depth 1 of the scene's parentheses (once), then
+/// `Entity(…)` or `(…)` items separated by commas up to the list's `]`.
 fn entity_spans(text: &str) -> Option<Spans> {
+    /// Where the scan stands.
+    #[derive(Clone, Copy)]
+    enum Phase {
+        /// Before the list, looking for `entities`.
+        Seek,
+        /// After `entities`, before `:`.
+        Word,
+        /// After `entities :`, before `[`.
+        Colon,
+        /// In the list, where an item or its `]` may start.
+        Item,
+        /// After `Entity` (its offset), before `(`.
+        Named(usize),
+        /// Inside an item that started at this offset.
+        Inside(usize),
+        /// After an item, before `,` or `]`.
+        After,
+        /// After the list: the rest must not name `entities` again.
+        Done,
+    }
     if text.contains("#!") {
         return None;
     }
-    let lexemes = lex(text)?;
-    // `Scene(` … `entities` `:` `[` at depth 1 of the scene's parentheses.
-    let mut depth = 0usize;
-    let mut list = None;
-    for (k, &(_, l)) in lexemes.iter().enumerate() {
+    let (mut phase, mut depth, mut list_at) = (Phase::Seek, 0usize, 0);
+    let (mut entities, mut list, mut good) = (Vec::new(), None, true);
+    lex_each(text, |at, l| {
+        let level = depth;
         match l {
             Lexeme::Open => depth += 1,
-            Lexeme::Close => depth = depth.checked_sub(1)?,
-            Lexeme::Word(a, b) if depth == 1 && &text[a..b] == "entities" => {
-                if lexemes.get(k + 1)?.1 != Lexeme::Colon || lexemes.get(k + 2)?.1 != Lexeme::Open {
-                    return None;
+            Lexeme::Close => match depth.checked_sub(1) {
+                Some(d) => depth = d,
+                None => {
+                    good = false;
+                    return false;
                 }
-                if list.replace(k + 3).is_some() {
-                    return None;
-                }
-            }
+            },
             _ => {}
         }
-    }
-    let mut k = list?;
-    let mut spans = Vec::new();
-    loop {
-        match lexemes.get(k)?.1 {
-            Lexeme::Close => {
-                return Some(Spans {
-                    entities: spans,
-                    list: lexemes.get(list? - 1)?.0..lexemes[k].0 + 1,
-                });
+        let entities_word =
+            matches!(l, Lexeme::Word(a, b) if level == 1 && &text[a..b] == "entities");
+        phase = match (phase, l) {
+            (Phase::Seek, _) if entities_word => Phase::Word,
+            (Phase::Done, _) if entities_word => {
+                good = false;
+                return false;
             }
+            (p @ (Phase::Seek | Phase::Done), _) => p,
+            (Phase::Word, Lexeme::Colon) => Phase::Colon,
+            (Phase::Colon, Lexeme::Open) => {
+                list_at = at;
+                Phase::Item
+            }
+            (Phase::Item | Phase::After, Lexeme::Close) => {
+                list = Some(list_at..at + 1);
+                Phase::Done
+            }
+            (Phase::Item, Lexeme::Word(a, b)) if &text[a..b] == "Entity" => Phase::Named(at),
+            (Phase::Item, Lexeme::Open) => Phase::Inside(at),
+            (Phase::Named(start), Lexeme::Open) => Phase::Inside(start),
+            (Phase::Inside(start), Lexeme::Close) if depth == 2 => {
+                entities.push(start..at + 1);
+                Phase::After
+            }
+            (p @ Phase::Inside(_), _) => p,
+            (Phase::After, Lexeme::Comma) => Phase::Item,
             _ => {
-                let (start, end, next) = value(text, &lexemes, k)?;
-                spans.push(start..end);
-                k = match lexemes.get(next)?.1 {
-                    Lexeme::Comma => next + 1,
-                    Lexeme::Close => next,
-                    _ => return None,
-                };
+                good = false;
+                return false;
             }
-        }
-    }
+        };
+        true
+    })?;
+    let list = list.filter(|_| good)?;
+    Some(Spans { entities, list })
 }
 
 #[cfg(test)]
