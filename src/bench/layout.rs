@@ -42,6 +42,7 @@ use crate::geometry::aabb::RayQuery;
 use crate::geometry::layout::{Aos, Hybrid, Layout, LayoutKind, Soa, SoaSimd};
 use crate::geometry::packed::{BvhPlan, Geometry, Primitive};
 use crate::geometry::ray::Ray;
+use crate::geometry::world::world_primitives;
 use crate::lights::LightSet;
 use crate::render::{SceneView, has_masks, render_pass};
 use crate::scene::format::Method;
@@ -49,7 +50,6 @@ use crate::shading::material::Material;
 use crate::shading::rng::Rng;
 use crate::shading::sampler::SamplerKind;
 use crate::shading::texture::Texture;
-use crate::geometry::world::world_primitives;
 
 use super::chart;
 use super::layout_rows::{Kind, Row, WORKLOADS, spread};

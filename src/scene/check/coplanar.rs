@@ -8,10 +8,10 @@ use std::hash::{BuildHasherDefault, Hasher};
 use glam::{Vec2, Vec3};
 
 use crate::geometry::packed::Primitive;
+use crate::geometry::world::world_primitives;
 use crate::model::Shape;
 use crate::scene::load::LoadedScene;
 use crate::shading::material::Material;
-use crate::geometry::world::world_primitives;
 
 /// Tolerance of [`WarningKind::CoplanarOverlap`](super::WarningKind::CoplanarOverlap), relative
 /// to the larger surface's size.

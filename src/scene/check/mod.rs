@@ -26,11 +26,11 @@ use glam::{Vec2, Vec3};
 use crate::geometry::instance::BlasCache;
 use crate::geometry::packed::{Geometry, Primitive};
 use crate::geometry::ray::{Ray, gamma, spawn_origin};
+use crate::geometry::world::world_primitives;
 use crate::model::{MeshData, MeshRef, Shape, Transform};
 use crate::shading::material::Material;
 use crate::shading::rng::Rng;
 use crate::shading::sampling::{Frame, cosine_hemisphere};
-use crate::geometry::world::world_primitives;
 
 mod coplanar;
 
