@@ -62,15 +62,9 @@ fn an_unreported_file_with_unchanged_metadata_is_not_read_again() {
 fn a_reported_file_is_read_again_even_with_the_same_size_and_mtime() {
     let dir = common::temp_dir("asset-reads-reported");
     let (mut cache, mesh) = watched(&dir);
-    let stamp = std::fs::metadata(&mesh)
-        .and_then(|m| m.modified())
-        .expect("mtime");
+    let stamp = common::watch_diff::stamp(&mesh).1;
     std::fs::write(&mesh, triangle(2)).expect("rewrite mesh");
-    std::fs::File::options()
-        .write(true)
-        .open(&mesh)
-        .and_then(|file| file.set_modified(stamp))
-        .expect("restore the mtime");
+    common::watch_diff::set_mtime(&mesh, stamp);
     let read = cache.bytes_read();
     // Reported under its canonical path, as the watcher names it.
     cache.invalidate(&[mesh.canonicalize().expect("canonical")]);
@@ -88,16 +82,10 @@ fn an_unreported_change_of_metadata_is_read_again() {
     assert_eq!(first_x(&mut cache, &mesh), 3.0);
     assert_eq!(cache.bytes_read() - read, size(&mesh));
     // A file replaced by another of the same size and mtime (another inode).
-    let stamp = std::fs::metadata(&mesh)
-        .and_then(|m| m.modified())
-        .expect("mtime");
+    let stamp = common::watch_diff::stamp(&mesh).1;
     let other = dir.join("other.obj");
     std::fs::write(&other, format!("{}# more\n", triangle(4))).expect("write other");
-    std::fs::File::options()
-        .write(true)
-        .open(&other)
-        .and_then(|file| file.set_modified(stamp))
-        .expect("set the mtime");
+    common::watch_diff::set_mtime(&other, stamp);
     std::fs::rename(&other, &mesh).expect("rename over the mesh");
     let read = cache.bytes_read();
     assert_eq!(first_x(&mut cache, &mesh), 4.0);

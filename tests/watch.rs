@@ -707,15 +707,9 @@ fn issue14_case4_a_mesh_replaced_with_the_same_size_and_mtime_is_reloaded() {
     f.rendered();
     assert_eq!(f.centre(), [0, 0, 255]);
 
-    let stamp = std::fs::metadata(&mesh)
-        .and_then(|m| m.modified())
-        .expect("mtime");
+    let stamp = common::watch_diff::stamp(&mesh).1;
     std::fs::write(&mesh, aside).expect("write mesh");
-    std::fs::File::options()
-        .write(true)
-        .open(&mesh)
-        .and_then(|file| file.set_modified(stamp))
-        .expect("restore the mtime");
+    common::watch_diff::set_mtime(&mesh, stamp);
     let meta = std::fs::metadata(&mesh).expect("stat");
     assert_eq!(
         (meta.len(), meta.modified().ok()),
@@ -929,15 +923,9 @@ fn a_same_size_same_mtime_rewrite_with_an_event_is_read_again() {
     f.rendered();
     assert_eq!(f.centre(), [0, 0, 255]);
     let mesh = f.dir.join("tri.obj");
-    let stamp = std::fs::metadata(&mesh)
-        .and_then(|m| m.modified())
-        .expect("mtime");
+    let stamp = common::watch_diff::stamp(&mesh).1;
     std::fs::write(&mesh, aside).expect("write mesh");
-    std::fs::File::options()
-        .write(true)
-        .open(&mesh)
-        .and_then(|file| file.set_modified(stamp))
-        .expect("restore the mtime");
+    common::watch_diff::set_mtime(&mesh, stamp);
     let r = f.rendered();
     assert_eq!(r.asset_bytes_read, aside.len() as u64, "{r:?}");
     assert_eq!(f.centre(), [255, 0, 0]);
