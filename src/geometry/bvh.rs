@@ -193,6 +193,27 @@ impl<F: FnMut(Range<usize>, &mut f32) -> bool> Leaf for F {
 /// An axis-aligned box as `(min, max)`.
 pub type Bounds = (Vec3, Vec3);
 
+/// The box that grows to any other: the start of a union.
+pub const EMPTY: Bounds = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+
+/// The box around `a` and `b`.
+#[inline]
+pub fn union(a: Bounds, b: Bounds) -> Bounds {
+    (a.0.min(b.0), a.1.max(b.1))
+}
+
+/// The box of the sphere of centre `c` and radius `r`.
+#[inline]
+pub fn sphere_bounds(c: Vec3, r: f32) -> Bounds {
+    (c - Vec3::splat(r), c + Vec3::splat(r))
+}
+
+/// The box of the triangle `p`.
+#[inline]
+pub fn triangle_bounds(p: [Vec3; 3]) -> Bounds {
+    (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]))
+}
+
 impl Bvh {
     /// The box around everything in the tree (its root's), or `None` for an empty tree.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
@@ -270,12 +291,10 @@ impl Bvh {
                 } else {
                     let c = &self.wide[child];
                     let lanes = (0..WIDTH).filter(|j| c.valid >> j & 1 == 1);
-                    lanes.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), j| {
+                    lanes.fold(EMPTY, |all, j| {
                         let b = |axis: usize| c.bounds[axis][j];
-                        (
-                            lo.min(Vec3::new(b(0), b(1), b(2))),
-                            hi.max(Vec3::new(b(3), b(4), b(5))),
-                        )
+                        let lane = (Vec3::new(b(0), b(1), b(2)), Vec3::new(b(3), b(4), b(5)));
+                        union(all, lane)
                     })
                 };
                 for axis in 0..3 {
@@ -581,12 +600,15 @@ mod tests {
         }
     }
 
-    #[test]
-    fn wide_traversal_finds_the_nearest_box_hit_and_stops_when_asked() {
-        // Closest "hit" = the nearest entry into a leaf box (leaves of one primitive each).
-        let (boxes, rays) = random_boxes_and_rays(300);
-        let (bvh, order) = Bvh::build(&boxes);
-        for ray in rays {
+    /// Asserts that for every ray the nearest box entry the traversal finds (leaf by leaf, the
+    /// boxes in slot order `order`) is a brute-force scan's over all `boxes`.
+    fn assert_nearest_box_entry_is_brute_force(
+        bvh: &Bvh,
+        order: &[u32],
+        boxes: &[Bounds],
+        rays: &[Ray],
+    ) {
+        for &ray in rays {
             let q = RayQuery::new(ray);
             let expected = boxes
                 .iter()
@@ -603,6 +625,17 @@ mod tests {
                 true
             });
             assert_eq!(t, expected, "{ray:?}");
+        }
+    }
+
+    #[test]
+    fn wide_traversal_finds_the_nearest_box_hit_and_stops_when_asked() {
+        // Closest "hit" = the nearest entry into a leaf box (leaves of one primitive each).
+        let (boxes, rays) = random_boxes_and_rays(300);
+        let (bvh, order) = Bvh::build(&boxes);
+        assert_nearest_box_entry_is_brute_force(&bvh, &order, &boxes, &rays);
+        for ray in rays {
+            let q = RayQuery::new(ray);
             let (mut calls, mut t) = (0, f32::INFINITY);
             bvh.traverse(&q, &mut t, |_, _| {
                 calls += 1;
@@ -610,6 +643,89 @@ mod tests {
             });
             assert!(calls <= 1);
         }
+    }
+
+    /// Boxes of a big mesh (more than the 2¹⁷ primitives from which the BVH takes its big-mesh
+    /// build and collapses in parallel), and random rays through them.
+    fn big_mesh_boxes_and_rays() -> (Vec<Bounds>, Vec<Ray>) {
+        let mut rng = crate::shading::rng::Rng::new(24, 3);
+        let mut v = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+        let boxes = (0..(1 << 17) + 5_000)
+            .map(|_| {
+                let c = v() * 100.0;
+                (c, c + v() * 0.5)
+            })
+            .collect();
+        let rays = (0..200)
+            .map(|k| {
+                let mut d = v() * 2.0 - Vec3::ONE;
+                if k % 10 == 0 {
+                    d.x = 0.0;
+                }
+                Ray::new(v() * 110.0 - Vec3::splat(5.0), d.normalize())
+            })
+            .collect();
+        (boxes, rays)
+    }
+
+    /// Per ray, the slot ranges of the leaves the traversal visits, in visiting order: a
+    /// fingerprint of the wide tree's layout and child order.
+    fn visits(bvh: &Bvh, rays: &[Ray]) -> Vec<Vec<Range<usize>>> {
+        rays.iter()
+            .map(|&ray| {
+                let q = RayQuery::new(ray);
+                let mut seen = Vec::new();
+                let mut t = f32::INFINITY;
+                bvh.traverse(&q, &mut t, |slots, _| {
+                    seen.push(slots);
+                    true
+                });
+                seen
+            })
+            .collect()
+    }
+
+    #[test]
+    fn big_mesh_bvh_is_the_same_for_any_thread_count_and_valid() {
+        let (boxes, rays) = big_mesh_boxes_and_rays();
+        let build = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("thread pool")
+                .install(|| Bvh::build(&boxes))
+        };
+        let (bvh, order) = build(1);
+        let leaves: Vec<_> = bvh.leaves().collect();
+        let walk = visits(&bvh, &rays);
+        for threads in [2, 3] {
+            let (other, other_order) = build(threads);
+            // `assert!`, not `assert_eq!`: a failure would print 136,072 indices.
+            assert!(other_order == order, "{threads} threads: primitive order");
+            assert_eq!(other.node_count(), bvh.node_count(), "{threads} threads");
+            assert!(
+                other.leaves().eq(leaves.iter().cloned()),
+                "{threads} threads"
+            );
+            assert!(
+                visits(&other, &rays) == walk,
+                "{threads} threads: wide tree"
+            );
+        }
+        // Every primitive is in exactly one leaf.
+        let mut sorted = order.clone();
+        sorted.sort_unstable();
+        assert!(sorted.iter().copied().eq(0..boxes.len() as u32));
+        let mut covered = vec![0u8; boxes.len()];
+        for leaf in &leaves {
+            for s in leaf.clone() {
+                covered[s] += 1;
+            }
+        }
+        assert!(covered.iter().all(|&c| c == 1));
+        // Boxes enclose what is under them: the nearest box entry the traversal finds is a
+        // brute-force scan's, for every ray.
+        assert_nearest_box_entry_is_brute_force(&bvh, &order, &boxes, &rays);
     }
 
     #[test]

@@ -9,7 +9,7 @@ use std::sync::Arc;
 use glam::{Affine3A, Vec2, Vec3};
 
 use super::aabb::RayQuery;
-use super::bvh::{Bounds, Bvh};
+use super::bvh::{Bounds, Bvh, EMPTY, triangle_bounds, union};
 use super::ray::{Ray, gamma};
 use super::surface::{Surface, Tangent, uv_derivatives};
 use super::triangle::intersect_triangle;
@@ -49,17 +49,10 @@ impl MeshBlas {
         let bounds: Vec<Bounds> = mesh
             .triangles
             .par_iter()
-            .map(|t| {
-                let p = corners(t);
-                (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]))
-            })
+            .map(|t| triangle_bounds(corners(t)))
             .collect();
         let (bvh, order) = Bvh::build(&bounds);
-        let all = bounds
-            .iter()
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), b| {
-                (lo.min(b.0), hi.max(b.1))
-            });
+        let all = bounds.iter().fold(EMPTY, |all, &b| union(all, b));
         let normals = mesh.normals.as_ref().map(|n| {
             order
                 .par_iter()
@@ -173,7 +166,7 @@ pub struct InstanceSet {
 
 /// World bounds of an object-space box under `m`: the box of its eight transformed corners.
 fn transform_bounds(m: &Affine3A, (lo, hi): Bounds) -> Bounds {
-    let mut out = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    let mut out = EMPTY;
     for k in 0..8 {
         let c = Vec3::new(
             if k & 1 == 0 { lo.x } else { hi.x },

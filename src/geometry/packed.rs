@@ -14,7 +14,7 @@ use std::sync::Arc;
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use super::aabb::RayQuery;
-use super::bvh::{Bounds, Bvh, Leaf};
+use super::bvh::{Bounds, Bvh, EMPTY, Leaf, sphere_bounds, triangle_bounds, union};
 use super::instance::{InstanceSet, MeshBlas};
 pub use super::layout::{Aos, DefaultLayout, Hybrid, Layout, LayoutKind, Soa, SoaSimd};
 use super::plane::{intersect_plane, plane_uv};
@@ -200,7 +200,7 @@ impl BvhPlan {
         for (owner, prim) in primitives {
             match *prim {
                 Primitive::Sphere { center, radius, .. } => {
-                    spheres.push((center - Vec3::splat(radius), center + Vec3::splat(radius)));
+                    spheres.push(sphere_bounds(center, radius));
                 }
                 Primitive::Triangle { p, .. } => triangles.push((*owner, p)),
                 Primitive::Plane { .. } | Primitive::Instance { .. } => {}
@@ -214,7 +214,7 @@ impl BvhPlan {
         let mut i = 0;
         while i < triangles.len() {
             let (owner, p) = triangles[i];
-            let mut b = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+            let mut b = triangle_bounds(p);
             let mut end = i + 1;
             if let Some(&(o, q)) = triangles.get(i + 1)
                 && o == owner
@@ -294,9 +294,6 @@ impl<'a> Parts<'a> {
         )
     }
 }
-
-/// The box that grows to any other: the start of a union.
-const EMPTY: Bounds = (Vec3::INFINITY, Vec3::NEG_INFINITY);
 
 /// All geometry of a scene, packed for tracing in layout `L` (see [`super::layout`]). Built from
 /// [`Primitive`]s with their owners.
@@ -404,15 +401,15 @@ impl<L: Layout> Geometry<L> {
         self.lay_out(parts);
         let spheres = &self.spheres;
         self.sphere_bvh.refit(|slots| {
-            spheres.leaf(slots).fold(EMPTY, |(lo, hi), (c, r)| {
-                (lo.min(c - Vec3::splat(r)), hi.max(c + Vec3::splat(r)))
-            })
+            spheres
+                .leaf(slots)
+                .fold(EMPTY, |all, (c, r)| union(all, sphere_bounds(c, r)))
         });
         let triangles = &self.triangles;
         self.triangle_bvh.refit(|slots| {
-            triangles.leaf(slots).fold(EMPTY, |(lo, hi), [a, b, c]| {
-                (lo.min(a).min(b).min(c), hi.max(a).max(b).max(c))
-            })
+            triangles
+                .leaf(slots)
+                .fold(EMPTY, |all, p| union(all, triangle_bounds(p)))
         });
         true
     }
