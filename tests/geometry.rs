@@ -5,8 +5,6 @@ mod common;
 
 use common::geometry_of;
 use glam::{Vec2, Vec3};
-use rondo::geometry::aabb::RayQuery;
-use rondo::geometry::bvh::{Bounds, Bvh};
 use rondo::geometry::packed::{Geometry, HitKind, Primitive};
 use rondo::geometry::ray::Ray;
 use rondo::shading::rng::Rng;
@@ -205,104 +203,4 @@ fn planes_are_found_outside_the_bvh() {
     let onto_sphere = Ray::new(Vec3::new(0.0, 3.0, 0.0), -Vec3::Y);
     let hit = g.intersect(&onto_sphere, f32::INFINITY).expect("sphere");
     assert_eq!((hit.kind, hit.t), (HitKind::Sphere, 1.0));
-}
-
-/// Boxes of a big mesh (more than the 2¹⁷ primitives from which the BVH takes its big-mesh build
-/// and collapses in parallel), and random rays through them.
-fn big_mesh_boxes_and_rays() -> (Vec<Bounds>, Vec<Ray>) {
-    let mut rng = Rng::new(24, 3);
-    let mut v = || Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
-    let boxes = (0..(1 << 17) + 5_000)
-        .map(|_| {
-            let c = v() * 100.0;
-            (c, c + v() * 0.5)
-        })
-        .collect();
-    let rays = (0..200)
-        .map(|k| {
-            let mut d = v() * 2.0 - Vec3::ONE;
-            if k % 10 == 0 {
-                d.x = 0.0;
-            }
-            Ray::new(v() * 110.0 - Vec3::splat(5.0), d.normalize())
-        })
-        .collect();
-    (boxes, rays)
-}
-
-/// Per ray, the slot ranges of the leaves the traversal visits, in visiting order: a fingerprint
-/// of the wide tree's layout and child order.
-fn visits(bvh: &Bvh, rays: &[Ray]) -> Vec<Vec<std::ops::Range<usize>>> {
-    rays.iter()
-        .map(|&ray| {
-            let q = RayQuery::new(ray);
-            let mut seen = Vec::new();
-            let mut t = f32::INFINITY;
-            bvh.traverse(&q, &mut t, |slots, _| {
-                seen.push(slots);
-                true
-            });
-            seen
-        })
-        .collect()
-}
-
-#[test]
-fn big_mesh_bvh_is_the_same_for_any_thread_count_and_valid() {
-    let (boxes, rays) = big_mesh_boxes_and_rays();
-    let build = |threads: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("thread pool")
-            .install(|| Bvh::build(&boxes))
-    };
-    let (bvh, order) = build(1);
-    let leaves: Vec<_> = bvh.leaves().collect();
-    let walk = visits(&bvh, &rays);
-    for threads in [2, 3] {
-        let (other, other_order) = build(threads);
-        // `assert!`, not `assert_eq!`: a failure would print 136,072 indices.
-        assert!(other_order == order, "{threads} threads: primitive order");
-        assert_eq!(other.node_count(), bvh.node_count(), "{threads} threads");
-        assert!(
-            other.leaves().eq(leaves.iter().cloned()),
-            "{threads} threads"
-        );
-        assert!(
-            visits(&other, &rays) == walk,
-            "{threads} threads: wide tree"
-        );
-    }
-    // Every primitive is in exactly one leaf.
-    let mut sorted = order.clone();
-    sorted.sort_unstable();
-    assert!(sorted.iter().copied().eq(0..boxes.len() as u32));
-    let mut covered = vec![0u8; boxes.len()];
-    for leaf in &leaves {
-        for s in leaf.clone() {
-            covered[s] += 1;
-        }
-    }
-    assert!(covered.iter().all(|&c| c == 1));
-    // Boxes enclose what is under them: the nearest box entry the traversal finds is a brute-force
-    // scan's, for every ray.
-    for &ray in &rays {
-        let q = RayQuery::new(ray);
-        let expected = boxes
-            .iter()
-            .filter_map(|&(a, b)| q.enter_box(a.into(), b.into(), f32::INFINITY))
-            .fold(f32::INFINITY, f32::min);
-        let mut t = f32::INFINITY;
-        bvh.traverse(&q, &mut t, |slots, t| {
-            for s in slots {
-                let (a, b) = boxes[order[s] as usize];
-                if let Some(e) = q.enter_box(a.into(), b.into(), *t) {
-                    *t = t.min(e);
-                }
-            }
-            true
-        });
-        assert_eq!(t, expected, "{ray:?}");
-    }
 }
