@@ -486,6 +486,24 @@ mod tests {
         parse(Path::new("s.ron"), text).expect("parses")
     }
 
+    /// `SCENE` parsed, then `edited` parsed from it: the description (as text), the entities
+    /// parsed and the spans kept, or the error's text.
+    fn after_edit(edited: &str) -> Result<(String, usize, Option<Spans>), String> {
+        let path = Path::new("s.ron");
+        let mut kept = None;
+        parse_scene_text(path, SCENE.to_string(), &mut kept).expect("parses");
+        parse_scene_text(path, edited.to_string(), &mut kept)
+            .map(|(p, n)| (format!("{:?}", p.desc()), n, p.spans.clone()))
+            .map_err(|e| e.to_string())
+    }
+
+    /// A full parse of `edited`: the description (as text), or the error's text.
+    fn full_parse(edited: &str) -> Result<String, String> {
+        parse::<SceneDesc>(Path::new("s.ron"), edited)
+            .map(|d| format!("{d:?}"))
+            .map_err(|e| e.to_string())
+    }
+
     #[test]
     fn entity_spans_cover_each_entity_whatever_the_comments_and_strings() {
         let spans = entity_spans(SCENE).expect("found");
@@ -526,7 +544,7 @@ mod tests {
         let cases = [
             // Between entities: a new one.
             SCENE.replace("/* ( */", "Entity(name: \"d\", material: \"m\", shape: Sphere(center: (6, 0, 0), radius: 1)),"),
-            // Outside the list.
+            // Outside the list (read around it: see the next test).
             SCENE.replace("(0.5, 0.5, 0.5)", "(0.25, 0.5, 0.5)"),
             // A trailing comma inside the run would read as a list but not in the file.
             SCENE.replace("radius: 1)), /* ( */", "radius: 1)),, /* ( */"),
@@ -537,19 +555,10 @@ mod tests {
             ),
         ];
         for edited in cases {
-            let mut kept = None;
-            parse_scene_text(path, SCENE.to_string(), &mut kept).expect("parses");
-            match parse_scene_text(path, edited.clone(), &mut kept) {
-                Ok((parsed, _)) => {
-                    assert_eq!(
-                        format!("{:?}", parsed.desc()),
-                        format!("{:?}", full(&edited))
-                    );
-                }
-                Err(e) => {
-                    let reference = parse::<SceneDesc>(path, &edited).expect_err("fails too");
-                    assert_eq!(e.to_string(), reference.to_string());
-                }
+            match (after_edit(&edited), full_parse(&edited)) {
+                (Ok((ours, _, _)), Ok(reference)) => assert_eq!(ours, reference),
+                (Err(a), Err(b)) => assert_eq!(a, b),
+                (a, b) => panic!("{edited}: {a:?} against {b:?}"),
             }
         }
         let mut kept = None;
@@ -583,7 +592,6 @@ mod tests {
 
     #[test]
     fn an_edit_outside_the_list_parses_no_entity_and_equals_a_full_parse() {
-        let path = Path::new("s.ron");
         let cases = [
             // A material, before the list: the spans move.
             SCENE.replace("(0.5, 0.5, 0.5)", "(0.25, 0.5, 0.5)"),
@@ -593,38 +601,26 @@ mod tests {
             SCENE.replace("    ],\n)", "    ], // done\n)"),
         ];
         for edited in cases {
-            let mut kept = None;
-            parse_scene_text(path, SCENE.to_string(), &mut kept).expect("parses");
-            match parse_scene_text(path, edited.clone(), &mut kept) {
-                Ok((parsed, n)) => {
+            match (after_edit(&edited), full_parse(&edited)) {
+                (Ok((ours, n, spans)), Ok(reference)) => {
                     assert_eq!(n, 0, "no entity parsed: {edited}");
-                    assert_eq!(
-                        format!("{:?}", parsed.desc()),
-                        format!("{:?}", full(&edited))
-                    );
-                    assert_eq!(parsed.spans, entity_spans(&edited));
+                    assert_eq!(ours, reference);
+                    assert_eq!(spans, entity_spans(&edited));
                 }
-                Err(e) => {
-                    let reference = parse::<SceneDesc>(path, &edited).expect_err("fails too");
-                    assert_eq!(e.to_string(), reference.to_string());
-                }
+                (Err(a), Err(b)) => assert_eq!(a, b),
+                (a, b) => panic!("{edited}: {a:?} against {b:?}"),
             }
         }
         // Text before the list that would swallow it (an open raw string, a comment) is not
         // read around it: the whole file is parsed, as a full parse reads it.
         for opener in ["r#\"", "/*", "\""] {
             let edited = SCENE.replace("camera:", &format!("{opener}camera:"));
-            let mut kept = None;
-            parse_scene_text(path, SCENE.to_string(), &mut kept).expect("parses");
-            let ours = parse_scene_text(path, edited.clone(), &mut kept)
-                .map(|(p, n)| (format!("{:?}", p.desc()), n));
-            let reference = parse::<SceneDesc>(path, &edited).map(|d| format!("{d:?}"));
-            match (ours, reference) {
-                (Ok((ours, n)), Ok(reference)) => {
+            match (after_edit(&edited), full_parse(&edited)) {
+                (Ok((ours, n, _)), Ok(reference)) => {
                     assert_eq!(ours, reference);
                     assert_eq!(n, 3, "parsed in full");
                 }
-                (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
+                (Err(a), Err(b)) => assert_eq!(a, b),
                 (a, b) => panic!("{opener}: {a:?} against {b:?}"),
             }
         }
