@@ -319,7 +319,7 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         {
             s.ns = normal_mapped(view.geometry, &hit, &s, map);
         }
-        if features.is_none() && (!material.is_specular() || depth + 1 == view.max_depth) {
+        if features.is_none() && (!material.is_specular(s.uv) || depth + 1 == view.max_depth) {
             let n = shading_normal(&s, material);
             features = Some(FeatureSample {
                 albedo: throughput / eta_scale * material.feature_albedo(ray.direction, s.n, s.uv),

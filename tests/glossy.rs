@@ -82,7 +82,7 @@ fn sampling_density_integrates_to_one_minus_what_is_absorbed() {
 #[test]
 fn eval_and_scatter_agree_on_density_and_weight() {
     let mut rng = Rng::new(17, 4);
-    for roughness in [0.01f32, 0.05, 0.2, 0.5, 1.0] {
+    for roughness in [0.0317f32, 0.05, 0.2, 0.5, 1.0] {
         let m = Material::Glossy {
             albedo: Texture::Constant(Vec3::new(0.9, 0.5, 0.2)),
             roughness,
@@ -118,6 +118,44 @@ fn eval_and_scatter_agree_on_density_and_weight() {
             assert!(s.attenuation.max_element() <= 1.0 + 1e-5);
         }
     }
+}
+
+#[test]
+fn below_alpha_one_thousandth_glossy_is_a_perfect_mirror_of_schlicks_fresnel() {
+    // α = roughness²: 0.0316² < 10⁻³ ≤ 0.0317². Below, the lobe is a delta (pbrt-v4's
+    // "effectively smooth"): the mirror direction, weight F = F0 + (1 − F0)(1 − cos θ)⁵ written
+    // out here, no density, nothing to evaluate, no light sampling; above, an evaluable lobe.
+    let f0 = Vec3::new(0.9, 0.5, 0.2);
+    let mut rng = Rng::new(3, 3);
+    for roughness in [0.0f32, 0.01, 0.0316] {
+        let m = Material::Glossy {
+            albedo: Texture::Constant(f0),
+            roughness,
+        };
+        assert!(
+            !m.samples_lights() && m.is_specular(Vec2::ZERO),
+            "{roughness}"
+        );
+        for theta in [0.0f32, 0.5, 1.2, 1.5] {
+            let d = Vec3::new(theta.sin(), 0.0, -theta.cos());
+            let s = m
+                .scatter(d, Vec3::Z, Vec2::ZERO, &mut rng)
+                .expect("a mirror");
+            let fresnel = f0 + (Vec3::ONE - f0) * (1.0 - theta.cos()).powi(5);
+            assert!((s.direction - Vec3::new(d.x, d.y, -d.z)).length() < 1e-6);
+            assert!(
+                (s.attenuation - fresnel).abs().max_element() < 1e-6,
+                "{roughness} {theta}"
+            );
+            assert_eq!(s.pdf, None);
+            assert_eq!(m.eval(d, s.direction, Vec3::Z, Vec2::ZERO), None);
+        }
+    }
+    let rough = Material::Glossy {
+        albedo: Texture::Constant(f0),
+        roughness: 0.0317,
+    };
+    assert!(rough.samples_lights() && !rough.is_specular(Vec2::ZERO));
 }
 
 #[test]

@@ -1,7 +1,8 @@
 //! The glTF metallic–roughness material (`Pbr`) against independent truth: white furnaces (an
 //! environment of radiance 1 around a sphere, seen through a vanishing-fov camera so that every
-//! pixel is an independent estimate of one point's radiance), the closed-form light of an
-//! emissive `Pbr` sphere on a plane, emission added to reflection, and a RON error.
+//! pixel is an independent estimate of one point's radiance; a smooth `Glossy` beside the
+//! smooth `Pbr` there), the closed-form light of an emissive `Pbr` sphere on a plane, emission
+//! added to reflection, and a RON error.
 
 mod common;
 
@@ -36,30 +37,57 @@ fn furnace(dir: &Path, material: &str) -> PathBuf {
 }
 
 #[test]
-fn a_smooth_white_conductor_is_exactly_one_in_a_white_furnace() {
+fn smooth_white_mirrors_are_exactly_one_in_a_white_furnace_under_every_method() {
+    // A white roughness-0 conductor (`Pbr`, F0 = 1) and a white roughness-0 `Glossy` (Schlick
+    // F0 = 1): F = 1 at every angle, and the sphere is convex, so every pixel sees one
+    // reflection of radiance 1 into the environment. A lobe this smooth is a perfect mirror, so
+    // next-event estimation leaves it to BSDF sampling like a `Metal` of roughness 0.
     let dir = temp_dir("pbr-mirror");
     write_white_map(&dir);
-    let scene = furnace(
-        &dir,
+    for material in [
         "Pbr(base_color: Constant((1, 1, 1)), metallic: 1, roughness: 0)",
-    );
-    // Not `Nee`: a lobe of α = 10⁻⁴ is found by light samples of the map with probability
-    // ~10⁻⁸ (unbiased, but all of its estimate is in samples no test draws); MIS takes it from
-    // BSDF sampling.
-    let mut estimates = Vec::new();
-    for method in [Method::Naive, Method::Mis] {
-        let r = render(&scene, with(method, 16), None);
-        if method == Method::Naive {
-            // One bounce of weight F G₂/G₁ = 1 − O(α²) into radiance 1.
-            for p in r.film().mean() {
-                assert!((p.x - 1.0).abs() < 1e-5, "naive pixel {}", p.x);
-            }
+        "Glossy(albedo: Constant((1, 1, 1)), roughness: 0)",
+    ] {
+        let scene = furnace(&dir, material);
+        for method in [Method::Naive, Method::Nee, Method::Mis] {
+            let r = render(&scene, with(method, 16), None);
+            let (mean, se) = point_estimate(&r);
+            let worst = r
+                .film()
+                .mean()
+                .iter()
+                .map(|p| (p.x - 1.0).abs())
+                .fold(0.0f32, f32::max);
+            assert!(
+                worst < 1e-5,
+                "{material} {method}: mean {mean} ± {se}, a pixel {worst} away from 1"
+            );
         }
+    }
+}
+
+#[test]
+fn a_smooth_dielectric_pbr_mixes_its_mirror_and_diffuse_lobes_alike_under_every_method() {
+    // Roughness 0, metallic 0: a perfect mirror of Fresnel F(0.04) over a Lambertian base.
+    // Next-event estimation and MIS evaluate the diffuse lobe alone, with the density of
+    // sampling it, and leave the mirror to BSDF sampling: all three methods must agree.
+    let dir = temp_dir("pbr-smooth-plastic");
+    write_white_map(&dir);
+    let material = "Pbr(base_color: Constant((0.8, 0.8, 0.8)), metallic: 0, roughness: 0)";
+    let scene = furnace(&dir, material);
+    let mut estimates = Vec::new();
+    for method in [Method::Naive, Method::Nee, Method::Mis] {
+        let r = render(&scene, with(method, 64), None);
+        assert_eq!(r.stats().nonfinite, 0);
         let (mean, se) = point_estimate(&r);
-        assert!(within(mean, se, 1.0, 3.5), "{method}: {mean} ± {se}");
+        // At least the mirror's F ≥ 0.04 of the white environment, at most 1 (θo is small).
+        assert!(
+            mean > 0.04 && mean <= 1.0 + 3.0 * se,
+            "{method}: {mean} ± {se}"
+        );
         estimates.push((method, mean, se));
     }
-    assert_methods_agree("mirror", &estimates);
+    assert_methods_agree(material, &estimates);
 }
 
 #[test]
@@ -97,7 +125,7 @@ fn an_emissive_pbr_adds_its_emission_to_what_it_reflects() {
         "Pbr(base_color: Constant((1, 1, 1)), metallic: 1, roughness: 0, \
          emissive: Constant((1, 1, 1)), emissive_strength: 0.5)",
     );
-    for method in [Method::Naive, Method::Mis] {
+    for method in [Method::Naive, Method::Nee, Method::Mis] {
         let r = render(&scene, with(method, 16), None);
         let (mean, se) = point_estimate(&r);
         assert!(within(mean, se, 1.5, 3.5), "{method}: {mean} ± {se}");

@@ -8,7 +8,8 @@ use glam::{Vec2, Vec3};
 
 use super::maps::{AlphaMask, NormalMap};
 use super::microfacet::{
-    alpha_from_roughness, cos2_sin2, distribution, lambda, sample_visible_normal, schlick_rgb,
+    alpha_from_roughness, cos2_sin2, distribution, is_specular_alpha, lambda,
+    sample_visible_normal, schlick_rgb,
 };
 use super::pbr::Pbr;
 use super::sampler::Sampler;
@@ -34,7 +35,9 @@ pub enum Material {
     /// Rough metal with an evaluable BSDF: GGX (Trowbridge–Reitz) microfacet reflection,
     /// Schlick's Fresnel with `albedo` as the reflectance at normal incidence, height-correlated
     /// Smith shadowing; directions are sampled from the visible normals (see
-    /// [`super::microfacet`]). Unlike `Metal`, next-event estimation and MIS apply to it.
+    /// [`super::microfacet`]). Unlike `Metal`, next-event estimation and MIS apply to it, except
+    /// below [`super::microfacet::SPECULAR_ALPHA`], where it is a perfect mirror reflecting
+    /// Schlick's Fresnel at the view's cosine.
     Glossy {
         /// Reflectance at normal incidence (Schlick's F0), per channel.
         albedo: Texture,
@@ -203,12 +206,23 @@ impl Material {
     }
 
     /// Whether next-event estimation applies: the BSDF can be evaluated for any pair of
-    /// directions (see [`Material::eval`]).
+    /// directions (see [`Material::eval`]). A `Pbr` whose lobes depend on a texture may still be
+    /// a perfect mirror at some points, where [`Material::eval`] says so.
     pub fn samples_lights(&self) -> bool {
-        matches!(
-            self,
-            Self::Diffuse { .. } | Self::Glossy { .. } | Self::Pbr { .. }
-        )
+        match self {
+            Self::Diffuse { .. } => true,
+            Self::Glossy { roughness, .. } => !is_specular_alpha(alpha_from_roughness(*roughness)),
+            Self::Pbr {
+                metallic,
+                roughness,
+                metallic_roughness,
+                ..
+            } => {
+                metallic_roughness.is_some()
+                    || !Pbr::new(Vec3::ONE, *metallic, *roughness).is_delta()
+            }
+            _ => false,
+        }
     }
 
     /// The metallic–roughness BRDF of a `Pbr` material at `uv`: the base colour, and the
@@ -233,7 +247,8 @@ impl Material {
 
     /// BSDF times the cosine at the surface, and the density [`Material::scatter`] would give,
     /// for light arriving from `wi` and leaving against `d` (the incoming ray's direction).
-    /// `None` where the BSDF has no density to evaluate (delta or fuzzed lobes).
+    /// `None` where the BSDF has no density to evaluate (delta or fuzzed lobes); of a `Pbr` with
+    /// a smooth specular lobe and a diffuse one, the diffuse lobe alone.
     #[inline(always)]
     pub fn eval(&self, d: Vec3, wi: Vec3, n: Vec3, uv: Vec2) -> Option<(Vec3, f32)> {
         match self {
@@ -247,13 +262,17 @@ impl Material {
                 Some((albedo.eval(uv) * pdf, pdf))
             }
             Self::Glossy { albedo, roughness } => {
+                let alpha = alpha_from_roughness(*roughness);
+                if is_specular_alpha(alpha) {
+                    return None;
+                }
                 let facing = if d.dot(n) < 0.0 { n } else { -n };
                 let wo = -d;
                 let (cos_o, cos_i) = (wo.dot(facing), wi.dot(facing));
                 if cos_i <= 0.0 || cos_o <= 0.0 {
                     return Some((Vec3::ZERO, 0.0));
                 }
-                let g = GlossyTerms::new(wo, wi, facing, alpha_from_roughness(*roughness));
+                let g = GlossyTerms::new(wo, wi, facing, alpha);
                 // f·cos θi = F D G₂ / (4 cos θo cos θi) · cos θi.
                 let f = schlick_rgb(albedo.eval(uv), g.cos_oh);
                 Some((
@@ -270,20 +289,31 @@ impl Material {
             } => {
                 let facing = if d.dot(n) < 0.0 { n } else { -n };
                 let pbr = Self::pbr_at(base_color, *metallic, *roughness, metallic_roughness, uv);
-                Some(pbr.eval(-d, wi, facing))
+                (!pbr.is_delta()).then(|| pbr.eval(-d, wi, facing))
             }
             _ => None,
         }
     }
 
     /// Whether the feature buffers (albedo and normal, for a denoiser) look through this
-    /// surface to the next hit: perfect mirrors and smooth glass, whose look is that of what they
-    /// reflect or refract.
-    pub fn is_specular(&self) -> bool {
+    /// surface at `uv` to the next hit: where its BSDF is a perfect mirror or smooth glass (a
+    /// delta BSDF, nothing of it evaluable), whose look is that of what it reflects or refracts.
+    /// Open Image Denoise's documentation asks for this (its `RT` filter, "Albedo": follow
+    /// perfect specular paths and store the first diffuse or glossy hit).
+    #[inline]
+    pub fn is_specular(&self, uv: Vec2) -> bool {
         match self {
             Self::Dielectric { .. } => true,
             Self::Metal { roughness, .. } => *roughness == 0.0,
-            _ => false,
+            Self::Glossy { roughness, .. } => is_specular_alpha(alpha_from_roughness(*roughness)),
+            Self::Pbr {
+                base_color,
+                metallic,
+                roughness,
+                metallic_roughness,
+                ..
+            } => Self::pbr_at(base_color, *metallic, *roughness, metallic_roughness, uv).is_delta(),
+            Self::Diffuse { .. } | Self::Light { .. } => false,
         }
     }
 
@@ -375,9 +405,18 @@ impl Material {
             }
             Self::Glossy { albedo, roughness } => {
                 let alpha = alpha_from_roughness(*roughness);
-                let frame = Frame::from_normal(facing);
                 let wo = -d;
                 let cos_o = wo.dot(facing);
+                if is_specular_alpha(alpha) {
+                    // A perfect mirror: G₂/G₁ → 1 and h → n as α → 0, so the weight is F(wo · n).
+                    return (cos_o > 0.0).then(|| Scatter {
+                        direction: reflect(d, facing).normalize(),
+                        attenuation: schlick_rgb(albedo.eval(uv), cos_o),
+                        pdf: None,
+                        radiance_scale: 1.0,
+                    });
+                }
+                let frame = Frame::from_normal(facing);
                 let wo_local =
                     Vec3::new(wo.dot(frame.s), wo.dot(frame.t), cos_o.max(1e-6)).normalize();
                 let u = sampler.next_2d();
@@ -429,7 +468,7 @@ impl Material {
                 Some(Scatter {
                     direction: s.wi,
                     attenuation: s.weight,
-                    pdf: Some(s.pdf),
+                    pdf: s.pdf,
                     radiance_scale: 1.0,
                 })
             }

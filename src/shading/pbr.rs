@@ -15,12 +15,18 @@
 //! lobe (cosine) with a probability that depends on `wo` only ([`Pbr::specular_probability`]), so
 //! the density of a direction is the exact mixture `p·pdf_spec + (1 − p)·pdf_diffuse`, which
 //! next-event estimation and MIS evaluate through [`Pbr::eval`].
+//!
+//! Below [`super::microfacet::SPECULAR_ALPHA`] the specular lobe is a perfect mirror (a delta lobe): sampled with
+//! the same probability, its weight is Schlick's Fresnel at `wo · n` (the limit of F G₂/G₁ as
+//! α → 0) over that probability, and it has no density, so [`Pbr::eval`] and [`Pbr::sample`]'s
+//! densities cover the diffuse lobe alone.
 
 use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
 use super::microfacet::{
-    alpha_from_roughness, cos2_sin2, distribution, lambda, sample_visible_normal, schlick_rgb,
+    alpha_from_roughness, cos2_sin2, distribution, is_specular_alpha, lambda,
+    sample_visible_normal, schlick_rgb,
 };
 use super::sampling::{Frame, cosine_hemisphere};
 
@@ -45,8 +51,9 @@ pub struct PbrSample {
     pub wi: Vec3,
     /// `f·cos θi / pdf`.
     pub weight: Vec3,
-    /// Solid-angle density of `wi` under [`Pbr::sample`].
-    pub pdf: f32,
+    /// Solid-angle density of `wi` under [`Pbr::sample`]; `None` for the mirror direction of a
+    /// smooth specular lobe (a delta lobe, [`Pbr::is_smooth`]).
+    pub pdf: Option<f32>,
 }
 
 impl Pbr {
@@ -58,6 +65,19 @@ impl Pbr {
             metallic: metallic.clamp(0.0, 1.0),
             alpha: alpha_from_roughness(roughness),
         }
+    }
+
+    /// Whether the specular lobe is a perfect mirror (α below [`super::microfacet::SPECULAR_ALPHA`]).
+    #[inline]
+    pub fn is_smooth(&self) -> bool {
+        is_specular_alpha(self.alpha)
+    }
+
+    /// Whether the whole BRDF is a perfect mirror: a smooth specular lobe and no diffuse lobe (a
+    /// conductor, or a black base). Nothing of it can be evaluated.
+    #[inline]
+    pub fn is_delta(&self) -> bool {
+        self.is_smooth() && self.diffuse().max_element() <= 0.0
     }
 
     /// F0 of the combined specular lobe: mix(0.04, base colour, metallic) (Schlick's Fresnel is
@@ -90,7 +110,8 @@ impl Pbr {
 
     /// BRDF times `cos θi` and the density of `wi` under [`Pbr::sample`], for unit `wo` (towards
     /// the viewer) and `wi` (towards the light) about unit normal `n` on the viewer's side. Zero
-    /// when either is below the surface.
+    /// when either is below the surface. Of a smooth material ([`Pbr::is_smooth`]) only the
+    /// diffuse lobe, with the density of sampling it.
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3, n: Vec3) -> (Vec3, f32) {
         let (cos_o, cos_i) = (wo.dot(n), wi.dot(n));
@@ -99,10 +120,13 @@ impl Pbr {
         }
         let t = Terms::new(wo, wi, n, self.alpha);
         let p_spec = self.specular_probability(cos_o);
-        let (spec_cos, pdf_spec) = self.specular(&t, cos_o);
         let diff_cos = self.diffuse_term(&t) * cos_i;
-        let pdf = p_spec * pdf_spec + (1.0 - p_spec) * cos_i * FRAC_1_PI;
-        (spec_cos + diff_cos, pdf)
+        let pdf_diff = (1.0 - p_spec) * cos_i * FRAC_1_PI;
+        if self.is_smooth() {
+            return (diff_cos, pdf_diff);
+        }
+        let (spec_cos, pdf_spec) = self.specular(&t, cos_o);
+        (spec_cos + diff_cos, p_spec * pdf_spec + pdf_diff)
     }
 
     /// The specular part of f·cos θi, F D G₂ / (4 cos θo), and its density under visible-normal
@@ -133,6 +157,14 @@ impl Pbr {
         }
         let frame = Frame::from_normal(n);
         let p_spec = self.specular_probability(cos_o);
+        if self.is_smooth() && u.x < p_spec {
+            // The mirror direction; F at wo · h = wo · n.
+            return Some(PbrSample {
+                wi: (2.0 * cos_o * n - wo).normalize(),
+                weight: schlick_rgb(self.f0(), cos_o) / p_spec,
+                pdf: None,
+            });
+        }
         let wi = if u.x < p_spec {
             let u = Vec2::new((u.x / p_spec).min(1.0), u.y);
             let wo_local = Vec3::new(wo.dot(frame.s), wo.dot(frame.t), cos_o.max(1e-6)).normalize();
@@ -149,7 +181,7 @@ impl Pbr {
         (pdf > 0.0 && pdf.is_finite()).then(|| PbrSample {
             wi,
             weight: f_cos / pdf,
-            pdf,
+            pdf: Some(pdf),
         })
     }
 }
@@ -294,7 +326,8 @@ mod tests {
                     continue;
                 };
                 let (f_cos, pdf) = m.eval(wo, s.wi, Vec3::Z);
-                assert!((pdf - s.pdf).abs() <= 1e-5 * pdf, "{m:?}");
+                let sampled = s.pdf.expect("a rough lobe has a density");
+                assert!((pdf - sampled).abs() <= 1e-5 * pdf, "{m:?}");
                 assert!((f_cos / pdf - s.weight).abs().max_element() < 1e-4, "{m:?}");
             }
         }
@@ -372,6 +405,51 @@ mod tests {
                 "{m:?}: χ² = {chi2:.1} over {dof} degrees of freedom (critical {critical:.1})"
             );
         }
+    }
+
+    #[test]
+    fn a_smooth_lobe_is_a_mirror_of_schlicks_fresnel_and_the_density_is_the_diffuse_lobes() {
+        // Roughness 0 (α = 10⁻⁴, below the mirror threshold), metallic 0, base 0.8, viewed at
+        // θo = 0.7: the mirror direction comes with probability p and weight F(cos θo)/p, with
+        // F = 0.04 + 0.96 (1 − cos θo)⁵ written out here; every other direction is diffuse, so
+        // the density integrates to 1 − p (nothing is masked).
+        let m = Pbr::new(Vec3::splat(0.8), 0.0, 0.0);
+        assert!(m.is_smooth() && !m.is_delta());
+        assert!(Pbr::new(Vec3::splat(0.8), 1.0, 0.0).is_delta());
+        assert!(!Pbr::new(Vec3::splat(0.8), 1.0, 0.04).is_smooth());
+        let wo = dir(0.7, 0.4);
+        let cos_o = 0.7f32.cos();
+        let fresnel = 0.04 + 0.96 * (1.0 - cos_o).powi(5);
+        let p = m.specular_probability(cos_o);
+        let mut rng = Rng::new(4, 9);
+        let (count, mut mirrors) = (20_000, 0);
+        for _ in 0..count {
+            let u = Vec2::new(rng.next_f32(), rng.next_f32());
+            let s = m
+                .sample(wo, Vec3::Z, u)
+                .expect("a cosine or mirror direction");
+            match s.pdf {
+                None => {
+                    mirrors += 1;
+                    let mirror = Vec3::new(-wo.x, -wo.y, wo.z);
+                    assert!((s.wi - mirror).length() < 1e-5, "{}", s.wi);
+                    assert!((s.weight * p - Vec3::splat(fresnel)).abs().max_element() < 1e-6);
+                }
+                Some(pdf) => {
+                    let (f_cos, density) = m.eval(wo, s.wi, Vec3::Z);
+                    assert!((pdf - density).abs() <= 1e-5 * density);
+                    assert!((f_cos / density - s.weight).abs().max_element() < 1e-4);
+                }
+            }
+        }
+        let share = f64::from(mirrors) / f64::from(count);
+        assert!((share - f64::from(p)).abs() < 0.01, "{share} vs {p}");
+        let integral = pdf_integral(&m, wo);
+        assert!(
+            (integral - f64::from(1.0 - p)).abs() < 2e-3,
+            "{integral} vs {}",
+            1.0 - p
+        );
     }
 
     #[test]
