@@ -258,10 +258,13 @@ pub fn trace_path<L: Layout, S: Sampler>(
 /// [`trace_path`] with the BVHs' box tests as wide as `lanes`, and the path's features for the
 /// denoiser: the albedo and the shading normal (on the side the path arrived from) of the first
 /// hit that is not a perfect mirror or glass ([`Material::is_specular`]) nor absent where an
-/// alpha mask says so, the albedo tinted by the specular bounces before it; the background as
-/// albedo (and a zero normal) if the path leaves the scene first; zero if it ends first. They
-/// use no random numbers, so the radiance is the same whether they are collected or not;
-/// without `collect` (a film without feature buffers) they are not computed and come back zero.
+/// alpha mask says so, the albedo ([`Material::feature_albedo`]: reflectance plus emission)
+/// tinted by the specular bounces before it; the background and distant lights seen along the
+/// ray as albedo (and a zero normal) if the path leaves the scene first; zero if it ends first.
+/// Each sample's albedo is clamped to [0, 1] per channel ([`feature_albedo`]) before it is
+/// summed. They use no random numbers, so the radiance is the same whether they are collected or
+/// not; without `collect` (a film without feature buffers) they are not computed and come back
+/// zero.
 #[inline(always)]
 fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     lanes: W,
@@ -305,7 +308,7 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
             }
             radiance += throughput * light;
             features.get_or_insert(FeatureSample {
-                albedo: throughput / eta_scale * seen,
+                albedo: feature_albedo(throughput / eta_scale * seen),
                 normal: Vec3::ZERO,
             });
             break;
@@ -321,8 +324,9 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         }
         if features.is_none() && (!material.is_specular(s.uv) || depth + 1 == view.max_depth) {
             let n = shading_normal(&s, material);
+            let albedo = material.feature_albedo(ray.direction, s.n, s.uv);
             features = Some(FeatureSample {
-                albedo: throughput / eta_scale * material.feature_albedo(ray.direction, s.n, s.uv),
+                albedo: feature_albedo(throughput / eta_scale * albedo),
                 normal: if ray.direction.dot(n) < 0.0 { n } else { -n },
             });
         }
@@ -383,6 +387,16 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         ray = spawn(s.p, s.n, err, scatter.direction);
     }
     (radiance, features.unwrap_or_default())
+}
+
+/// One sample's albedo as the feature buffer records it: each channel clamped to [0, 1], the
+/// range Open Image Denoise requires of an albedo (its `RT` filter: "values in [0, 1]"). Clamped
+/// per sample, before the pixel's average, so that a pixel partly covering a bright emitter
+/// records the part it covers, not 1. A NaN stays NaN, so the film still drops the sample's
+/// features as non-finite.
+#[inline]
+fn feature_albedo(albedo: Vec3) -> Vec3 {
+    Vec3::from_array(albedo.to_array().map(|c| c.clamp(0.0, 1.0)))
 }
 
 /// The shading normal of `s` perturbed by `map`, where the hit has a texture tangent (see

@@ -209,21 +209,109 @@ fn through_a_mirror_the_buffers_hold_the_mirrored_object_tinted_by_the_mirror() 
 }
 
 #[test]
-fn an_emitters_albedo_is_its_emission() {
-    let r = render_features(
-        r#"Scene(
+fn an_emitters_albedo_is_its_emission_clamped_to_one_per_channel() {
+    // Open Image Denoise takes albedos in [0, 1]: a lamp of (2, 3, 4) · 5 records white, a dim
+    // one of (0.1, 0.2, 0.05) · 5 its emission (0.5, 1, 0.25).
+    let lamp = |emit: &str| {
+        format!(
+            r#"Scene(
             camera: Camera(position: (0, 0, 2), look_at: (0, 0, 0), fov: 30),
             settings: Settings(width: 8, height: 8, spp: 2, max_depth: 3, method: Mis),
-            materials: { "lamp": Light(emit: Constant((2, 3, 4)), intensity: 5) },
+            materials: {{ "lamp": Light(emit: Constant({emit}), intensity: 5) }},
             entities: [Entity(name: "l", material: "lamp",
                 shape: Quad(a: (-5, -5, 0), b: (5, -5, 0), c: (5, 5, 0), d: (-5, 5, 0)))],
-        )"#,
-        2,
-        None,
-        PassPlan::Single,
+        )"#
+        )
+    };
+    for (emit, expected) in [
+        ("(2, 3, 4)", Vec3::ONE),
+        ("(0.1, 0.2, 0.05)", Vec3::new(0.5, 1.0, 0.25)),
+    ] {
+        let r = render_features(&lamp(emit), 2, None, PassPlan::Single);
+        for a in albedo_of(&r) {
+            assert!((a - expected).abs().max_element() < 1e-6, "{emit}: {a}");
+        }
+    }
+}
+
+#[test]
+fn a_pixel_half_covering_the_sun_records_half_its_albedo() {
+    // A 5 × 5 image of 0.05° whose centre column is centred on the edge of a sun of 20° (radius
+    // 10°, radiance 10⁴) in a black sky: across the image the edge is straight to within 10⁻³ of
+    // a pixel, so the two columns on one side see only sun (albedo 1, clamped per sample), the
+    // two on the other only sky (0), and the centre column half of each: 0.5.
+    let r = 10f32.to_radians();
+    let sun = format!("({}, 0, {})", -r.sin(), r.cos());
+    let scene = format!(
+        r#"Scene(
+        camera: Camera(position: (0, 0, 0), look_at: (0, 0, 1), fov: 0.05),
+        settings: Settings(width: 5, height: 5, max_depth: 2,
+            sun: Sun(direction: {sun}, angular_diameter: 20, radiance: 10000)),
+        materials: {{ "m": Diffuse(albedo: Constant((0.5, 0.5, 0.5))) }},
+        entities: [Entity(name: "s", material: "m",
+            shape: Sphere(center: (0, 0, -10), radius: 1))],
+    )"#
     );
-    for a in albedo_of(&r) {
-        assert_eq!(a, Vec3::new(10.0, 15.0, 20.0));
+    let r = render_features(&scene, 256, None, PassPlan::Single);
+    let albedo = albedo_of(&r);
+    let column = |x: usize| (0..5).map(|y| f64::from(albedo[y * 5 + x].x)).sum::<f64>() / 5.0;
+    let (left, right) = (column(0) + column(1), column(3) + column(4));
+    let (sun_side, sky_side) = if left > right {
+        (left, right)
+    } else {
+        (right, left)
+    };
+    assert!(
+        (sun_side - 2.0).abs() < 1e-6,
+        "columns in the sun: {sun_side} / 2"
+    );
+    assert!(sky_side.abs() < 1e-6, "columns in the sky: {sky_side} / 2");
+    assert!(
+        (column(2) - 0.5).abs() < 0.01,
+        "the edge column: {}",
+        column(2)
+    );
+}
+
+#[test]
+fn a_mirror_like_pbr_or_glossy_records_what_it_reflects_as_a_smooth_metal_does() {
+    // As the mirror test above, with the mirror a roughness-0 `Metal`, a `Pbr` conductor of
+    // roughness 0 and a roughness-0 `Glossy`, each of the same colour: seen within 21° of the
+    // normal, Schlick's Fresnel of the last two is their colour to within 2·10⁻⁶, so all three
+    // record the wall times the tint and the wall's normal.
+    let scene = |mirror: &str| {
+        format!(
+            r#"Scene(
+            camera: Camera(position: (0, 0, 2), look_at: (0, 0, 0), fov: 30),
+            settings: Settings(width: 16, height: 16, spp: 4, max_depth: 4, method: Mis),
+            materials: {{
+                "mirror": {mirror},
+                "wall": Diffuse(albedo: Constant((0.2, 0.4, 0.6))),
+            }},
+            entities: [
+                Entity(name: "m", material: "mirror",
+                    shape: Quad(a: (-5, -5, 0), b: (5, -5, 0), c: (5, 5, 0), d: (-5, 5, 0))),
+                Entity(name: "w", material: "wall",
+                    shape: Quad(a: (-20, -20, 4), b: (20, -20, 4), c: (20, 20, 4), d: (-20, 20, 4))),
+            ],
+        )"#
+        )
+    };
+    let tint = "(0.5, 1, 0.25)";
+    let expected = Vec3::new(0.1, 0.4, 0.15);
+    for mirror in [
+        format!("Metal(albedo: Constant({tint}), roughness: 0)"),
+        format!("Pbr(base_color: Constant({tint}), metallic: 1, roughness: 0)"),
+        format!("Glossy(albedo: Constant({tint}), roughness: 0)"),
+    ] {
+        let r = render_features(&scene(&mirror), 4, None, PassPlan::Single);
+        for (a, n) in albedo_of(&r).iter().zip(normal_of(&r)) {
+            assert!((*a - expected).abs().max_element() < 1e-5, "{mirror}: {a}");
+            assert!(
+                (n - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6,
+                "{mirror}: {n}"
+            );
+        }
     }
 }
 

@@ -318,18 +318,21 @@ impl Material {
     }
 
     /// The colour the albedo feature buffer records for a ray along `d` hitting the surface
-    /// (geometric normal `n`): the reflectance of a reflector (F0 of a glossy one), white for
-    /// glass, the emitted radiance of an emitter.
+    /// (geometric normal `n`), before the integrator clamps it to [0, 1]: the reflectance (F0 of
+    /// a glossy reflector, the base colour of a `Pbr`, white for glass) plus the radiance the
+    /// surface emits towards the ray, so that an emitter records its emission, one that also
+    /// reflects the sum.
     #[inline]
     pub fn feature_albedo(&self, d: Vec3, n: Vec3, uv: Vec2) -> Vec3 {
-        match self {
+        let reflectance = match self {
             Self::Diffuse { albedo } | Self::Metal { albedo, .. } | Self::Glossy { albedo, .. } => {
                 albedo.eval(uv)
             }
             Self::Pbr { base_color, .. } => base_color.eval(uv),
             Self::Dielectric { .. } => Vec3::ONE,
-            Self::Light { .. } => self.emitted(d, n, uv),
-        }
+            Self::Light { .. } => Vec3::ZERO,
+        };
+        reflectance + self.emitted(d, n, uv)
     }
 
     /// The largest radiance the material emits in any channel, anywhere (0 for a non-emitter).
