@@ -251,6 +251,9 @@ fn cached<T>(
     Ok((value, true))
 }
 
+/// An embedded image's bytes ([`super::gltf::SharedBytes::identity`]) and its encoding.
+type EmbeddedKey = ((usize, usize, usize), Encoding);
+
 /// A glTF file as read, with the external buffer files it was read from and its embedded
 /// images, decoded when first asked for.
 pub struct GltfAsset {
@@ -260,7 +263,7 @@ pub struct GltfAsset {
     buffers: Vec<(PathBuf, u64)>,
     /// Embedded images decoded so far, by the identity of their bytes (images on one buffer
     /// view are decoded once) and encoding.
-    embedded: Mutex<HashMap<((usize, usize, usize), Encoding), Arc<ImageTexture>>>,
+    embedded: Mutex<HashMap<EmbeddedKey, Arc<ImageTexture>>>,
 }
 
 impl GltfAsset {

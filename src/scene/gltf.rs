@@ -1113,14 +1113,14 @@ fn local(node: &gltf::Node) -> Result<Affine3A, String> {
             }
             let m = Affine3A::from_mat4(Mat4::from_cols_array_2d(&matrix));
             let axes = [m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis];
-            if let Some(k) = axes.iter().position(|a| !(a.length() >= MIN_SCALE)) {
+            if let Some(k) = axes.iter().position(|a| a.length() < MIN_SCALE) {
                 return Err(format!(
                     "node {i}: matrix scales axis {k} to zero (length below {MIN_SCALE})"
                 ));
             }
             let [x, y, z] = axes.map(Vec3A::normalize);
             let volume = Mat3A::from_cols(x, y, z).determinant().abs();
-            if !(volume >= MIN_AXIS_VOLUME) {
+            if volume < MIN_AXIS_VOLUME {
                 return Err(format!(
                     "node {i}: matrix is singular (its axes are coplanar)"
                 ));
@@ -1132,7 +1132,7 @@ fn local(node: &gltf::Node) -> Result<Affine3A, String> {
             rotation,
             scale,
         } => {
-            if let Some(k) = scale.iter().position(|s| !(s.abs() >= MIN_SCALE)) {
+            if let Some(k) = scale.iter().position(|s| s.abs() < MIN_SCALE) {
                 return Err(format!(
                     "node {i}: scale[{k}] is {}, must be non-zero (at least {MIN_SCALE} in size)",
                     scale[k]
@@ -1145,6 +1145,7 @@ fn local(node: &gltf::Node) -> Result<Affine3A, String> {
             )
         }
     };
+    // Also catches what the comparisons above let through: NaN is below nothing.
     if !m.is_finite() {
         return Err(format!("node {i}: non-finite transform"));
     }
