@@ -5,18 +5,21 @@
 mod common;
 
 use std::path::Path;
+use std::sync::Arc;
 
 use common::gltf_doc::{Bin, doc, glb};
 use common::temp_dir;
 use glam::{Vec2, Vec3};
-use rondo::scene::gltf::{GltfScene, read_gltf};
+use rondo::scene::gltf::{GltfImage, GltfScene, read_gltf, read_gltf_within};
 use rondo::shading::rng::Rng;
 use serde_json::{Value, json};
 
 fn read(doc: &Value) -> Result<GltfScene, String> {
-    read_gltf(Path::new("test.gltf"), doc.to_string().as_bytes(), |uri| {
-        Err(format!("no external buffers here ({uri})"))
-    })
+    read_gltf(
+        Path::new("test.gltf"),
+        Arc::new(doc.to_string().into_bytes()),
+        |uri, _| Err(format!("no external buffers here ({uri})")),
+    )
 }
 
 const TRIANGLE: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
@@ -253,7 +256,10 @@ fn materials_and_emissive_strength() {
 fn glb_and_external_buffers() {
     let (bin, parts) = triangle();
     let bytes = glb(&bin, parts.clone());
-    let scene = read_gltf(Path::new("t.glb"), &bytes, |_| Err("none".into())).expect("glb reads");
+    let scene = read_gltf(Path::new("t.glb"), Arc::new(bytes), |_, _| {
+        Err("none".into())
+    })
+    .expect("glb reads");
     assert_eq!(
         scene.meshes[0].primitives[0].data.positions,
         vec![Vec3::ZERO, Vec3::X, Vec3::Y]
@@ -265,10 +271,14 @@ fn glb_and_external_buffers() {
     let mut d = doc(&bin, parts);
     d["buffers"][0]["uri"] = json!("data/tri%20bin.bin");
     let mut asked = Vec::new();
-    let scene = read_gltf(Path::new("t.gltf"), d.to_string().as_bytes(), |uri| {
-        asked.push(uri.to_owned());
-        std::fs::read(dir.join(uri)).map_err(|e| e.to_string())
-    })
+    let scene = read_gltf(
+        Path::new("t.gltf"),
+        Arc::new(d.to_string().into_bytes()),
+        |uri, _| {
+            asked.push(uri.to_owned());
+            std::fs::read(dir.join(uri)).map_err(|e| e.to_string())
+        },
+    )
     .expect("external buffer reads");
     assert_eq!(asked, vec!["data/tri bin.bin".to_string()]);
     assert_eq!(
@@ -341,15 +351,20 @@ fn errors_name_the_file_and_the_problem() {
     assert!(error(&d).contains("cycle"));
 
     let mut d = doc(&bin, parts.clone());
-    d["materials"] = json!([{"name": "Bad", "emissiveFactor": [1e38, 0.0, 0.0],
-        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 10.0}}}]);
+    d["materials"] = json!([{"name": "Bad", "emissiveFactor": [1.0, 0.0, 0.0],
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 1e39}}}]);
     let e = error(&d);
-    assert!(e.contains("material \"Bad\": non-finite"), "{e}");
+    assert!(
+        e.contains("material \"Bad\" (materials[0]): extensions.KHR_materials_emissive_strength.emissiveStrength is inf"),
+        "{e}"
+    );
 
     let g = glb(&bin, parts);
     for len in [0, 4, 11, 12, 20, g.len() / 2, g.len() - 1] {
-        let e = read_gltf(Path::new("t.glb"), &g[..len], |_| Err("none".into()))
-            .expect_err("truncated .glb");
+        let e = read_gltf(Path::new("t.glb"), Arc::new(g[..len].to_vec()), |_, _| {
+            Err("none".into())
+        })
+        .expect_err("truncated .glb");
         assert!(e.contains("t.glb"), "{e}");
     }
 }
@@ -378,7 +393,10 @@ fn corrupted_files_never_panic() {
             };
         }
         let result = std::panic::catch_unwind(|| {
-            read_gltf(Path::new("f.gltf"), &bytes, |_| Err("none".into())).is_ok()
+            read_gltf(Path::new("f.gltf"), Arc::new(bytes.clone()), |_, _| {
+                Err("none".into())
+            })
+            .is_ok()
         });
         match result {
             Ok(ok) => outcomes[usize::from(ok)] += 1,
@@ -389,4 +407,282 @@ fn corrupted_files_never_panic() {
         }
     }
     assert!(outcomes[0] > 0 && outcomes[1] > 0, "{outcomes:?}");
+}
+
+/// `triangle()` in a `.glb` whose JSON lists `buffers` buffers, all of its binary chunk.
+fn glb_with_buffers(buffers: usize) -> Vec<u8> {
+    let (bin, parts) = triangle();
+    let mut bytes = glb(&bin, parts);
+    // Rebuilt around the JSON chunk: a header (12 bytes), the chunk's length and type (8).
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes")) as usize;
+    let mut d: Value = serde_json::from_slice(&bytes[20..20 + json_len]).expect("JSON");
+    d["buffers"] = Value::Array(vec![json!({"byteLength": bin.bytes.len()}); buffers]);
+    let bin_chunk = bytes.split_off(20 + json_len);
+    let mut json_bytes = d.to_string().into_bytes();
+    while !json_bytes.len().is_multiple_of(4) {
+        json_bytes.push(b' ');
+    }
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend(((12 + 8 + json_bytes.len() + bin_chunk.len()) as u32).to_le_bytes());
+    out.extend((json_bytes.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(json_bytes);
+    out.extend(bin_chunk);
+    out
+}
+
+#[test]
+fn only_buffer_zero_may_use_the_glb_binary_chunk() {
+    let read_glb = |bytes: Vec<u8>| {
+        read_gltf(Path::new("t.glb"), Arc::new(bytes), |_, _| {
+            Err("none".into())
+        })
+    };
+    let scene = read_glb(glb_with_buffers(1)).expect("one buffer reads");
+    // The binary chunk holds the triangle's 9 floats, 36 bytes, and is held once.
+    assert_eq!(scene.held_bytes, 36);
+    for n in [2, 2000] {
+        let e = read_glb(glb_with_buffers(n)).expect_err("a second buffer on the chunk");
+        assert!(
+            e.contains("t.glb") && e.contains("buffer 1") && e.contains("only buffer 0"),
+            "{e}"
+        );
+    }
+}
+
+#[test]
+fn images_on_one_buffer_view_share_its_bytes() {
+    let (mut bin, mut parts) = triangle();
+    let png = bin.view(vec![7; 1000]);
+    parts["images"] = Value::Array(vec![
+        json!({"bufferView": png, "mimeType": "image/png"});
+        300
+    ]);
+    let bytes = glb(&bin, parts);
+    let scene = read_gltf(Path::new("t.glb"), Arc::new(bytes), |_, _| {
+        Err("none".into())
+    })
+    .expect("reads");
+    assert_eq!(scene.images.len(), 300);
+    let identities: Vec<_> = scene
+        .images
+        .iter()
+        .map(|image| match image {
+            GltfImage::Bytes { bytes, .. } => {
+                assert_eq!(&bytes[..], &[7; 1000][..]);
+                bytes.identity()
+            }
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert!(
+        identities.iter().all(|i| *i == identities[0]),
+        "every image is the same bytes of the one buffer"
+    );
+    // Held: the chunk once, 36 bytes of floats and the image's 1000 (padded to 4 between).
+    assert_eq!(scene.held_bytes, 1036);
+}
+
+#[test]
+fn buffer_sources_are_read_once_and_their_total_is_bounded() {
+    let (bin, parts) = triangle();
+    let len = bin.bytes.len();
+    let mut d = doc(&bin, parts);
+    // Buffers 0 and 2 name one file, buffer 1 another.
+    d["buffers"] = json!([
+        {"byteLength": len, "uri": "a.bin"},
+        {"byteLength": len, "uri": "b.bin"},
+        {"byteLength": len, "uri": "a.bin"},
+    ]);
+    let text = Arc::new(d.to_string().into_bytes());
+    let mut asked = Vec::new();
+    let scene = read_gltf_within(Path::new("t.gltf"), text.clone(), 100, |uri, max| {
+        asked.push((uri.to_owned(), max));
+        Ok(bin.bytes.clone())
+    })
+    .expect("72 bytes of 100");
+    // Each file fetched once, told what is left: 100, then 100 − 36.
+    assert_eq!(
+        asked,
+        [("a.bin".to_string(), 100), ("b.bin".to_string(), 64)]
+    );
+    assert_eq!(scene.held_bytes, 72);
+
+    // Within 50 bytes the second file does not fit: a loader that returns it anyway is refused.
+    let e = read_gltf_within(Path::new("t.gltf"), text, 50, |_, _| Ok(bin.bytes.clone()))
+        .expect_err("72 bytes of 50");
+    assert!(
+        e.contains("t.gltf") && e.contains("buffer 1") && e.contains("more than 50 bytes"),
+        "{e}"
+    );
+
+    // A data URI counts as well.
+    let d = doc(&bin, triangle().1);
+    let e = read_gltf_within(
+        Path::new("t.gltf"),
+        Arc::new(d.to_string().into_bytes()),
+        35,
+        |_, _| Err("none".into()),
+    )
+    .expect_err("36 bytes of 35");
+    assert!(e.contains("more than 35 bytes"), "{e}");
+}
+
+/// The error of reading `triangle()` with its material (or node, or view) edited by `edit`.
+fn refused(edit: impl Fn(&mut Value)) -> String {
+    let (bin, parts) = triangle();
+    let mut d = doc(&bin, parts);
+    d["materials"] = json!([{"name": "M"}]);
+    d["meshes"][0]["primitives"][0]["material"] = json!(0);
+    edit(&mut d);
+    error(&d)
+}
+
+#[test]
+fn material_values_outside_the_spec_ranges_are_refused_naming_the_field() {
+    let material = |field: &str, value: Value| {
+        refused(|d| {
+            let mut at = &mut d["materials"][0];
+            let mut parts = field.split('.').peekable();
+            while let Some(part) = parts.next() {
+                if parts.peek().is_none() {
+                    at[part] = value.clone();
+                } else {
+                    if at.get(part).is_none() {
+                        at[part] = json!({});
+                    }
+                    at = &mut at[part];
+                }
+            }
+            if field.starts_with("normalTexture") {
+                d["images"] = json!([{"uri": "n.png"}]);
+                d["textures"] = json!([{"source": 0}]);
+            }
+        })
+    };
+    let big = json!(1e39); // beyond f32: infinite once read
+    for (field, value, named) in [
+        (
+            "pbrMetallicRoughness.baseColorFactor",
+            json!([-5.0, 0.5, 0.5, 1.0]),
+            "pbrMetallicRoughness.baseColorFactor[0] is -5",
+        ),
+        (
+            "pbrMetallicRoughness.baseColorFactor",
+            json!([0.5, 0.5, 0.5, 1.5]),
+            "baseColorFactor[3] is 1.5",
+        ),
+        (
+            "pbrMetallicRoughness.metallicFactor",
+            json!(2.0),
+            "metallicFactor is 2",
+        ),
+        (
+            "pbrMetallicRoughness.roughnessFactor",
+            json!(-0.5),
+            "roughnessFactor is -0.5",
+        ),
+        (
+            "emissiveFactor",
+            json!([0.0, -1.0, 0.0]),
+            "emissiveFactor[1] is -1",
+        ),
+        (
+            "emissiveFactor",
+            json!([0.0, 0.0, 3.0]),
+            "emissiveFactor[2] is 3",
+        ),
+        (
+            "extensions.KHR_materials_emissive_strength.emissiveStrength",
+            json!(-2.0),
+            "emissiveStrength is -2",
+        ),
+        (
+            "extensions.KHR_materials_transmission.transmissionFactor",
+            json!(1.5),
+            "transmissionFactor is 1.5",
+        ),
+        ("alphaCutoff", big.clone(), "alphaCutoff is inf"),
+        ("alphaCutoff", json!(-0.5), "alphaCutoff is -0.5"),
+        (
+            "normalTexture",
+            json!({"index": 0, "scale": -1e39}),
+            "normalTexture.scale is -inf",
+        ),
+    ] {
+        let e = material(field, value);
+        assert!(
+            e.contains("test.gltf")
+                && e.contains("material \"M\" (materials[0])")
+                && e.contains(named),
+            "{field}: {e}"
+        );
+    }
+    // In range, the extremes included: read as given.
+    let (bin, parts) = triangle();
+    let mut d = doc(&bin, parts);
+    d["materials"] = json!([{"pbrMetallicRoughness": {"baseColorFactor": [0.0, 1.0, 0.0, 1.0],
+        "metallicFactor": 0.0, "roughnessFactor": 1.0}, "emissiveFactor": [1.0, 0.0, 1.0],
+        "normalTexture": {"index": 0, "scale": -3.0}, "alphaMode": "MASK", "alphaCutoff": 2.0}]);
+    d["images"] = json!([{"uri": "n.png"}]);
+    d["textures"] = json!([{"source": 0}]);
+    let m = &read(&d).expect("in range").materials[0];
+    assert_eq!(m.base_color_factor, [0.0, 1.0, 0.0, 1.0]);
+    assert_eq!(m.emissive, Vec3::new(1.0, 0.0, 1.0));
+    assert_eq!(m.normal_texture.as_ref().map(|t| t.1), Some(-3.0));
+}
+
+#[test]
+fn singular_or_projective_node_transforms_and_overlapping_strides_are_refused() {
+    let node = |n: Value| refused(|d| d["nodes"][0] = n.clone());
+    let m = |col3: [f32; 4], x: [f32; 3], y: [f32; 3]| {
+        json!({"mesh": 0, "matrix": [x[0], x[1], x[2], 0.0, y[0], y[1], y[2], 0.0,
+            0.0, 0.0, 1.0, 0.0, col3[0], col3[1], col3[2], col3[3]]})
+    };
+    for (n, named) in [
+        (
+            json!({"mesh": 0, "scale": [1.0, 0.0, 1.0]}),
+            "node 0: scale[1] is 0",
+        ),
+        (
+            json!({"mesh": 0, "scale": [1e-13, 1.0, 1.0]}),
+            "node 0: scale[0]",
+        ),
+        (
+            m([0.0, 0.0, 0.0, 1.0], [0.0; 3], [0.0, 1.0, 0.0]),
+            "scales axis 0 to zero",
+        ),
+        // y = x: the axes are coplanar.
+        (
+            m([0.0, 0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [1.0, 0.0, 0.0]),
+            "singular",
+        ),
+        (
+            m([0.0, 0.0, 0.0, 2.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+            "last row",
+        ),
+    ] {
+        let e = node(n.clone());
+        assert!(e.contains("test.gltf") && e.contains(named), "{n}: {e}");
+    }
+    // 0.5 0 0 1 in the last row of a column-major matrix: elements 3, 7, 11 and 15.
+    let mut projective = m([0.0, 0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+    projective["matrix"][3] = json!(0.5);
+    assert!(node(projective).contains("[0.5, 0.0, 0.0, 1.0]"));
+    // A skewed but invertible matrix and a mirroring scale are read.
+    let (bin, parts) = triangle();
+    let mut d = doc(&bin, parts);
+    d["nodes"] = json!([m([0.0, 0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0])]);
+    assert!(read(&d).is_ok());
+    d["nodes"] = json!([{"mesh": 0, "scale": [-1.0, 1e-6, 1.0]}]);
+    assert!(read(&d).is_ok());
+
+    // Positions are 12 bytes each; a stride of 8 would read overlapping elements.
+    let e = refused(|d| d["bufferViews"][0]["byteStride"] = json!(8));
+    assert!(
+        e.contains("accessor 0")
+            && e.contains("byteStride 8 is smaller than an element (12 bytes)"),
+        "{e}"
+    );
 }

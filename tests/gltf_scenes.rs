@@ -554,3 +554,104 @@ fn an_embedded_jpeg_is_read() {
         "{got} against {expected}"
     );
 }
+
+/// The names of the entities `model` (written as `m.gltf`) becomes, placed as `g`.
+fn entity_names(dir: &Path, model: &Value) -> Result<Vec<String>, String> {
+    std::fs::write(dir.join("m.gltf"), model.to_string()).expect("write");
+    let path = write_scene(dir, "scene.ron", &placing("m.gltf", "{}"));
+    let scene = load_scene(&path, &mut AssetCache::default()).map_err(|e| e.to_string())?;
+    Ok(scene.entities.into_iter().map(|e| e.name).collect())
+}
+
+#[test]
+fn generated_names_are_unique_whatever_the_nodes_are_called() {
+    let dir = temp_dir("gltf-names");
+    let mut model = two_meshes();
+    // Node 3 is named like unnamed node 1's label, node 4 like node "multi"'s first primitive,
+    // node 5 like the second instance of node 6, which is reached twice.
+    model["nodes"] = json!([
+        {"name": "a", "mesh": 0},
+        {"mesh": 0},
+        {"name": "multi", "mesh": 1},
+        {"name": "#1", "mesh": 0},
+        {"name": "multi/0", "mesh": 0},
+        {"name": "y@2", "mesh": 0},
+        {"name": "y", "mesh": 0},
+        {"name": "parent", "children": [6]},
+    ]);
+    model["scenes"] = json!([{"nodes": [0, 1, 2, 3, 4, 5, 6, 7]}]);
+    let names = entity_names(&dir, &model).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        names,
+        [
+            "g/a",
+            "g/#1",
+            "g/multi/0",
+            "g/multi/1",
+            "g/#3",
+            "g/#4",
+            "g/#5",
+            "g/y",
+            "g/y@2",
+        ]
+    );
+    // Every name appears once; the file's 9 placed primitives give 9 entities.
+    let distinct: std::collections::HashSet<&String> = names.iter().collect();
+    assert_eq!(distinct.len(), 9);
+}
+
+#[test]
+fn buffers_and_images_reached_through_symlinks_out_of_the_folder_are_refused() {
+    let root = temp_dir("gltf-symlink");
+    let (outside, model) = (root.join("outside"), root.join("model"));
+    std::fs::create_dir_all(&outside).expect("mkdir");
+    std::fs::create_dir_all(&model).expect("mkdir");
+    let mut bin = Bin::default();
+    let parts = textured_quad(&mut bin, 9729, json!({"uri": "t.png"}));
+    let mut d = doc(&bin, parts);
+    d["buffers"][0]["uri"] = json!("quad.bin");
+    std::fs::write(model.join("quad.gltf"), d.to_string()).expect("write");
+    std::fs::write(outside.join("quad.bin"), &bin.bytes).expect("write");
+    std::fs::write(outside.join("t.png"), texture_png()).expect("write");
+    let scene = write_scene(
+        &root,
+        "scene.ron",
+        r#"Scene(camera: Camera(position: (0, 0, 2), look_at: (0, 0, 0)),
+                 entities: [Entity(name: "m", gltf: "model/quad.gltf")])"#,
+    );
+    let load = || load_scene(&scene, &mut AssetCache::default()).map_err(|e| e.to_string());
+    // Both files inside the folder: the model loads.
+    for name in ["quad.bin", "t.png"] {
+        std::fs::copy(outside.join(name), model.join(name)).expect("copy");
+    }
+    load().unwrap_or_else(|e| panic!("{e}"));
+    // The buffer a symlink to a file outside.
+    std::fs::remove_file(model.join("quad.bin")).expect("rm");
+    std::os::unix::fs::symlink(outside.join("quad.bin"), model.join("quad.bin")).expect("ln");
+    let e = load().expect_err("buffer outside");
+    assert!(
+        e.contains("quad.gltf")
+            && e.contains("buffer 0")
+            && e.contains("outside the glTF file's folder"),
+        "{e}"
+    );
+    // The image a symlink to a file outside (through a symlinked folder), the buffer inside.
+    std::fs::remove_file(model.join("quad.bin")).expect("rm");
+    std::fs::write(model.join("quad.bin"), &bin.bytes).expect("write");
+    std::fs::remove_file(model.join("t.png")).expect("rm");
+    std::os::unix::fs::symlink(&outside, model.join("linked")).expect("ln");
+    d["images"][0]["uri"] = json!("linked/t.png");
+    std::fs::write(model.join("quad.gltf"), d.to_string()).expect("write");
+    let e = load().expect_err("image outside");
+    assert!(
+        e.contains("t.png") && e.contains("outside the glTF file's folder"),
+        "{e}"
+    );
+    // A symlink that stays inside the folder is followed.
+    std::fs::create_dir_all(model.join("real")).expect("mkdir");
+    std::fs::write(model.join("real/t.png"), texture_png()).expect("write");
+    std::os::unix::fs::symlink(model.join("real"), model.join("inner")).expect("ln");
+    d["images"][0]["uri"] = json!("inner/t.png");
+    std::fs::write(model.join("quad.gltf"), d.to_string()).expect("write");
+    load().unwrap_or_else(|e| panic!("{e}"));
+}

@@ -18,7 +18,7 @@ use super::{
     Sums, check_settings, error, normalize, parse_range,
 };
 use crate::film::{NORMAL_SHIFT, Pixel};
-use crate::scene::format::SettingsDesc;
+use crate::scene::format::{MAX_SPP, SettingsDesc};
 
 fn open(path: &Path) -> Result<exr::block::reader::Reader<BufReader<File>>, PartialError> {
     let file = File::open(path).map_err(|e| error(path, format!("cannot open: {e}")))?;
@@ -108,6 +108,13 @@ fn meta_of(path: &Path, headers: &[Header]) -> Result<PartialMeta, PartialError>
     let max_depth =
         check_settings(&settings).map_err(|why| bad("rondo.settings", &settings, &why))?;
     let samples = attr("rondo.samples")?;
+    if samples.len() > MAX_SAMPLES_TEXT || !samples.bytes().all(|b| b"0123456789.,".contains(&b)) {
+        return Err(bad(
+            "rondo.samples",
+            &samples,
+            &format!("ranges A..B joined by commas, at most {MAX_SAMPLES_TEXT} characters"),
+        ));
+    }
     if samples.is_empty() {
         return Err(bad(
             "rondo.samples",
@@ -290,6 +297,20 @@ fn shown(text: &str) -> String {
         Some((at, _)) => format!("{:?}…", &text[..at]),
         None => format!("{text:?}"),
     }
+}
+
+/// Longest `rondo.samples` a render writes: sorted ranges that do not touch, so at most one per
+/// two samples below [`MAX_SPP`], each two numbers of at most its digits, `..` and a comma.
+const MAX_SAMPLES_TEXT: usize = MAX_SPP as usize / 2 * (2 * digits(MAX_SPP) + 3);
+
+/// The decimal digits of `n`.
+const fn digits(mut n: u32) -> usize {
+    let mut d = 1;
+    while n >= 10 {
+        n /= 10;
+        d += 1;
+    }
+    d
 }
 
 /// The fixed-point shifts [`crate::film::shift_for`] can give, for any finite radiance.

@@ -190,6 +190,30 @@ fn read_asset(path: &Path) -> Result<(std::fs::Metadata, Vec<u8>), String> {
     Ok((meta, bytes))
 }
 
+/// Refuses `path`, a glTF file's buffer or image below the file's folder `dir` (by its URI,
+/// checked by [`super::gltf::relative_uri`]), when it resolves outside that folder through a
+/// symlink. A path that does not resolve is left for the read to report (and for a watcher to
+/// wait for).
+pub fn inside_folder(dir: &Path, path: &Path) -> Result<(), String> {
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    let (Ok(folder), Ok(target)) = (dir.canonicalize(), path.canonicalize()) else {
+        return Ok(());
+    };
+    if target.starts_with(&folder) {
+        Ok(())
+    } else {
+        Err(format!(
+            "resolves to {}, outside the glTF file's folder {}",
+            target.display(),
+            folder.display()
+        ))
+    }
+}
+
 /// Hash of a file's bytes.
 fn hash_bytes(bytes: &[u8]) -> u64 {
     use std::hash::Hasher;
@@ -227,6 +251,9 @@ fn cached<T>(
     Ok((value, true))
 }
 
+/// An embedded image's bytes ([`super::gltf::SharedBytes::identity`]) and its encoding.
+type EmbeddedKey = ((usize, usize, usize), Encoding);
+
 /// A glTF file as read, with the external buffer files it was read from and its embedded
 /// images, decoded when first asked for.
 pub struct GltfAsset {
@@ -234,8 +261,9 @@ pub struct GltfAsset {
     pub scene: GltfScene,
     /// External buffer files and the hashes of their bytes when they were read.
     buffers: Vec<(PathBuf, u64)>,
-    /// Embedded images decoded so far, by image index and encoding.
-    embedded: Mutex<HashMap<(usize, Encoding), Arc<ImageTexture>>>,
+    /// Embedded images decoded so far, by the identity of their bytes (images on one buffer
+    /// view are decoded once) and encoding.
+    embedded: Mutex<HashMap<EmbeddedKey, Arc<ImageTexture>>>,
 }
 
 impl GltfAsset {
@@ -257,7 +285,8 @@ impl GltfAsset {
             .embedded
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
-        if let Some(image) = embedded.get(&(index, encoding)) {
+        let key = (bytes.identity(), encoding);
+        if let Some(image) = embedded.get(&key) {
             return Ok(image.clone());
         }
         // The MIME type names the format; the content decides when it is unknown.
@@ -270,7 +299,7 @@ impl GltfAsset {
             decode_image(Path::new(hint), bytes, encoding)
                 .map_err(|e| format!("image {index}: {e}"))?,
         );
-        embedded.insert((index, encoding), image.clone());
+        embedded.insert(key, image.clone());
         Ok(image)
     }
 }
@@ -434,9 +463,19 @@ impl AssetCache {
         let mut buffers = Vec::new();
         let mut asked = Vec::new();
         let files = &mut self.files;
-        let scene = read_gltf(path, &bytes, |relative| {
+        let scene = read_gltf(path, Arc::new(bytes), |relative, max| {
             let full = dir.join(relative);
             asked.push(full.clone());
+            inside_folder(dir, &full)?;
+            // Checked before reading: the file's buffers together are bounded.
+            if let Ok(meta) = std::fs::metadata(&full)
+                && meta.len() > max
+            {
+                return Err(format!(
+                    "is {} bytes, more than the {max} left for the file's buffers",
+                    meta.len()
+                ));
+            }
             let (hash, bytes) = match (files.current(&full)?, read.remove(&full)) {
                 ((hash, Some(bytes)), _) | ((hash, None), Some(bytes)) => (hash, bytes),
                 ((_, None), None) => files.read(&full)?,

@@ -17,10 +17,12 @@
 //! animations, vertex colours, tangents (normal maps derive them from texture coordinates). Any
 //! other extension listed in `extensionsRequired` is an error naming it.
 
+use std::collections::HashMap;
+use std::ops::{Range, RangeInclusive};
 use std::path::Path;
 use std::sync::Arc;
 
-use glam::{Affine3A, Mat4, Quat, Vec2, Vec3};
+use glam::{Affine3A, Mat3A, Mat4, Quat, Vec2, Vec3, Vec3A};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
@@ -61,6 +63,8 @@ pub struct GltfScene {
     pub images: Vec<GltfImage>,
     /// What was skipped or ignored, one sentence each.
     pub warnings: Vec<String>,
+    /// Bytes held by the file's buffers (each source once), at most [`MAX_BUFFER_BYTES`].
+    pub held_bytes: u64,
 }
 
 /// A glTF mesh: its triangle primitives (points and lines are left out).
@@ -140,8 +144,8 @@ pub enum GltfImage {
     File(String),
     /// Image bytes held in the file (a buffer view or a data URI), with their MIME type.
     Bytes {
-        /// The encoded image.
-        bytes: Vec<u8>,
+        /// The encoded image, shared with the buffer that holds it.
+        bytes: SharedBytes,
         /// Its MIME type, e.g. `image/png`.
         mime_type: String,
     },
@@ -180,49 +184,138 @@ pub struct GltfMaterial {
     pub ior: f32,
 }
 
-/// Reads a glTF file from its `bytes` (`.gltf` JSON or `.glb`); `path` names it in errors.
-/// External buffers are fetched by `load_buffer` with a URI relative to the file's directory,
-/// already checked by [`relative_uri`] (no absolute paths, no `..`, no other schemes).
-pub fn read_gltf(
-    path: &Path,
-    bytes: &[u8],
-    load_buffer: impl FnMut(&str) -> Result<Vec<u8>, String>,
-) -> Result<GltfScene, String> {
-    read(bytes, load_buffer).map_err(|e| format!("glTF {}: {e}", path.display()))
+/// Most bytes the buffers of one file may hold: its `.glb` binary chunk, its decoded data URIs
+/// and its external buffer files, each source counted once however many buffers or images name
+/// it (the file itself is bounded by the asset reader).
+pub const MAX_BUFFER_BYTES: u64 = 1 << 30;
+
+/// Bytes of a glTF file's buffers: a range of one shared allocation, so that a source named by
+/// several buffers, and the images held in their views, are held once.
+#[derive(Clone, Debug)]
+pub struct SharedBytes {
+    data: Arc<Vec<u8>>,
+    range: Range<usize>,
 }
 
-fn read(
-    bytes: &[u8],
-    mut load_buffer: impl FnMut(&str) -> Result<Vec<u8>, String>,
-) -> Result<GltfScene, String> {
-    let (json, blob) = if bytes.starts_with(b"glTF") {
-        split_glb(bytes)?
-    } else {
-        (bytes, None)
-    };
-    let gltf = gltf::Gltf::from_slice_without_validation(json)
-        .map_err(|e| format!("invalid JSON: {e}"))?;
-    let doc = &gltf.document;
-    if let Some(ext) = doc
-        .extensions_required()
-        .find(|e| !SUPPORTED_REQUIRED.contains(e))
-    {
-        return Err(format!("unsupported required extension {ext}"));
+impl SharedBytes {
+    /// All of `data`.
+    fn whole(data: Arc<Vec<u8>>) -> Self {
+        let range = 0..data.len();
+        Self { data, range }
     }
-    validate(doc)?;
 
+    /// The part `range` (relative to these bytes), if inside them.
+    fn slice(&self, range: Range<usize>) -> Option<Self> {
+        let start = self.range.start.checked_add(range.start)?;
+        let end = self.range.start.checked_add(range.end)?;
+        (start <= end && end <= self.range.end).then(|| Self {
+            data: self.data.clone(),
+            range: start..end,
+        })
+    }
+
+    /// What identifies these bytes without reading them: the allocation and the range in it
+    /// (two images on one buffer view have the same identity).
+    pub fn identity(&self) -> (usize, usize, usize) {
+        (
+            Arc::as_ptr(&self.data) as usize,
+            self.range.start,
+            self.range.end,
+        )
+    }
+}
+
+impl std::ops::Deref for SharedBytes {
+    type Target = [u8];
+
+    fn deref(&self) -> &[u8] {
+        &self.data[self.range.clone()]
+    }
+}
+
+impl PartialEq for SharedBytes {
+    fn eq(&self, other: &Self) -> bool {
+        **self == **other
+    }
+}
+
+/// Reads a glTF file from its `bytes` (`.gltf` JSON or `.glb`); `path` names it in errors.
+/// External buffers are fetched by `load_buffer` with a URI relative to the file's directory,
+/// already checked by [`relative_uri`] (no absolute paths, no `..`, no other schemes), and the
+/// most bytes the file may have (what is left of [`MAX_BUFFER_BYTES`]): a larger file must be
+/// refused before it is read. Each distinct URI is fetched once.
+pub fn read_gltf(
+    path: &Path,
+    bytes: Arc<Vec<u8>>,
+    load_buffer: impl FnMut(&str, u64) -> Result<Vec<u8>, String>,
+) -> Result<GltfScene, String> {
+    read_gltf_within(path, bytes, MAX_BUFFER_BYTES, load_buffer)
+}
+
+/// [`read_gltf`] with `max_bytes` in place of [`MAX_BUFFER_BYTES`].
+pub fn read_gltf_within(
+    path: &Path,
+    bytes: Arc<Vec<u8>>,
+    max_bytes: u64,
+    load_buffer: impl FnMut(&str, u64) -> Result<Vec<u8>, String>,
+) -> Result<GltfScene, String> {
+    read(bytes, max_bytes, load_buffer).map_err(|e| format!("glTF {}: {e}", path.display()))
+}
+
+/// The file's buffers, each source read once and counted against `max_bytes`: the binary
+/// chunk (for buffer 0 only, as the spec says), data URIs and external files.
+fn read_buffers(
+    doc: &gltf::Document,
+    file: &SharedBytes,
+    blob: Option<Range<usize>>,
+    max_bytes: u64,
+    mut load_buffer: impl FnMut(&str, u64) -> Result<Vec<u8>, String>,
+) -> Result<(Vec<SharedBytes>, u64), String> {
+    let mut left = max_bytes;
+    let take = |i: usize, n: usize, left: &mut u64| {
+        *left = left.checked_sub(n as u64).ok_or_else(|| {
+            format!("buffer {i}: the file's buffers hold more than {max_bytes} bytes")
+        })?;
+        Ok::<(), String>(())
+    };
+    let mut files: HashMap<String, SharedBytes> = HashMap::new();
     let mut buffers = Vec::new();
     for buffer in doc.buffers() {
         let i = buffer.index();
         let data = match buffer.source() {
-            gltf::buffer::Source::Bin => blob
-                .map(<[u8]>::to_vec)
-                .ok_or_else(|| format!("buffer {i}: no binary chunk"))?,
+            gltf::buffer::Source::Bin if i > 0 => {
+                return Err(format!(
+                    "buffer {i}: only buffer 0 may use the .glb's binary chunk"
+                ));
+            }
+            gltf::buffer::Source::Bin => {
+                let range = blob
+                    .clone()
+                    .ok_or_else(|| format!("buffer {i}: no binary chunk"))?;
+                take(i, range.len(), &mut left)?;
+                file.slice(range)
+                    .ok_or("the binary chunk is outside the file")?
+            }
             gltf::buffer::Source::Uri(uri) => match decode_data_uri(uri) {
-                Some(r) => r.map_err(|e| format!("buffer {i}: {e}"))?.0,
+                // Decoded before it is counted: it is smaller than its text, which the file holds.
+                Some(r) => {
+                    let (bytes, _) = r.map_err(|e| format!("buffer {i}: {e}"))?;
+                    take(i, bytes.len(), &mut left)?;
+                    SharedBytes::whole(Arc::new(bytes))
+                }
                 None => {
                     let rel = relative_uri(uri).map_err(|e| format!("buffer {i}: {e}"))?;
-                    load_buffer(&rel).map_err(|e| format!("buffer {i} ({rel}): {e}"))?
+                    match files.get(&rel) {
+                        Some(shared) => shared.clone(),
+                        None => {
+                            let bytes = load_buffer(&rel, left)
+                                .map_err(|e| format!("buffer {i} ({rel}): {e}"))?;
+                            take(i, bytes.len(), &mut left)?;
+                            let shared = SharedBytes::whole(Arc::new(bytes));
+                            files.insert(rel, shared.clone());
+                            shared
+                        }
+                    }
                 }
             },
         };
@@ -235,8 +328,36 @@ fn read(
         }
         buffers.push(data);
     }
+    Ok((buffers, max_bytes - left))
+}
 
-    let mut scene = GltfScene::default();
+fn read(
+    bytes: Arc<Vec<u8>>,
+    max_bytes: u64,
+    load_buffer: impl FnMut(&str, u64) -> Result<Vec<u8>, String>,
+) -> Result<GltfScene, String> {
+    let file = SharedBytes::whole(bytes);
+    let (json, blob) = if file.starts_with(b"glTF") {
+        split_glb(&file)?
+    } else {
+        (0..file.len(), None)
+    };
+    let gltf = gltf::Gltf::from_slice_without_validation(&file[json])
+        .map_err(|e| format!("invalid JSON: {e}"))?;
+    let doc = &gltf.document;
+    if let Some(ext) = doc
+        .extensions_required()
+        .find(|e| !SUPPORTED_REQUIRED.contains(e))
+    {
+        return Err(format!("unsupported required extension {ext}"));
+    }
+    validate(doc)?;
+    let (buffers, held_bytes) = read_buffers(doc, &file, blob, max_bytes, load_buffer)?;
+
+    let mut scene = GltfScene {
+        held_bytes,
+        ..GltfScene::default()
+    };
     let mut budget = Budget {
         vertices: MAX_VERTICES,
         triangles: MAX_TRIANGLES,
@@ -281,9 +402,7 @@ fn read(
                     format!("image {i}: buffer view {} does not exist", view.value())
                 })?;
                 GltfImage::Bytes {
-                    bytes: view_bytes(view, &buffers)
-                        .map_err(|e| format!("image {i}: {e}"))?
-                        .to_vec(),
+                    bytes: view_shared(view, &buffers).map_err(|e| format!("image {i}: {e}"))?,
                     mime_type: mime_type.unwrap_or_default(),
                 }
             }
@@ -291,7 +410,7 @@ fn read(
                 Some(r) => {
                     let (bytes, mime) = r.map_err(|e| format!("image {i}: {e}"))?;
                     GltfImage::Bytes {
-                        bytes,
+                        bytes: SharedBytes::whole(Arc::new(bytes)),
                         mime_type: mime_type.unwrap_or(mime),
                     }
                 }
@@ -369,8 +488,8 @@ fn validate(doc: &gltf::Document) -> Result<(), String> {
     }
 }
 
-/// Splits a `.glb` into its JSON chunk and its binary chunk, if any.
-fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
+/// Splits a `.glb` into the ranges of its JSON chunk and of its binary chunk, if any.
+fn split_glb(bytes: &[u8]) -> Result<(Range<usize>, Option<Range<usize>>), String> {
     let word = |at: usize| -> Option<u32> {
         let b = bytes.get(at..at.checked_add(4)?)?;
         Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
@@ -384,7 +503,7 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
     if length > bytes.len() {
         return Err(format!("truncated .glb: {} bytes of {length}", bytes.len()));
     }
-    let chunk = |at: usize| -> Result<(u32, &[u8], usize), String> {
+    let chunk = |at: usize| -> Result<(u32, Range<usize>, usize), String> {
         let len = word(at).ok_or_else(truncated)? as usize;
         let kind = word(at + 4).ok_or_else(truncated)?;
         let start = at + 8;
@@ -392,7 +511,7 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
             .checked_add(len)
             .filter(|&e| e <= length)
             .ok_or_else(truncated)?;
-        Ok((kind, &bytes[start..end], end.next_multiple_of(4)))
+        Ok((kind, start..end, end.next_multiple_of(4)))
     };
     let (kind, json, next) = chunk(12)?;
     if kind != 0x4E4F_534A {
@@ -482,12 +601,37 @@ pub fn relative_uri(uri: &str) -> Result<String, String> {
 }
 
 /// The bytes of a buffer view, checked against its buffer.
-fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [Vec<u8>]) -> Result<&'b [u8], String> {
+fn view_bytes<'b>(
+    view: &gltf::buffer::View,
+    buffers: &'b [SharedBytes],
+) -> Result<&'b [u8], String> {
     let buffer = buffers.get(view.buffer().index()).ok_or("missing buffer")?;
     view.offset()
         .checked_add(view.length())
         .and_then(|end| buffer.get(view.offset()..end))
         .ok_or_else(|| format!("buffer view {} outside its buffer", view.index()))
+}
+
+/// The bytes of a buffer view, shared with its buffer.
+fn view_shared(view: &gltf::buffer::View, buffers: &[SharedBytes]) -> Result<SharedBytes, String> {
+    let buffer = buffers.get(view.buffer().index()).ok_or("missing buffer")?;
+    view.offset()
+        .checked_add(view.length())
+        .and_then(|end| buffer.slice(view.offset()..end))
+        .ok_or_else(|| format!("buffer view {} outside its buffer", view.index()))
+}
+
+/// The distance between elements of `size` bytes in `view`: its `byteStride`, which may not be
+/// smaller than an element (elements would overlap), or the size when it has none.
+fn stride(view: &gltf::buffer::View, size: usize) -> Result<usize, String> {
+    match view.stride() {
+        None => Ok(size),
+        Some(stride) if stride >= size => Ok(stride),
+        Some(stride) => Err(format!(
+            "buffer view {}: byteStride {stride} is smaller than an element ({size} bytes)",
+            view.index()
+        )),
+    }
 }
 
 /// What is left of the file's vertex and triangle allowance.
@@ -555,7 +699,7 @@ fn sparse_values<'b>(
     acc: &gltf::Accessor,
     count: usize,
     size: usize,
-    buffers: &'b [Vec<u8>],
+    buffers: &'b [SharedBytes],
 ) -> Result<Vec<(usize, &'b [u8])>, String> {
     let i = acc.index();
     let Some(sparse) = acc.sparse() else {
@@ -598,7 +742,11 @@ fn sparse_values<'b>(
 }
 
 /// Reads accessor `acc` as `count × dims` floats, sparse substitution applied.
-fn read_floats(acc: &gltf::Accessor, dims: usize, buffers: &[Vec<u8>]) -> Result<Vec<f32>, String> {
+fn read_floats(
+    acc: &gltf::Accessor,
+    dims: usize,
+    buffers: &[SharedBytes],
+) -> Result<Vec<f32>, String> {
     let i = acc.index();
     if acc.dimensions().multiplicity() != dims {
         return Err(format!(
@@ -619,7 +767,7 @@ fn read_floats(acc: &gltf::Accessor, dims: usize, buffers: &[Vec<u8>]) -> Result
     match acc.view() {
         Some(view) => {
             let bytes = view_bytes(&view, buffers).map_err(|e| format!("accessor {i}: {e}"))?;
-            let stride = view.stride().unwrap_or(size).max(size);
+            let stride = stride(&view, size).map_err(|e| format!("accessor {i}: {e}"))?;
             let items = elements(bytes, acc.offset(), stride, size, count).ok_or_else(|| {
                 format!(
                     "accessor {i}: {count} elements outside buffer view {}",
@@ -649,7 +797,7 @@ fn read_floats(acc: &gltf::Accessor, dims: usize, buffers: &[Vec<u8>]) -> Result
 }
 
 /// Reads an index accessor (unsigned integers, not normalised).
-fn read_indices(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
+fn read_indices(acc: &gltf::Accessor, buffers: &[SharedBytes]) -> Result<Vec<u32>, String> {
     let i = acc.index();
     if !matches!(
         acc.data_type(),
@@ -669,7 +817,7 @@ fn read_indices(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32>, S
     let mut out = match acc.view() {
         Some(view) => {
             let bytes = view_bytes(&view, buffers).map_err(|e| format!("accessor {i}: {e}"))?;
-            let stride = view.stride().unwrap_or(size).max(size);
+            let stride = stride(&view, size).map_err(|e| format!("accessor {i}: {e}"))?;
             elements(bytes, acc.offset(), stride, size, count)
                 .ok_or_else(|| {
                     format!(
@@ -696,7 +844,7 @@ fn read_indices(acc: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32>, S
 /// Reads one triangle primitive into a [`MeshData`].
 fn read_primitive(
     prim: &gltf::Primitive,
-    buffers: &[Vec<u8>],
+    buffers: &[SharedBytes],
     budget: &mut Budget,
 ) -> Result<MeshData, String> {
     let pos = prim.get(&gltf::Semantic::Positions).ok_or("no POSITION")?;
@@ -829,27 +977,86 @@ fn texture(tex: &gltf::Texture, texcoord: u32) -> GltfTexture {
     }
 }
 
-/// Reads a material, checking its factors.
+/// Checks that a material's field `field` holds `v`, a finite number within `range` (the
+/// spec's range for it; the RON loader refuses the same quantities out of range).
+fn check_field(
+    what: &dyn Fn() -> String,
+    field: &str,
+    v: f32,
+    range: RangeInclusive<f32>,
+) -> Result<(), String> {
+    if v.is_finite() && range.contains(&v) {
+        return Ok(());
+    }
+    let (lo, hi) = (range.start(), range.end());
+    let within = if hi.is_finite() {
+        format!("in [{lo}, {hi}]")
+    } else if lo.is_finite() {
+        format!("finite and at least {lo}")
+    } else {
+        "finite".into()
+    };
+    Err(format!("{}: {field} is {v}, must be {within}", what()))
+}
+
+/// Reads a material, checking its factors against the spec's ranges.
 fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> {
     let pbr = m.pbr_metallic_roughness();
     let name = m.name().map(str::to_owned);
     let what = || match (&name, m.index()) {
-        (Some(n), _) => format!("material \"{n}\""),
-        (None, Some(i)) => format!("material {i}"),
-        (None, None) => "default material".into(),
+        (Some(n), Some(i)) => format!("material \"{n}\" (materials[{i}])"),
+        (None, Some(i)) => format!("materials[{i}]"),
+        (_, None) => "default material".into(),
     };
-    let emissive = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
-    let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
-    let ior = m.ior().unwrap_or(1.5);
-    if !(transmission.is_finite() && ior.is_finite() && ior > 0.0) {
-        return Err(format!("{}: invalid transmission or ior", what()));
+    let unit = 0.0..=1.0;
+    let any = f32::NEG_INFINITY..=f32::INFINITY;
+    let at_least_0 = 0.0..=f32::INFINITY;
+    for (k, v) in pbr.base_color_factor().into_iter().enumerate() {
+        let field = format!("pbrMetallicRoughness.baseColorFactor[{k}]");
+        check_field(&what, &field, v, unit.clone())?;
     }
-    let finite = pbr.base_color_factor().iter().all(|v| v.is_finite())
-        && pbr.metallic_factor().is_finite()
-        && pbr.roughness_factor().is_finite()
-        && emissive.is_finite();
-    if !finite {
-        return Err(format!("{}: non-finite factor", what()));
+    let metallic = pbr.metallic_factor();
+    check_field(
+        &what,
+        "pbrMetallicRoughness.metallicFactor",
+        metallic,
+        unit.clone(),
+    )?;
+    let roughness = pbr.roughness_factor();
+    check_field(
+        &what,
+        "pbrMetallicRoughness.roughnessFactor",
+        roughness,
+        unit.clone(),
+    )?;
+    for (k, v) in m.emissive_factor().into_iter().enumerate() {
+        check_field(&what, &format!("emissiveFactor[{k}]"), v, unit.clone())?;
+    }
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    let field = "extensions.KHR_materials_emissive_strength.emissiveStrength";
+    check_field(&what, field, strength, at_least_0.clone())?;
+    let emissive = Vec3::from(m.emissive_factor()) * strength;
+    if !emissive.is_finite() {
+        return Err(format!(
+            "{}: emissiveFactor × emissiveStrength is not finite",
+            what()
+        ));
+    }
+    let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
+    let field = "extensions.KHR_materials_transmission.transmissionFactor";
+    check_field(&what, field, transmission, unit)?;
+    let ior = m.ior().unwrap_or(1.5);
+    if !(ior.is_finite() && ior > 0.0) {
+        return Err(format!(
+            "{}: extensions.KHR_materials_ior.ior is {ior}, must be finite and above 0",
+            what()
+        ));
+    }
+    if let Some(t) = m.normal_texture() {
+        check_field(&what, "normalTexture.scale", t.scale(), any)?;
+    }
+    if let Some(cutoff) = m.alpha_cutoff() {
+        check_field(&what, "alphaCutoff", cutoff, at_least_0)?;
     }
     let alpha_mode = match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
@@ -861,8 +1068,8 @@ fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> {
         base_color_texture: pbr
             .base_color_texture()
             .map(|t| texture(&t.texture(), t.tex_coord())),
-        metallic: pbr.metallic_factor(),
-        roughness: pbr.roughness_factor(),
+        metallic,
+        roughness,
         metallic_roughness_texture: pbr
             .metallic_roughness_texture()
             .map(|t| texture(&t.texture(), t.tex_coord())),
@@ -884,24 +1091,63 @@ fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> {
     })
 }
 
-/// The node's own transform (TRS or matrix), checked to be finite.
+/// Smallest |scale| of a node on any axis, as the RON loader's `Transform` allows.
+const MIN_SCALE: f32 = 1e-12;
+
+/// Smallest volume of a node matrix's unit cube relative to the product of its axes' lengths
+/// (1 for any rotation and scale; near 0 when the axes are nearly coplanar).
+const MIN_AXIS_VOLUME: f32 = 1e-6;
+
+/// The node's own transform (TRS or matrix), checked to be finite and invertible, as RON's
+/// `Transform` is: no scale below [`MIN_SCALE`] on any axis, a matrix's last row `0 0 0 1`
+/// (glTF matrices are affine) and its axes not (nearly) coplanar.
 fn local(node: &gltf::Node) -> Result<Affine3A, String> {
+    let i = node.index();
     let m = match node.transform() {
         gltf::scene::Transform::Matrix { matrix } => {
-            Affine3A::from_mat4(Mat4::from_cols_array_2d(&matrix))
+            let row = [matrix[0][3], matrix[1][3], matrix[2][3], matrix[3][3]];
+            if row != [0.0, 0.0, 0.0, 1.0] {
+                return Err(format!(
+                    "node {i}: matrix's last row is {row:?}, must be [0, 0, 0, 1] (an affine transform)"
+                ));
+            }
+            let m = Affine3A::from_mat4(Mat4::from_cols_array_2d(&matrix));
+            let axes = [m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis];
+            if let Some(k) = axes.iter().position(|a| a.length() < MIN_SCALE) {
+                return Err(format!(
+                    "node {i}: matrix scales axis {k} to zero (length below {MIN_SCALE})"
+                ));
+            }
+            let [x, y, z] = axes.map(Vec3A::normalize);
+            let volume = Mat3A::from_cols(x, y, z).determinant().abs();
+            if volume < MIN_AXIS_VOLUME {
+                return Err(format!(
+                    "node {i}: matrix is singular (its axes are coplanar)"
+                ));
+            }
+            m
         }
         gltf::scene::Transform::Decomposed {
             translation,
             rotation,
             scale,
-        } => Affine3A::from_scale_rotation_translation(
-            Vec3::from(scale),
-            Quat::from_array(rotation).normalize(),
-            Vec3::from(translation),
-        ),
+        } => {
+            if let Some(k) = scale.iter().position(|s| s.abs() < MIN_SCALE) {
+                return Err(format!(
+                    "node {i}: scale[{k}] is {}, must be non-zero (at least {MIN_SCALE} in size)",
+                    scale[k]
+                ));
+            }
+            Affine3A::from_scale_rotation_translation(
+                Vec3::from(scale),
+                Quat::from_array(rotation).normalize(),
+                Vec3::from(translation),
+            )
+        }
     };
+    // Also catches what the comparisons above let through: NaN is below nothing.
     if !m.is_finite() {
-        return Err(format!("node {}: non-finite transform", node.index()));
+        return Err(format!("node {i}: non-finite transform"));
     }
     Ok(m)
 }

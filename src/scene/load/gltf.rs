@@ -15,7 +15,7 @@ use glam::{Affine3A, Vec3};
 
 use super::{Anchor, Expander, Origin, Placed, Scope, SourceFile};
 use crate::model::{MeshRef, Shape, Transform};
-use crate::scene::assets::{Encoding, GltfAsset};
+use crate::scene::assets::{Encoding, GltfAsset, inside_folder};
 use crate::scene::error::SceneError;
 use crate::scene::format::EntityDesc;
 use crate::scene::gltf::{AlphaMode, GltfImage, GltfMaterial, GltfTexture, Wrap as GltfWrap};
@@ -26,19 +26,38 @@ use crate::shading::texture::{Filter, ImageTexture, Sampling, Texture, Wrap};
 /// The name a placement's `materials` uses for primitives without a material.
 const DEFAULT_MATERIAL: &str = "#default";
 
-/// The labels of a file's materials or nodes: the name when it is unique in the file, else
-/// `#index`.
-fn labels<'a>(names: impl Iterator<Item = (usize, Option<&'a str>)> + Clone) -> Vec<String> {
-    let mut count: HashMap<&str, usize> = HashMap::new();
-    for (_, name) in names.clone() {
+/// The labels of a file's materials or nodes, by index: the name when no other index has it,
+/// it is not empty, does not start with `#` (the form of the others) and holds none of the
+/// characters in `reserved`; else `#index`. Labels are therefore distinct, and a label followed
+/// by a suffix starting with a reserved character is never another label.
+fn labels<'a>(
+    names: impl Iterator<Item = (usize, Option<&'a str>)> + Clone,
+    reserved: &[char],
+) -> HashMap<usize, String> {
+    let mut holders: HashMap<&str, usize> = HashMap::new();
+    for (i, name) in names.clone() {
         if let Some(n) = name {
-            *count.entry(n).or_default() += 1;
+            let first = *holders.entry(n).or_insert(i);
+            if first != i {
+                // Held by two indices: marked by an index no item has.
+                holders.insert(n, usize::MAX);
+            }
         }
     }
     names
-        .map(|(i, name)| match name {
-            Some(n) if count.get(n) == Some(&1) && !n.is_empty() => n.to_owned(),
-            _ => format!("#{i}"),
+        .map(|(i, name)| {
+            let label = match name {
+                Some(n)
+                    if holders.get(n) == Some(&i)
+                        && !n.is_empty()
+                        && !n.starts_with('#')
+                        && !n.contains(reserved) =>
+                {
+                    n.to_owned()
+                }
+                _ => format!("#{i}"),
+            };
+            (i, label)
         })
         .collect()
 }
@@ -84,7 +103,11 @@ impl Expander<'_> {
                 .iter()
                 .enumerate()
                 .map(|(i, m)| (i, m.name.as_deref())),
+            &[],
         );
+        let material_labels: Vec<String> = (0..materials.len())
+            .map(|i| material_labels[&i].clone())
+            .collect();
 
         // The placement's names, checked against the file's.
         let mut mapped: HashMap<&str, String> = HashMap::new();
@@ -116,15 +139,19 @@ impl Expander<'_> {
         // The table key of each material index (`None`: the default material), made once.
         let mut keys: HashMap<Option<usize>, String> = HashMap::new();
         let mut placed_nodes: HashMap<usize, usize> = HashMap::new();
+        // A node reached twice is one node: its name is its own. `/` and `@` start the suffixes
+        // of primitives and repeats.
         let node_labels = labels(
             asset
                 .scene
                 .nodes
                 .iter()
                 .map(|n| (n.index, n.name.as_deref())),
+            &['/', '@'],
         );
         let prefix = format!("{name}/");
-        for (node, base) in asset.scene.nodes.iter().zip(&node_labels) {
+        for node in &asset.scene.nodes {
+            let base = &node_labels[&node.index];
             let Some(mesh) = node.mesh.and_then(|m| asset.scene.meshes.get(m)) else {
                 continue;
             };
@@ -304,8 +331,8 @@ impl Expander<'_> {
         });
         Ok(Material::Pbr {
             base_color,
-            metallic: m.metallic.clamp(0.0, 1.0),
-            roughness: m.roughness.clamp(0.0, 1.0),
+            metallic: m.metallic,
+            roughness: m.roughness,
             metallic_roughness,
             emissive,
             emissive_strength: 1.0,
@@ -338,6 +365,7 @@ impl Expander<'_> {
                 let dir = path.parent().unwrap_or(Path::new(""));
                 let full = dir.join(relative);
                 self.depend(&full);
+                inside_folder(dir, &full).map_err(|e| format!("image {}: {e}", full.display()))?;
                 self.assets
                     .image(&full, encoding)
                     .map_err(|e| format!("image {}: {e}", full.display()))?
