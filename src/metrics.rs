@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 use image::RgbImage;
 
 use crate::film::Film;
+use crate::scene::format::{MAX_PIXELS, MAX_SIDE};
 
 /// The ε added to `r²` in the denominator of the relative MSE.
 pub const REL_EPSILON: f64 = 0.01;
@@ -52,6 +53,17 @@ pub enum MetricsError {
         /// Why.
         source: image::ImageError,
     },
+    /// An image is larger than a render can be: refused from its header.
+    #[error(
+        "{}: the image is {}×{}; at most {MAX_SIDE} on a side and {MAX_PIXELS} pixels are accepted",
+        path.display(), size.0, size.1
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its size in its header.
+        size: (u32, u32),
+    },
     /// The two images differ in size.
     #[error(
         "{}: image is {}×{}, but the reference {} is {}×{}",
@@ -88,18 +100,34 @@ pub enum MetricsError {
 impl Image {
     /// Reads an image file (any format the build decodes: OpenEXR, PNG). EXR values are linear
     /// radiance; 8-bit formats are taken as stored values / 255, without undoing the sRGB curve.
-    /// Non-finite values are an error.
+    /// Non-finite values are an error, and so is an image larger than a render can be
+    /// ([`MAX_SIDE`], [`MAX_PIXELS`]): refused from its header, before its pixels are allocated.
     pub fn read(path: &Path) -> Result<Self, MetricsError> {
+        use image::ImageDecoder;
         let read_error = |source| MetricsError::Read {
             path: path.to_path_buf(),
             source,
         };
-        let decoded = image::ImageReader::open(path)
+        let mut reader = image::ImageReader::open(path)
             .map_err(|e| read_error(image::ImageError::IoError(e)))?
             .with_guessed_format()
-            .map_err(|e| read_error(image::ImageError::IoError(e)))?
-            .decode()
-            .map_err(read_error)?;
+            .map_err(|e| read_error(image::ImageError::IoError(e)))?;
+        let mut limits = image::Limits::default();
+        // RGBA f32, the widest decoded texel.
+        limits.max_alloc = Some(MAX_PIXELS * 16);
+        reader.limits(limits);
+        let decoder = reader.into_decoder().map_err(read_error)?;
+        let (width, height) = decoder.dimensions();
+        if width > MAX_SIDE
+            || height > MAX_SIDE
+            || u64::from(width) * u64::from(height) > MAX_PIXELS
+        {
+            return Err(MetricsError::TooLarge {
+                path: path.to_path_buf(),
+                size: (width, height),
+            });
+        }
+        let decoded = image::DynamicImage::from_decoder(decoder).map_err(read_error)?;
         let rgb = decoded.to_rgb32f();
         let image = Self {
             width: rgb.width(),

@@ -538,31 +538,73 @@ pub enum Encoding {
 /// Largest image accepted, in texels (16384²).
 pub const MAX_IMAGE_TEXELS: u64 = 1 << 28;
 
-/// Decodes the image file `path` from its `bytes` (the format from the content, else from the
-/// extension), with `encoding`; alpha is kept if it is not opaque everywhere.
-pub fn decode_image(path: &Path, bytes: &[u8], encoding: Encoding) -> Result<ImageTexture, String> {
+/// Longest side of an image accepted, in texels (JPEG's own limit is 65535).
+pub const MAX_IMAGE_SIDE: u32 = 1 << 16;
+
+/// A reader of the image file `path` in `bytes`, its format from the content, else from the
+/// extension.
+fn image_reader<'a>(
+    path: &Path,
+    bytes: &'a [u8],
+) -> Result<image::ImageReader<std::io::Cursor<&'a [u8]>>, String> {
     let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes));
     if let Ok(format) = image::ImageFormat::from_path(path) {
         reader.set_format(format);
     }
-    let mut reader = reader
+    reader
         .with_guessed_format()
-        .map_err(|e| format!("cannot read image: {e}"))?;
+        .map_err(|e| format!("cannot read image: {e}"))
+}
+
+/// The decoder of `reader`'s image once its header has shown an image of at most `max_texels`
+/// texels, no side longer than `max_side` and none empty: a file that declares more (a few
+/// bytes can declare gigabytes of pixels) is refused before any of its pixels is allocated.
+/// `max_alloc` bounds what the decoder itself allocates.
+fn sized_decoder<'a>(
+    mut reader: image::ImageReader<std::io::Cursor<&'a [u8]>>,
+    max_texels: u64,
+    max_side: u32,
+    max_alloc: u64,
+) -> Result<impl image::ImageDecoder + 'a, String> {
+    use image::ImageDecoder;
     let mut limits = image::Limits::default();
-    limits.max_alloc = Some(MAX_IMAGE_TEXELS * 16);
+    limits.max_image_width = Some(max_side);
+    limits.max_image_height = Some(max_side);
+    limits.max_alloc = Some(max_alloc);
     reader.limits(limits);
-    let decoded = reader
-        .decode()
-        .map_err(|e| format!("cannot decode image: {e}"))?;
-    let (width, height) = (decoded.width(), decoded.height());
+    let decoder = reader.into_decoder().map_err(|e| match e {
+        image::ImageError::Limits(l)
+            if l.kind() == image::error::LimitErrorKind::DimensionError =>
+        {
+            format!("the image is wider or taller than {max_side} texels")
+        }
+        e => format!("cannot read image: {e}"),
+    })?;
+    let (width, height) = decoder.dimensions();
     if width == 0 || height == 0 {
         return Err("image is empty".into());
     }
-    if u64::from(width) * u64::from(height) > MAX_IMAGE_TEXELS {
+    if u64::from(width) * u64::from(height) > max_texels {
         return Err(format!(
-            "the image has {width}×{height} texels; at most {MAX_IMAGE_TEXELS} are accepted"
+            "the image has {width}×{height} texels; at most {max_texels} are accepted"
         ));
     }
+    Ok(decoder)
+}
+
+/// Decodes the image file `path` from its `bytes` (the format from the content, else from the
+/// extension), with `encoding`; alpha is kept if it is not opaque everywhere. Its size is
+/// checked from its header, before decoding.
+pub fn decode_image(path: &Path, bytes: &[u8], encoding: Encoding) -> Result<ImageTexture, String> {
+    let decoder = sized_decoder(
+        image_reader(path, bytes)?,
+        MAX_IMAGE_TEXELS,
+        MAX_IMAGE_SIDE,
+        MAX_IMAGE_TEXELS * 16,
+    )?;
+    let decoded = image::DynamicImage::from_decoder(decoder)
+        .map_err(|e| format!("cannot decode image: {e}"))?;
+    let (width, height) = (decoded.width(), decoded.height());
     // Float images (EXR) hold linear values; 8/16-bit ones are encoded as `encoding` says.
     Ok(match decoded {
         image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_) => {
@@ -595,39 +637,26 @@ fn decode_environment(path: &Path, bytes: &[u8]) -> Result<EnvironmentMap, Strin
 }
 
 /// Decodes the environment map `path` from its `bytes` to its width, height and linear RGB
-/// floats (row-major from the top row). The decoder's limits refuse a map of more than
-/// [`crate::sky::environment::MAX_TEXELS`] texels before it allocates them.
+/// floats (row-major from the top row). A map of more than
+/// [`crate::sky::environment::MAX_TEXELS`] texels is refused from its header, before any of its
+/// pixels is allocated.
 fn decode_environment_pixels(path: &Path, bytes: &[u8]) -> Result<(u32, u32, Vec<f32>), String> {
-    let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes));
-    if let Ok(format) = image::ImageFormat::from_path(path) {
-        reader.set_format(format);
-    }
-    let mut reader = reader
-        .with_guessed_format()
-        .map_err(|e| format!("cannot read image: {e}"))?;
+    use crate::sky::environment::MAX_TEXELS;
+    let reader = image_reader(path, bytes)?;
     match reader.format() {
         Some(image::ImageFormat::OpenExr) => return decode_exr_rgb(bytes),
         Some(image::ImageFormat::Hdr) => {}
         _ => return Err("an environment map must be an OpenEXR or Radiance .hdr file".into()),
     }
-    let mut limits = image::Limits::default();
-    let side = 1u32 << 15;
-    limits.max_image_width = Some(side);
-    limits.max_image_height = Some(side);
     // RGB f32, plus the decoder's own buffer.
-    limits.max_alloc = Some(crate::sky::environment::MAX_TEXELS * 28);
-    reader.limits(limits);
-    let decoded = reader
-        .decode()
+    let decoder = sized_decoder(reader, MAX_TEXELS, 1 << 15, MAX_TEXELS * 28)?;
+    let decoded = image::DynamicImage::from_decoder(decoder)
         .map_err(|e| format!("cannot decode image: {e}"))?;
-    let (width, height) = (decoded.width(), decoded.height());
-    if u64::from(width) * u64::from(height) > crate::sky::environment::MAX_TEXELS {
-        return Err(format!(
-            "the map has {width}×{height} texels; at most {} are accepted",
-            crate::sky::environment::MAX_TEXELS
-        ));
-    }
-    Ok((width, height, decoded.into_rgb32f().into_raw()))
+    Ok((
+        decoded.width(),
+        decoded.height(),
+        decoded.into_rgb32f().into_raw(),
+    ))
 }
 
 /// Decodes an OpenEXR file's first layer with R, G and B channels straight into RGB floats,

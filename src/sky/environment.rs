@@ -79,8 +79,9 @@ pub struct EnvironmentMap {
     texel_scale: f32,
 }
 
-/// Cumulative counts out of [`SCALE`] of `weights` (summing to `total` > 0), written to `out`;
-/// the last written count is [`SCALE`] exactly.
+/// Cumulative counts out of [`SCALE`] through each of the first `out.len()` of `weights`
+/// (which sum to `total` > 0 over all of them), written to `out`. A table of every weight but
+/// the last leaves the last its share: the count through all of them is [`SCALE`].
 fn cumulative(weights: impl Iterator<Item = f64>, total: f64, out: &mut [u32]) {
     let mut acc = 0.0f64;
     for (o, w) in out.iter_mut().zip(weights) {
@@ -88,9 +89,6 @@ fn cumulative(weights: impl Iterator<Item = f64>, total: f64, out: &mut [u32]) {
         *o = ((acc / total) * f64::from(SCALE))
             .round()
             .min(f64::from(SCALE)) as u32;
-    }
-    if let Some(last) = out.last_mut() {
-        *last = SCALE;
     }
 }
 
@@ -195,7 +193,7 @@ impl EnvironmentMap {
                     cumulative(row.chunks_exact(3).map(lum), sum, columns);
                 } else {
                     // Never picked (its marginal count is 0); uniform for completeness.
-                    cumulative(std::iter::repeat_n(1.0, w - 1), w as f64, columns);
+                    cumulative(std::iter::repeat_n(1.0, w), w as f64, columns);
                 }
                 (sum, rgb, max)
             })
@@ -207,6 +205,8 @@ impl EnvironmentMap {
         let lit = total > 0.0 && total.is_finite();
         if lit {
             cumulative(weights(), total, &mut marginal);
+            // Exactly: the counts are read up to the last row's.
+            marginal[height as usize - 1] = SCALE;
         }
         for (i, m) in marginal.iter().enumerate() {
             counts[i * w + w - 1] = *m;
@@ -516,6 +516,52 @@ mod tests {
             chi2 < limit,
             "χ² = {chi2:.1} with {dof} dof (limit {limit:.1})"
         );
+    }
+
+    #[test]
+    fn every_texel_is_sampled_in_proportion_to_its_luminance_times_solid_angle() {
+        // Bright texels in the last column and the last row, where the tables end; the
+        // expected probabilities come from the texels alone: grey radiance (luminance = value)
+        // times the texel's solid angle, (cos θ_top − cos θ_bottom) · 2π / width.
+        let (w, h) = (12u32, 6u32);
+        let radiance = |x: u32, y: u32| match (x, y) {
+            (11, 2) => 300.0,
+            (4, 5) => 200.0,
+            (11, 5) => 50.0,
+            _ => 0.5 + ((x * 7 + y * 3) % 5) as f64,
+        };
+        let m = map(w, h, |x, y| radiance(x, y) as f32);
+        let solid_angle = |y: u32| {
+            let theta = |k: u32| std::f64::consts::PI * f64::from(k) / f64::from(h);
+            (theta(y).cos() - theta(y + 1).cos()) * std::f64::consts::TAU / f64::from(w)
+        };
+        let weight = |x: u32, y: u32| radiance(x, y) * solid_angle(y);
+        let total: f64 = (0..h).flat_map(|y| (0..w).map(move |x| weight(x, y))).sum();
+        let n = 400_000u32;
+        let mut bins = vec![0u32; (w * h) as usize];
+        let mut rng = Rng::new(5, 17);
+        for _ in 0..n {
+            let u = Vec2::new(rng.next_f32(), rng.next_f32());
+            let j = Vec2::new(rng.next_f32(), rng.next_f32());
+            let (row, column) = m.texel_of(m.sample(u, j).expect("lit map"));
+            bins[row * w as usize + column] += 1;
+        }
+        let mut chi2 = 0.0f64;
+        for y in 0..h {
+            for x in 0..w {
+                let p = weight(x, y) / total;
+                // The tables hold counts out of 2²⁴: each of the two factors within 2⁻²⁴.
+                let table = f64::from(m.texel_probability(y as usize, x as usize));
+                assert!(
+                    (table - p).abs() < 4e-7 + 1e-6 * p,
+                    "texel ({x}, {y}): probability {table}, expected {p}"
+                );
+                let expected = p * f64::from(n);
+                chi2 += (f64::from(bins[(y * w + x) as usize]) - expected).powi(2) / expected;
+            }
+        }
+        // 71 degrees of freedom: the 99.9th percentile of χ² is about 115.
+        assert!(chi2 < 115.0, "χ² = {chi2:.1} over {} texels", w * h);
     }
 
     #[test]
