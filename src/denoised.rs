@@ -27,13 +27,13 @@ pub struct FilmImages {
 impl FilmImages {
     /// The means of `film`'s sums.
     pub fn of(film: &Film) -> Self {
-        let (count, fixed) = (film.count(), film.fixed());
+        let count = film.count();
         let features = film.features.as_ref();
         Self {
             width: film.width,
             height: film.height,
             colour: film.mean(),
-            albedo: features.map(|f| f.albedo_mean(count, fixed)),
+            albedo: features.map(|f| f.albedo_mean(count)),
             normal: features.map(|f| f.normal_mean(count)),
         }
     }

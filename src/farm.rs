@@ -10,7 +10,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crate::app::{Overrides, Renderer};
-use crate::film::{DEFAULT_SHIFT, OutputKind};
+use crate::film::{ALBEDO_SHIFT, DEFAULT_SHIFT, OutputKind};
 use crate::geometry::packed::LayoutKind;
 use crate::partial::{
     FORMAT_2, PartialError, PartialMeta, Sums, Tracing, image_hash, image_settings, normalize,
@@ -111,6 +111,7 @@ pub fn prepare(
                     shift: DEFAULT_SHIFT,
                     settings,
                     features: true,
+                    albedo_shift: ALBEDO_SHIFT,
                 },
                 resume: None,
                 settings: s,
@@ -122,6 +123,13 @@ pub fn prepare(
                 return Err(fail(format!(
                     "{}: a {FORMAT_2} partial, without the feature buffers (albedo, normal) this rondo continues too: render it again, or merge it with partials of its format",
                     base.display()
+                )));
+            }
+            if held.albedo_shift != ALBEDO_SHIFT {
+                return Err(fail(format!(
+                    "{}: its albedo sums are in the colour's units (2^-{}), as an older rondo wrote them, not in 2^-{ALBEDO_SHIFT}: merge it with partials of its kind, or render its samples again",
+                    base.display(),
+                    held.albedo_shift
                 )));
             }
             r.set_overrides(overrides);

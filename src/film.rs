@@ -193,6 +193,13 @@ impl OutputKind {
 /// radiance 1.
 pub const NORMAL_SHIFT: i32 = DEFAULT_SHIFT;
 
+/// The fixed-point shift of the albedo feature buffer: albedos are reflectances, at most 1 (an
+/// emitter's or the sky's may be more, up to 2^[`HEADROOM_BITS`] before it is clamped), so the
+/// shift of radiance 1, whatever the colour's: the colour's shift of a scene lit at 10⁻¹⁰ leaves
+/// a range of about 10⁻³, which would clamp every albedo, and that of a scene lit at 10³⁸ a
+/// resolution of about 10³¹, which would round every albedo to zero.
+pub const ALBEDO_SHIFT: i32 = DEFAULT_SHIFT;
+
 /// The fixed point of [`NORMAL_SHIFT`], made once rather than per sample.
 const NORMAL_FIXED: FixedPoint = FixedPoint {
     scale: (1u64 << NORMAL_SHIFT) as f64,
@@ -201,26 +208,50 @@ const NORMAL_FIXED: FixedPoint = FixedPoint {
 /// The feature buffers (AOVs) a denoiser is guided by: per pixel, the exact sums of each
 /// sample's albedo and shading normal at the first hit that is not a perfect mirror or glass
 /// (see [`crate::render::trace_path`]). Summed like the colour, so they split, merge and resume
-/// bit-exactly too. The albedo is in the film's fixed point, the normal in [`NORMAL_SHIFT`]'s.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// bit-exactly too. Each has a fixed point of its own, independent of the colour's: the normal
+/// [`NORMAL_SHIFT`]'s, the albedo `albedo_shift`'s ([`ALBEDO_SHIFT`], but in a partial written
+/// while the albedo took the colour's shift, see `docs/partial-format.md`).
+#[derive(Clone, Debug, PartialEq)]
 pub struct Features {
-    /// Sums of the albedo samples.
+    /// Sums of the albedo samples, in units of 2⁻`albedo_shift`.
     pub albedo: Vec<Pixel>,
-    /// Sums of the normal samples.
+    /// Sums of the normal samples, in units of 2⁻[`NORMAL_SHIFT`].
     pub normal: Vec<Pixel>,
+    /// The fixed-point shift of the albedo sums.
+    pub albedo_shift: i32,
+}
+
+impl Default for Features {
+    fn default() -> Self {
+        Self::new(0)
+    }
 }
 
 impl Features {
-    /// Zero sums for `pixels` pixels.
+    /// Zero sums for `pixels` pixels, the albedo in [`ALBEDO_SHIFT`]'s fixed point.
     pub fn new(pixels: usize) -> Self {
+        Self::with_albedo_shift(pixels, ALBEDO_SHIFT)
+    }
+
+    /// Zero sums for `pixels` pixels, the albedo in units of 2⁻`albedo_shift` (to read a
+    /// partial whose albedo is in other units than [`ALBEDO_SHIFT`]'s).
+    pub fn with_albedo_shift(pixels: usize, albedo_shift: i32) -> Self {
         Self {
             albedo: vec![Pixel::ZERO; pixels],
             normal: vec![Pixel::ZERO; pixels],
+            albedo_shift,
         }
     }
 
-    /// Adds another film's feature sums (exact, so in any order).
+    /// The fixed point the albedo is summed in.
+    pub fn albedo_fixed(&self) -> FixedPoint {
+        FixedPoint::new(self.albedo_shift)
+    }
+
+    /// Adds another film's feature sums (exact, so in any order), which must be in the same
+    /// fixed point (callers check partials' `albedo_shift` before they merge).
     pub fn merge(&mut self, other: &Self) {
+        debug_assert_eq!(self.albedo_shift, other.albedo_shift);
         for (a, b) in self.albedo.iter_mut().zip(&other.albedo) {
             a.merge(b);
         }
@@ -229,8 +260,9 @@ impl Features {
         }
     }
 
-    /// The mean albedo of every pixel (`count` samples, the colour's `fixed` point).
-    pub fn albedo_mean(&self, count: u64, fixed: FixedPoint) -> Vec<Vec3> {
+    /// The mean albedo of every pixel (`count` samples).
+    pub fn albedo_mean(&self, count: u64) -> Vec<Vec3> {
+        let fixed = self.albedo_fixed();
         self.albedo.iter().map(|s| fixed.mean(s, count)).collect()
     }
 
@@ -260,11 +292,13 @@ pub struct FilmBand<'a> {
     pub sum: &'a mut [Pixel],
     /// Albedo and normal sums.
     pub features: Option<(&'a mut [Pixel], &'a mut [Pixel])>,
+    /// The fixed point of the albedo sums ([`Features::albedo_fixed`]).
+    albedo_fixed: FixedPoint,
 }
 
 impl FilmBand<'_> {
-    /// Adds one sample to pixel `i` of the band, in `fixed` point: its features (if the band
-    /// has them and they are finite) and its radiance `l`. Returns `None` if `l` is not finite
+    /// Adds one sample to pixel `i` of the band: its radiance `l` in `fixed` point and its
+    /// features (if the band has them and they are finite) in theirs. Returns `None` if `l` is not finite
     /// (the radiance is then dropped), else whether any value was clamped.
     #[inline]
     pub fn add(
@@ -279,7 +313,7 @@ impl FilmBand<'_> {
             && features.albedo.is_finite()
             && features.normal.is_finite()
         {
-            clamped |= albedo[i].add(features.albedo, fixed);
+            clamped |= albedo[i].add(features.albedo, self.albedo_fixed);
             clamped |= normal[i].add(features.normal, NORMAL_FIXED);
         }
         if !l.is_finite() {
@@ -334,21 +368,25 @@ impl Film {
     pub fn bands(&mut self, rows: usize) -> Vec<FilmBand<'_>> {
         let n = (self.width as usize * rows).max(1);
         match &mut self.features {
-            Some(f) => self
-                .sum
-                .chunks_mut(n)
-                .zip(f.albedo.chunks_mut(n).zip(f.normal.chunks_mut(n)))
-                .map(|(sum, (a, b))| FilmBand {
-                    sum,
-                    features: Some((a, b)),
-                })
-                .collect(),
+            Some(f) => {
+                let albedo_fixed = f.albedo_fixed();
+                self.sum
+                    .chunks_mut(n)
+                    .zip(f.albedo.chunks_mut(n).zip(f.normal.chunks_mut(n)))
+                    .map(|(sum, (a, b))| FilmBand {
+                        sum,
+                        features: Some((a, b)),
+                        albedo_fixed,
+                    })
+                    .collect()
+            }
             None => self
                 .sum
                 .chunks_mut(n)
                 .map(|sum| FilmBand {
                     sum,
                     features: None,
+                    albedo_fixed: FixedPoint::new(ALBEDO_SHIFT),
                 })
                 .collect(),
         }

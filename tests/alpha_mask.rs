@@ -234,10 +234,7 @@ fn masks_absent_everywhere_change_no_path() {
         let (a, b) = (film(&plain), film(&ghosts));
         let features = |f: &Film| {
             let x = f.features.as_ref().expect("features");
-            (
-                x.albedo_mean(f.count(), f.fixed()),
-                x.normal_mean(f.count()),
-            )
+            (x.albedo_mean(f.count()), x.normal_mean(f.count()))
         };
         let ((albedo_a, normal_a), (albedo_b, normal_b)) = (features(&a), features(&b));
         // The features use no random numbers and see through the ghosts.

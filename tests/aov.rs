@@ -47,7 +47,7 @@ fn render_file(
 fn albedo_of(r: &Renderer) -> Vec<Vec3> {
     let film = r.film();
     let f = film.features.as_ref().expect("features were collected");
-    f.albedo_mean(film.count(), film.fixed())
+    f.albedo_mean(film.count())
 }
 
 fn normal_of(r: &Renderer) -> Vec<Vec3> {
@@ -342,4 +342,64 @@ fn features_are_the_same_bits_for_any_thread_count_and_pass_split_and_leave_the_
     assert_eq!(Some(features), passes.film().features.as_ref());
     assert_eq!(one.film().sum, plain.film().sum, "features change no pixel");
     assert!(plain.film().features.is_none());
+}
+
+/// A partial whose albedo layer is in the colour's fixed point (as rondo wrote them before the
+/// albedo had a scale of its own) is still read, its albedo mean is the albedo summed, and it
+/// does not merge with a partial whose albedo is in the albedo's own scale.
+#[test]
+fn a_partial_with_the_albedo_in_the_colours_fixed_point_is_read_and_kept_apart() {
+    use rondo::film::{ALBEDO_SHIFT, Features, FixedPoint, Pixel};
+    use rondo::partial::{PartialMeta, plan_merge, read_partial, write_partial};
+    let dir = temp_dir("aov-old-partial");
+    let (width, height, count) = (4u32, 2u32, 3u32);
+    let pixels = (width * height) as usize;
+    // A colour shift other than the albedo's, as a scene lit at 10⁻⁶ has (one of 10⁻¹⁰ would
+    // have clamped such an albedo).
+    let shift = ALBEDO_SHIFT + 20;
+    let meta = |albedo_shift| PartialMeta {
+        width,
+        height,
+        seed: 0,
+        hash: 1,
+        ranges: std::slice::from_ref(&(0..count)).to_vec(),
+        scene: "s.ron".into(),
+        shift,
+        settings: "max_depth=8 method=mis sampler=sobol background=0,0,0 roulette=on instancing=on"
+            .into(),
+        features: true,
+        albedo_shift,
+    };
+    // Every sample's albedo is 0.25 (exact in any fixed point), its normal +z.
+    let sums = |albedo_shift: i32| {
+        let mut f = Features::with_albedo_shift(pixels, albedo_shift);
+        let sample = |v: Vec3, shift: i32| {
+            let mut p = Pixel::ZERO;
+            for _ in 0..count {
+                p.add(v, FixedPoint::new(shift));
+            }
+            p
+        };
+        f.albedo.fill(sample(Vec3::splat(0.25), albedo_shift));
+        f.normal.fill(sample(Vec3::Z, rondo::film::NORMAL_SHIFT));
+        f
+    };
+    let colour = vec![Pixel::ZERO; pixels];
+    let old = dir.join("old.exr");
+    write_partial(&old, &meta(shift), &colour, Some(&sums(shift))).expect("write");
+    let (read, held) = read_partial(&old).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(read.albedo_shift, shift);
+    let features = held.features.expect("features");
+    assert_eq!(
+        features.albedo_mean(u64::from(count)),
+        vec![Vec3::splat(0.25); pixels]
+    );
+    let new = dir.join("new.exr");
+    let later = PartialMeta {
+        ranges: std::slice::from_ref(&(count..2 * count)).to_vec(),
+        ..meta(ALBEDO_SHIFT)
+    };
+    write_partial(&new, &later, &colour, Some(&sums(ALBEDO_SHIFT))).expect("write");
+    let refused = plan_merge(&[old, new], None).expect_err("albedo sums in other units");
+    assert!(refused.0.contains("albedo fraction bits"), "{refused}");
 }

@@ -139,3 +139,70 @@ fn the_same_render_denoises_to_the_same_bits() {
     );
     assert_ne!(da, a.colour, "the denoiser changed the image");
 }
+
+/// A floor and a back wall lit by a lamp of `intensity`, written to `dir`.
+fn lamp_scene(dir: &std::path::Path, intensity: f32) -> std::path::PathBuf {
+    write_scene(
+        dir,
+        &format!("lamp-{intensity:e}.ron"),
+        &format!(
+            r#"Scene(
+            camera: Camera(position: (0, 2, 4), look_at: (0, 0.5, 0), fov: 50),
+            settings: Settings(max_depth: 4),
+            materials: {{
+                "white": Diffuse(albedo: Constant((0.7, 0.7, 0.7))),
+                "red": Diffuse(albedo: Constant((0.6, 0.1, 0.1))),
+                "lamp": Light(emit: Constant((1, 1, 1)), intensity: {intensity:e}),
+            }},
+            entities: [
+                Entity(name: "floor", material: "white",
+                    shape: Quad(a: (-3, 0, -3), b: (-3, 0, 3), c: (3, 0, 3), d: (3, 0, -3))),
+                Entity(name: "wall", material: "red",
+                    shape: Quad(a: (-3, 0, -2), b: (3, 0, -2), c: (3, 3, -2), d: (-3, 3, -2))),
+                Entity(name: "lamp", material: "lamp",
+                    shape: Quad(a: (-0.5, 2.5, -0.5), b: (0.5, 2.5, -0.5), c: (0.5, 2.5, 0.5),
+                        d: (-0.5, 2.5, 0.5))),
+            ],
+        )"#
+        ),
+    )
+}
+
+fn mean(pixels: &[Vec3]) -> f64 {
+    pixels
+        .iter()
+        .map(|p| p.as_dvec3().element_sum())
+        .sum::<f64>()
+        / (3 * pixels.len()) as f64
+}
+
+/// Light is linear: a scene whose lamp is `f` times as bright renders `f` times as bright, so
+/// its denoised image must be `f` times the denoised image of the lamp at 1, at any `f` a
+/// lamp may have, from 10⁻³⁰ to 3·10³⁸. The albedo, which does not depend on the lamp, is the
+/// same at every `f` (none clamped to the film's range).
+#[test]
+fn a_dimmed_or_brightened_lamp_denoises_to_the_scaled_image() {
+    if denoiser().is_none() {
+        return;
+    }
+    let dir = temp_dir("denoise-scaled-lamp");
+    let reference = render(&lamp_scene(&dir, 1.0), 48, 4, 3);
+    let (raw_mean, denoised_mean) = (mean(&reference.colour), mean(&denoised(&reference)));
+    assert!(denoised_mean > 0.01, "{denoised_mean}");
+    for factor in [1e-10f32, 1e-20, 1e-30, 3e38] {
+        let scaled = render(&lamp_scene(&dir, factor), 48, 4, 3);
+        let f = f64::from(factor);
+        let raw = mean(&scaled.colour) / f;
+        let clean = mean(&denoised(&scaled)) / f;
+        eprintln!(
+            "lamp ×{factor:e}: raw mean / f {raw:.6} (at 1: {raw_mean:.6}), denoised mean / f \
+            {clean:.6} (at 1: {denoised_mean:.6})"
+        );
+        assert!((raw / raw_mean - 1.0).abs() < 1e-3, "the render is linear");
+        assert_eq!(scaled.albedo, reference.albedo, "lamp ×{factor:e}: albedo");
+        assert!(
+            (clean / denoised_mean - 1.0).abs() < 0.01,
+            "lamp ×{factor:e}: denoised mean / f {clean}, at 1 {denoised_mean}"
+        );
+    }
+}

@@ -215,7 +215,7 @@ fn albedo_of_quad(dir: &Path, model: &str) -> Vec<Vec3> {
     r.render_to_completion();
     let film = r.film();
     let f = film.features.as_ref().expect("features");
-    f.albedo_mean(film.count(), film.fixed())
+    f.albedo_mean(film.count())
 }
 
 /// The texture at glTF coordinates `(u, v)` (v down the image), decoded from sRGB and filtered

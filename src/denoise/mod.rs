@@ -80,7 +80,11 @@ impl fmt::Display for Quality {
 ///
 /// Values are made safe for OIDN before the call, on a copy: NaN and infinities become 0 in
 /// every image, colour is clamped to at least 0, albedo to [0, 1] and normals to [-1, 1] (the
-/// ranges OIDN's networks were trained on; a NaN would spread over the whole image).
+/// ranges OIDN's networks were trained on; a NaN would spread over the whole image). A colour
+/// far from 1 overall (a scene lit at 10⁻¹⁰ or 10³⁰) is scaled by a power of two towards 1 for
+/// OIDN and the result scaled back, so the denoised image is as bright as the input at any
+/// scale; a colour whose brightest value is too far above its typical one for that is refused
+/// ([`DenoiseError::BadInput`]).
 #[derive(Debug, Clone, Copy)]
 pub struct DenoiseInput<'a> {
     /// Width in pixels.
@@ -242,7 +246,11 @@ impl Denoiser {
         cancel: &AtomicBool,
     ) -> Result<Vec<f32>, DenoiseError> {
         let (width, height) = validate(input)?;
-        let color = sanitized(input.color, 0.0, f32::MAX);
+        let mut color = sanitized(input.color, 0.0, f32::MAX);
+        let exposure = exposure(&color)?;
+        if exposure != 1.0 {
+            scale(&mut color, exposure);
+        }
         let albedo = input.albedo.map(|a| sanitized(a, 0.0, 1.0));
         let normal = input.normal.map(|n| sanitized(n, -1.0, 1.0));
         let images = oidn::Images {
@@ -256,12 +264,17 @@ impl Denoiser {
             .device
             .lock()
             .map_err(|_| DenoiseError::Oidn("an earlier call panicked".into()))?;
-        device
-            .run(&images, quality.oidn_value(), cancel)
-            .map_err(|e| match e {
-                oidn::RunError::Cancelled => DenoiseError::Cancelled,
-                oidn::RunError::Oidn(message) => DenoiseError::Oidn(message),
-            })
+        let mut output =
+            device
+                .run(&images, quality.oidn_value(), cancel)
+                .map_err(|e| match e {
+                    oidn::RunError::Cancelled => DenoiseError::Cancelled,
+                    oidn::RunError::Oidn(message) => DenoiseError::Oidn(message),
+                })?;
+        if exposure != 1.0 {
+            scale(&mut output, 1.0 / exposure);
+        }
+        Ok(output)
     }
 }
 
@@ -304,6 +317,62 @@ fn validate(input: &DenoiseInput) -> Result<(usize, usize), DenoiseError> {
     }
     // Both fit: pixels ≤ MAX_PIXELS < 2^32.
     Ok((w as usize, h as usize))
+}
+
+/// The typical colours (log2 of their geometric mean) OIDN is given unscaled: its own exposure
+/// maps them to its networks' range. Below about 2⁻²⁷ (1e-8, the luminance its exposure ignores)
+/// it sees black and returns a floor of about 1.5·10⁻⁸, 150 times the mean of an image at
+/// 10⁻¹⁰; near 10³⁸ its sums overflow and it returns zeros (both measured with OIDN 2.5.1).
+const TYPICAL_LOG2: std::ops::RangeInclusive<f64> = -20.0..=20.0;
+
+/// log2 of the largest colour OIDN is given, after [`exposure`]: OIDN sums colours in `f32`
+/// (over 16×16 blocks, over the image's at most 2²⁶ pixels), which stays finite below 2¹²⁸
+/// when every value is at most 2¹⁰⁰.
+const MAX_LOG2: i32 = 100;
+
+/// The power of two the colour is multiplied by before OIDN (and the output divided by after):
+/// 1 when the geometric mean of the pixels' positive mean channels is within [`TYPICAL_LOG2`],
+/// else the one that brings it to 1, so that a scene lit at 10⁻³⁰ or at 10³⁸ denoises as at 1
+/// (a power of two scales `f32`s exactly). Refuses a colour whose brightest value would then
+/// be beyond 2^[`MAX_LOG2`]. `color` is sanitised (finite, at least 0).
+fn exposure(color: &[f32]) -> Result<f64, DenoiseError> {
+    let (mut log_sum, mut count, mut brightest) = (0.0f64, 0u64, 0.0f32);
+    for pixel in color.chunks_exact(3) {
+        let mean = (f64::from(pixel[0]) + f64::from(pixel[1]) + f64::from(pixel[2])) / 3.0;
+        if mean > 0.0 {
+            log_sum += mean.log2();
+            count += 1;
+        }
+        brightest = brightest.max(pixel[0]).max(pixel[1]).max(pixel[2]);
+    }
+    let typical = if count == 0 {
+        0.0
+    } else {
+        log_sum / count as f64
+    };
+    let exponent = if TYPICAL_LOG2.contains(&typical) {
+        0
+    } else {
+        -(typical.round() as i32)
+    };
+    let largest = f64::from(brightest).log2() + f64::from(exponent);
+    if largest > f64::from(MAX_LOG2) {
+        return Err(DenoiseError::BadInput(format!(
+            "the colour's brightest value, {brightest:e}, is 2^{:.0} times its typical value \
+            (the geometric mean of the pixels, {:e}): beyond the range the denoiser takes",
+            f64::from(brightest).log2() - typical,
+            2f64.powf(typical)
+        )));
+    }
+    Ok(2f64.powi(exponent))
+}
+
+/// Multiplies every value by `factor` (a power of two), in `f64` so that factors beyond
+/// `f32`'s range work; results beyond `f32::MAX` become `f32::MAX`.
+fn scale(values: &mut [f32], factor: f64) {
+    for v in values {
+        *v = (f64::from(*v) * factor).min(f64::from(f32::MAX)) as f32;
+    }
 }
 
 /// A copy of `values` with NaN and infinities replaced by 0 and the rest clamped to [lo, hi].

@@ -86,6 +86,9 @@ pub struct PartialMeta {
     /// Whether the partial carries the feature buffers ([`FORMAT`]; a [`FORMAT_2`] partial
     /// does not).
     pub features: bool,
+    /// The albedo layer's fixed-point shift: [`crate::film::ALBEDO_SHIFT`], or `shift` in a
+    /// partial written while the albedo took the colour's shift (still read and merged).
+    pub albedo_shift: i32,
 }
 
 impl PartialMeta {
@@ -112,8 +115,8 @@ impl PartialMeta {
 }
 
 /// The sums a partial holds, row-major from the top-left: the colour's, in units of 2⁻shift of
-/// its [`PartialMeta`], and the feature buffers' if it carries them (the albedo in the same
-/// units, the normal in those of [`crate::film::NORMAL_SHIFT`], as a film's).
+/// its [`PartialMeta`], and the feature buffers' if it carries them (the albedo in units of
+/// 2⁻`albedo_shift`, the normal in those of [`crate::film::NORMAL_SHIFT`], as a film's).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Sums {
     /// Sums of the colour samples.
@@ -128,7 +131,9 @@ impl Sums {
         let pixels = meta.pixels();
         Self {
             colour: vec![Pixel::ZERO; pixels],
-            features: meta.features.then(|| Features::new(pixels)),
+            features: meta
+                .features
+                .then(|| Features::with_albedo_shift(pixels, meta.albedo_shift)),
         }
     }
 }
@@ -402,6 +407,13 @@ pub fn plan_merge(paths: &[PathBuf], expect_end: Option<u32>) -> Result<MergePla
                 "fraction bits",
                 meta.shift.to_string(),
                 first.shift.to_string(),
+            );
+        }
+        if meta.features && first.features && meta.albedo_shift != first.albedo_shift {
+            return differs(
+                "albedo fraction bits",
+                meta.albedo_shift.to_string(),
+                first.albedo_shift.to_string(),
             );
         }
         if let Some((key, mine, theirs)) = setting_difference(&meta.settings, &first.settings) {

@@ -17,7 +17,7 @@ use super::{
     FORMAT, FORMAT_1, FORMAT_2, LAYERS, MAX_SCENE_NAME, PartialError, PartialMeta, SUM_CHANNELS,
     Sums, check_settings, error, normalize, parse_range,
 };
-use crate::film::{NORMAL_SHIFT, Pixel};
+use crate::film::{ALBEDO_SHIFT, NORMAL_SHIFT, Pixel};
 use crate::scene::format::{MAX_SPP, SettingsDesc};
 
 fn open(path: &Path) -> Result<exr::block::reader::Reader<BufReader<File>>, PartialError> {
@@ -180,9 +180,16 @@ fn meta_of(path: &Path, headers: &[Header]) -> Result<PartialMeta, PartialError>
             ));
         }
     };
-    // The feature layers: the colour's size, each in its own fixed point (the albedo in the
-    // colour's, the normal in the film's normal scale), as their `rondo.fraction_bits` say.
-    for ((h, name), expected) in headers.iter().zip(names).skip(1).zip([shift, NORMAL_SHIFT]) {
+    // The feature layers: the colour's size, each in its own fixed point, as their
+    // `rondo.fraction_bits` say: the albedo in ALBEDO_SHIFT's (or in the colour's, as partials
+    // were written before the albedo had a scale of its own), the normal in NORMAL_SHIFT's.
+    let mut albedo_shift = ALBEDO_SHIFT;
+    for ((h, name), expected) in headers
+        .iter()
+        .zip(names)
+        .skip(1)
+        .zip([ALBEDO_SHIFT, NORMAL_SHIFT])
+    {
         if h.layer_size != size {
             return Err(error(
                 path,
@@ -201,11 +208,18 @@ fn meta_of(path: &Path, headers: &[Header]) -> Result<PartialMeta, PartialError>
             Some(AttributeValue::Text(t)) => t.to_string(),
             _ => String::new(),
         };
-        if bits != expected.to_string() {
+        if *name == LAYERS[1] && bits == shift.to_string() {
+            albedo_shift = shift;
+        } else if bits != expected.to_string() {
+            let colours = if *name == LAYERS[1] {
+                format!(" (or the colour's {shift:?})")
+            } else {
+                String::new()
+            };
             return Err(error(
                 path,
                 format!(
-                    "layer {name}: rondo.fraction_bits {}, expected {expected:?}",
+                    "layer {name}: rondo.fraction_bits {}, expected {expected:?}{colours}",
                     shown(&bits)
                 ),
             ));
@@ -221,6 +235,7 @@ fn meta_of(path: &Path, headers: &[Header]) -> Result<PartialMeta, PartialError>
         shift,
         settings,
         features,
+        albedo_shift,
     })
 }
 

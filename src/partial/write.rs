@@ -71,7 +71,8 @@ pub fn write_partial(
     other.insert(Text::from("rondo.scene"), text(&scene));
     // Per layer: its sums, their fixed point and its attributes. A layer of a multi-layer file
     // needs a name; a feature layer says its own fixed point.
-    let shifts = [meta.shift, meta.shift, NORMAL_SHIFT];
+    let albedo_shift = features.map_or(meta.albedo_shift, |f| f.albedo_shift);
+    let shifts = [meta.shift, albedo_shift, NORMAL_SHIFT];
     let layers: Layers<_> = buffers
         .into_iter()
         .zip(shifts)
