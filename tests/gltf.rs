@@ -471,6 +471,8 @@ fn images_on_one_buffer_view_share_its_bytes() {
         .map(|image| match image {
             GltfImage::Bytes { bytes, .. } => {
                 assert_eq!(&bytes[..], &[7; 1000][..]);
+                // Only the image's bytes outlive the read, not the file's JSON and mesh data.
+                assert_eq!(bytes.allocation_len(), 1000);
                 bytes.identity()
             }
             other => panic!("{other:?}"),

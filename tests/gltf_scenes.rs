@@ -598,6 +598,22 @@ fn generated_names_are_unique_whatever_the_nodes_are_called() {
     // Every name appears once; the file's 9 placed primitives give 9 entities.
     let distinct: std::collections::HashSet<&String> = names.iter().collect();
     assert_eq!(distinct.len(), 9);
+
+    // A material named "#1" beside unnamed material 1: two materials, not one under one name.
+    let mut model = two_meshes();
+    model["materials"][0]["name"] = json!("#1");
+    std::fs::write(dir.join("m.gltf"), model.to_string()).expect("write");
+    let path = write_scene(&dir, "scene.ron", &placing("m.gltf", "{}"));
+    let scene = load_scene(&path, &mut AssetCache::default()).unwrap_or_else(|e| panic!("{e}"));
+    let metallic = |name: &str| {
+        let e = scene.entities.iter().find(|e| e.name == name).expect(name);
+        match &scene.materials[&e.material] {
+            Material::Pbr { metallic, .. } => *metallic,
+            other => panic!("{other:?}"),
+        }
+    };
+    // Node "a" uses material 0 (metallic 0.25), "multi"'s first primitive material 1 (0).
+    assert_eq!((metallic("g/a"), metallic("g/multi/0")), (0.25, 0.0));
 }
 
 #[test]

@@ -5,7 +5,9 @@
 //! The `gltf` crate parses and validates the JSON (every index in range); the GLB container,
 //! buffers (data URIs, external files through the caller) and accessors (strides, normalised
 //! integers, sparse substitution) are read here, each bounded by the data it reads before it
-//! allocates, so a hostile file is an error, never a panic.
+//! allocates, so a hostile file is an error, never a panic. Each buffer source (the `.glb`'s
+//! binary chunk, for buffer 0 only; a data URI; an external file) is held once, however many
+//! buffers and images name it, and all of them together are bounded by [`MAX_BUFFER_BYTES`].
 //!
 //! Supported: triangles (indexed or not; strips and fans converted), `POSITION`, `NORMAL` (flat
 //! shading when absent: [`MeshData::normals`] is `None`), `TEXCOORD_0` (float or normalised
@@ -214,6 +216,11 @@ impl SharedBytes {
         })
     }
 
+    /// The size of the allocation these bytes keep alive (they may be a part of it).
+    pub fn allocation_len(&self) -> usize {
+        self.data.len()
+    }
+
     /// What identifies these bytes without reading them: the allocation and the range in it
     /// (two images on one buffer view have the same identity).
     pub fn identity(&self) -> (usize, usize, usize) {
@@ -419,6 +426,7 @@ fn read(
             (None, None) => return Err(format!("image {i}: neither a uri nor a bufferView")),
         });
     }
+    detach_images(&mut scene.images);
     for m in doc.materials() {
         scene.materials.push(read_material(&m)?);
     }
@@ -442,6 +450,39 @@ fn read(
         }
     }
     Ok(scene)
+}
+
+/// Copies out, once per buffer, the span that its images' views cover (at most the buffer), and
+/// points the images into it: images outlive the read, the rest of a buffer (mesh data, decoded
+/// by then, and a `.glb`'s JSON) is not held with them.
+fn detach_images(images: &mut [GltfImage]) {
+    let mut spans: HashMap<usize, Range<usize>> = HashMap::new();
+    for image in images.iter() {
+        if let GltfImage::Bytes { bytes, .. } = image {
+            let span = spans
+                .entry(Arc::as_ptr(&bytes.data) as usize)
+                .or_insert(bytes.range.clone());
+            *span = span.start.min(bytes.range.start)..span.end.max(bytes.range.end);
+        }
+    }
+    let mut copies: HashMap<usize, SharedBytes> = HashMap::new();
+    for image in images.iter_mut() {
+        if let GltfImage::Bytes { bytes, .. } = image {
+            let id = Arc::as_ptr(&bytes.data) as usize;
+            let span = spans[&id].clone();
+            if span.len() == bytes.data.len() {
+                continue;
+            }
+            let copy = copies
+                .entry(id)
+                .or_insert_with(|| SharedBytes::whole(Arc::new(bytes.data[span.clone()].to_vec())));
+            let start = bytes.range.start - span.start;
+            *bytes = SharedBytes {
+                data: copy.data.clone(),
+                range: start..start + bytes.range.len(),
+            };
+        }
+    }
 }
 
 /// Validates the document with the `gltf` crate (so that its accessors never index out of
