@@ -10,6 +10,8 @@
 # Usage: scripts/fetch-oidn.sh [WHEEL]   (WHEEL: an already downloaded copy of the wheel)
 # Needs: python3 with pip (python3-pip on Debian). Linux x86_64 only.
 set -euo pipefail
+# rondo refuses a library folder or file others can write: make none, whatever the caller's umask.
+umask 022
 
 VERSION=2.5.1
 WHEEL_NAME=pyoidn-2.5.1.0-py3-none-manylinux2014_x86_64.whl

@@ -1,7 +1,7 @@
 //! The denoiser (src/denoise/): Open Image Denoise loaded at run time.
 //!
 //! The tests that need the library find it the way rondo does (`RONDO_OIDN_DIR`, else
-//! `.oidn/lib` above the test binary, i.e. in the repository, else the system); without it they
+//! `.oidn/lib` in the repository, where scripts/fetch-oidn.sh puts it); without it they
 //! print why and pass, unless `RONDO_REQUIRE_OIDN=1` (as in CI, after scripts/fetch-oidn.sh),
 //! when they fail.
 
@@ -340,6 +340,112 @@ fn a_file_that_is_not_a_library_is_unavailable_with_the_loader_error() {
         message.contains("libOpenImageDenoise.so.2 could not be loaded"),
         "{message}"
     );
+    // The loader's own reason (dlerror), which glibc gives for a file shorter than an ELF
+    // header.
+    assert!(message.contains("file too short"), "{message}");
+}
+
+/// A folder others can write, or one of its libraries, is refused before anything is loaded:
+/// the refusal names the path and the reason, not a loader error.
+#[test]
+fn a_folder_or_library_others_can_write_is_refused() {
+    use std::os::unix::fs::PermissionsExt;
+    let set_mode = |path: &Path, mode: u32| {
+        std::fs::set_permissions(path, std::fs::Permissions::from_mode(mode)).expect("chmod");
+    };
+    let refused = |dir: &Path, path: &Path, why: &str| {
+        let err = Denoiser::load_from(dir).expect_err("refused");
+        let message = err.to_string();
+        assert!(
+            message.contains(&format!("{}: refused: {why}", path.display())),
+            "{message}"
+        );
+        assert!(!message.contains("could not be loaded"), "{message}");
+    };
+    let dir = common::temp_dir("oidn-writable");
+    let lib = dir.join("libOpenImageDenoise.so.2");
+    std::fs::write(&lib, "not a library").expect("write");
+    let dir = dir.canonicalize().expect("canonical");
+    let lib = dir.join("libOpenImageDenoise.so.2");
+    set_mode(&lib, 0o755);
+    for mode in [0o777, 0o775, 0o1777] {
+        set_mode(&dir, mode);
+        refused(&dir, &dir, "writable by others");
+    }
+    set_mode(&dir, 0o755);
+    for mode in [0o757, 0o775] {
+        set_mode(&lib, mode);
+        refused(&dir, &lib, "writable by others");
+    }
+    // A library of the folder that OIDN loads itself (its CPU device) is checked too.
+    set_mode(&lib, 0o755);
+    let device = dir.join("libOpenImageDenoise_device_cpu.so.2.5.1");
+    std::fs::write(&device, "not a library").expect("write");
+    set_mode(&device, 0o777);
+    refused(&dir, &device, "writable by others");
+    set_mode(&device, 0o755);
+    // Owned by another user (only root can make such a file here).
+    if runs_as_root() {
+        std::os::unix::fs::chown(&device, Some(65534), None).expect("chown");
+        refused(&dir, &device, "owned by user 65534");
+        std::os::unix::fs::chown(&device, Some(0), None).expect("chown");
+    } else {
+        eprintln!("skipped the owner check: only root can give a file to another user");
+    }
+    // A folder above the library's that others can write lets them swap it: refused, unless
+    // it has the sticky bit (as the system's temporary folder).
+    let parent = common::temp_dir("oidn-writable-parent");
+    let inner = parent.join("lib");
+    std::fs::create_dir(&inner).expect("mkdir");
+    std::fs::write(inner.join("libOpenImageDenoise.so.2"), "not a library").expect("write");
+    let parent_real = parent.canonicalize().expect("canonical");
+    set_mode(&parent_real, 0o777);
+    refused(&inner, &parent_real, "writable by others");
+    set_mode(&parent_real, 0o1777);
+    let err = Denoiser::load_from(&inner).expect_err("not a library");
+    assert!(err.to_string().contains("could not be loaded"), "{err}");
+    set_mode(&parent_real, 0o700);
+}
+
+/// Whether this process runs as root (the owner of a file this process creates).
+fn runs_as_root() -> bool {
+    use std::os::unix::fs::MetadataExt;
+    let dir = common::temp_dir("oidn-whoami");
+    std::fs::metadata(dir.path()).is_ok_and(|m| m.uid() == 0)
+}
+
+/// A rondo binary placed below the system's temporary folder, beside a planted
+/// `.oidn/lib/libOpenImageDenoise.so.2` in a folder above it, does not look there: a denoised
+/// render uses the project's library (or says where it looked), never the planted one.
+#[test]
+fn a_library_planted_above_the_executable_is_not_searched() {
+    let root = common::temp_dir("oidn-planted");
+    let planted = root.join(".oidn").join("lib");
+    std::fs::create_dir_all(&planted).expect("mkdir");
+    std::fs::write(planted.join("libOpenImageDenoise.so.2"), "planted").expect("write");
+    let bin = root.join("bin");
+    std::fs::create_dir(&bin).expect("mkdir");
+    let rondo = bin.join("rondo");
+    std::fs::copy(env!("CARGO_BIN_EXE_rondo"), &rondo).expect("copy rondo");
+    let scene = common::scenes_dir().join("cornell.ron");
+    let out = root.join("out.png");
+    let ran = Command::new(&rondo)
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&out)
+        .args(["--spp", "1", "--width", "8", "--height", "8", "--denoise"])
+        .env_remove("RONDO_OIDN_DIR")
+        .output()
+        .expect("run rondo");
+    let stderr = String::from_utf8_lossy(&ran.stderr);
+    assert!(!stderr.contains(&*root.to_string_lossy()), "{stderr}");
+    if denoiser().is_some() {
+        assert!(ran.status.success(), "{stderr}");
+    } else {
+        let fetched = Path::new(env!("CARGO_MANIFEST_DIR")).join(".oidn/lib");
+        assert!(stderr.contains(&*fetched.to_string_lossy()), "{stderr}");
+    }
 }
 
 /// Loads the denoiser as rondo does and denoises a small image with it; prints the outcome for

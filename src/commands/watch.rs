@@ -46,8 +46,8 @@ pub fn run(
             eprintln!("viewer: {}", viewer.url());
             watch.set_observer(feed.observer());
             watch.set_progress(feed.progress_bar());
-            // Without a flag or a scene setting, a missing denoiser is one warning (from the
-            // denoise thread) and the viewer shows the raw images.
+            // Denoised passes reach the viewer only when a denoise is asked for (`--denoise` or
+            // the scene's setting): the library is loaded for nothing else.
             watch.set_denoise_sink(feed.denoise_sink());
             Some(viewer)
         }

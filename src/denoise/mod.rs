@@ -1,15 +1,12 @@
 //! Denoising with Intel Open Image Denoise (OIDN) 2.x, loaded at run time.
 //!
 //! rondo does not link OIDN: the default build stays pure Rust, and the denoiser is available
-//! when the library is found at run time. `scripts/fetch-oidn.sh` fetches Intel's prebuilt CPU
-//! libraries (from the pinned, checksummed PyPI wheel `pyoidn`) into `.oidn/lib` in the
-//! repository. [`Denoiser::load`] looks, in order:
-//!
-//! 1. in the directory named by the environment variable `RONDO_OIDN_DIR`, if it is set (and
-//!    then only there: an explicit choice is never silently replaced by another copy);
-//! 2. in `.oidn/lib` beside the running executable and in each of its ancestors, so that
-//!    `target/release/rondo` (and the test binaries) find `<repository>/.oidn/lib`;
-//! 3. with the system loader's search for `libOpenImageDenoise.so.2`.
+//! when the library is found at run time, and loads it only when a denoised image is asked
+//! for. `scripts/fetch-oidn.sh` fetches Intel's prebuilt CPU libraries (from the pinned,
+//! checksummed PyPI wheel `pyoidn`) into `.oidn/lib` in the repository. [`Denoiser::load`]
+//! looks in the directory named by the environment variable `RONDO_OIDN_DIR` if it is set, else
+//! in that `.oidn/lib` of the project rondo was built from, and nowhere else; it refuses a
+//! folder or library another user could change (`location.rs`).
 //!
 //! The filter is OIDN's `RT` (ray-traced images) on HDR colour, optionally guided by the first
 //! hit's albedo and shading normal, on the CPU device. The raw image is never changed: the
@@ -18,11 +15,11 @@
 //! On one machine the same input gives the same output bits (`tests/denoise.rs` checks it);
 //! other CPUs may run other kernels (AVX2, AVX-512) and differ in the last bits.
 
+mod location;
 mod oidn;
 
-use std::ffi::OsStr;
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::{Mutex, OnceLock};
 
@@ -135,31 +132,6 @@ impl fmt::Debug for Denoiser {
     }
 }
 
-/// One place the library is looked for.
-#[derive(Debug, Clone, PartialEq, Eq)]
-enum Candidate {
-    /// A directory that may hold `libOpenImageDenoise.so.2`.
-    Dir(PathBuf),
-    /// The system loader's search.
-    System,
-}
-
-/// Where [`Denoiser::load`] looks, in order, given the value of [`DIR_VARIABLE`] and the path
-/// of the running executable (see the module documentation).
-fn search_path(dir_variable: Option<&OsStr>, executable: Option<&Path>) -> Vec<Candidate> {
-    if let Some(dir) = dir_variable.filter(|d| !d.is_empty()) {
-        return vec![Candidate::Dir(PathBuf::from(dir))];
-    }
-    let mut candidates: Vec<Candidate> = executable
-        .and_then(Path::parent)
-        .into_iter()
-        .flat_map(Path::ancestors)
-        .map(|dir| Candidate::Dir(dir.join(".oidn").join("lib")))
-        .collect();
-    candidates.push(Candidate::System);
-    candidates
-}
-
 impl Denoiser {
     /// The process's denoiser, loaded by the first call (see [`Denoiser::load`]); later calls
     /// return the same denoiser, or the same error.
@@ -171,56 +143,42 @@ impl Denoiser {
             .map_err(Clone::clone)
     }
 
-    /// Loads the library from the first place it is found (see the module documentation) and
-    /// creates its CPU device.
+    /// Loads the library from the folder named by `RONDO_OIDN_DIR`, or else from `.oidn/lib`
+    /// in the project rondo was built from (see the module documentation), and creates its CPU
+    /// device.
     pub fn load() -> Result<Denoiser, DenoiseError> {
         let variable = std::env::var_os(DIR_VARIABLE);
-        let executable = std::env::current_exe().ok();
-        Denoiser::load_first(&search_path(variable.as_deref(), executable.as_deref()))
+        Denoiser::load_from(&location::search_path(variable.as_deref()))
     }
 
     /// Loads the library from `dir` only, which holds `libOpenImageDenoise.so.2` (and, for the
-    /// wheel's libraries, the core, the CPU device module and TBB beside it).
+    /// wheel's libraries, the core, the CPU device module and TBB beside it). The folder, the
+    /// folders above it and the libraries must be safe from other users (see the module
+    /// documentation); a refusal or a load error says which path and why (the loader's
+    /// message included).
     pub fn load_from(dir: &Path) -> Result<Denoiser, DenoiseError> {
-        Denoiser::load_first(&[Candidate::Dir(dir.to_path_buf())])
-    }
-
-    /// Loads from the first candidate that has the library; a library that is found but fails
-    /// to load ends the search with its error.
-    fn load_first(candidates: &[Candidate]) -> Result<Denoiser, DenoiseError> {
-        let mut looked = Vec::new();
-        for candidate in candidates {
-            let (dir, location) = match candidate {
-                Candidate::Dir(dir) => {
-                    let file = dir.join(oidn::LIBRARY_NAME);
-                    if !file.is_file() {
-                        looked.push(dir.display().to_string());
-                        continue;
-                    }
-                    (Some(dir.as_path()), file.display().to_string())
-                }
-                Candidate::System => (None, oidn::LIBRARY_NAME.to_string()),
-            };
-            return match oidn::Device::new(dir) {
-                Ok(device) => Ok(Denoiser {
-                    version: device.version(),
-                    device: Mutex::new(device),
-                    location,
-                }),
-                Err(_) if dir.is_none() => {
-                    looked.push(format!("the system library path ({})", oidn::LIBRARY_NAME));
-                    break;
-                }
-                Err(e) => Err(DenoiseError::Unavailable(format!(
-                    "{location} could not be loaded: {e}"
-                ))),
-            };
+        let file = dir.join(oidn::LIBRARY_NAME);
+        if !file.is_file() {
+            return Err(DenoiseError::Unavailable(format!(
+                "{} not found in {}; {HOW_TO_GET}",
+                oidn::LIBRARY_NAME,
+                dir.display()
+            )));
         }
-        Err(DenoiseError::Unavailable(format!(
-            "{} not found in {}; {HOW_TO_GET}",
-            oidn::LIBRARY_NAME,
-            looked.join(", ")
-        )))
+        let real = location::trusted(dir).map_err(|why| {
+            DenoiseError::Unavailable(format!("{} not loaded: {why}", file.display()))
+        })?;
+        let location = file.display().to_string();
+        match oidn::Device::new(&real) {
+            Ok(device) => Ok(Denoiser {
+                version: device.version(),
+                device: Mutex::new(device),
+                location,
+            }),
+            Err(e) => Err(DenoiseError::Unavailable(format!(
+                "{location} could not be loaded: {e}"
+            ))),
+        }
     }
 
     /// The OIDN version, as `major.minor.patch`.
@@ -447,32 +405,5 @@ mod tests {
     fn the_denoiser_can_be_shared_between_threads() {
         fn send_sync<T: Send + Sync>() {}
         send_sync::<Denoiser>();
-    }
-
-    #[test]
-    fn search_path_is_the_variable_alone_when_set() {
-        let exe = Path::new("/repo/target/release/rondo");
-        assert_eq!(
-            search_path(Some(OsStr::new("/opt/oidn")), Some(exe)),
-            [Candidate::Dir(PathBuf::from("/opt/oidn"))]
-        );
-    }
-
-    #[test]
-    fn search_path_walks_up_from_the_executable_then_asks_the_system() {
-        let exe = Path::new("/repo/target/release/rondo");
-        let expected: Vec<Candidate> = [
-            "/repo/target/release/.oidn/lib",
-            "/repo/target/.oidn/lib",
-            "/repo/.oidn/lib",
-            "/.oidn/lib",
-        ]
-        .into_iter()
-        .map(|d| Candidate::Dir(PathBuf::from(d)))
-        .chain([Candidate::System])
-        .collect();
-        assert_eq!(search_path(None, Some(exe)), expected);
-        assert_eq!(search_path(Some(OsStr::new("")), Some(exe)), expected);
-        assert_eq!(search_path(None, None), [Candidate::System]);
     }
 }

@@ -67,36 +67,30 @@ struct Functions {
     release_filter: unsafe extern "C" fn(RawFilter),
 }
 
-/// Loads OIDN from `dir` (which holds [`LIBRARY_NAME`]), or with the system loader's search when
-/// `dir` is `None`. When loading from a directory, TBB and the core library found there are loaded
-/// first by full path: the wheel's libraries find each other through `RPATH $ORIGIN/../lib`,
+/// Loads OIDN from `dir` (which holds [`LIBRARY_NAME`]), by full paths only (never the system
+/// loader's search). TBB and the core library found there are loaded first: the wheel's libraries find each other through `RPATH $ORIGIN/../lib`,
 /// which only works in a directory named `lib`, and the dynamic linker reuses an already loaded
 /// library for a dependency of the same soname. The CPU device module is loaded by OIDN itself
 /// from the core library's directory.
 ///
 /// The libraries are never unloaded: OIDN's TBB thread pool outlives any one device, and
 /// unloading code its threads may still run would crash.
-fn open(dir: Option<&Path>) -> Result<Functions, String> {
+fn open(dir: &Path) -> Result<Functions, String> {
     let load = |path: &Path| {
         // SAFETY: loading runs the library's initialisers; OIDN's and TBB's only set up their
         // own state.
         unsafe { Library::new(path) }
             .map(ManuallyDrop::new)
-            .map_err(|e| e.to_string())
+            .map_err(|e| loader_error(&e))
     };
-    let main = match dir {
-        Some(dir) => {
-            let tbb = dir.join(TBB_NAME);
-            if tbb.is_file() {
-                load(&tbb)?;
-            }
-            if let Some(core) = find_core(dir) {
-                load(&core)?;
-            }
-            load(&dir.join(LIBRARY_NAME))?
-        }
-        None => load(Path::new(LIBRARY_NAME))?,
-    };
+    let tbb = dir.join(TBB_NAME);
+    if tbb.is_file() {
+        load(&tbb)?;
+    }
+    if let Some(core) = find_core(dir) {
+        load(&core)?;
+    }
+    let main = load(&dir.join(LIBRARY_NAME))?;
     Ok(Functions {
         new_device: symbol(&main, "oidnNewDevice")?,
         commit_device: symbol(&main, "oidnCommitDevice")?,
@@ -124,7 +118,16 @@ fn symbol<T: Copy>(library: &Library, name: &str) -> Result<T, String> {
     // the pointer stays valid.
     unsafe { library.get::<T>(name.as_bytes()) }
         .map(|s| *s)
-        .map_err(|e| format!("{e} (is this Open Image Denoise 2.x?)"))
+        .map_err(|e| format!("{} (is this Open Image Denoise 2.x?)", loader_error(&e)))
+}
+
+/// libloading's error with the loader's own message (`dlerror()`), which its `Display` leaves
+/// to the error's source.
+fn loader_error(e: &libloading::Error) -> String {
+    match std::error::Error::source(e) {
+        Some(source) => format!("{e}: {source}"),
+        None => e.to_string(),
+    }
 }
 
 /// The core library in `dir`, whose file name carries the full version.
@@ -173,7 +176,7 @@ unsafe impl Send for Device {}
 
 impl Device {
     /// Loads the library (see [`open`]) and creates and commits a CPU device.
-    pub(super) fn new(dir: Option<&Path>) -> Result<Device, String> {
+    pub(super) fn new(dir: &Path) -> Result<Device, String> {
         let f = open(dir)?;
         // SAFETY: the functions come from a loaded OIDN 2.x; a null device is checked before use
         // (oidnGetDeviceError accepts null for errors of device creation).

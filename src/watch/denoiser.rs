@@ -28,14 +28,13 @@ use crate::layers::{Layer, write_layers};
 /// high quality's error is lower (0.0043 against 0.0050 at 8 spp; BENCHMARKS.md).
 pub const HIGH_QUALITY_FROM_SPP: u32 = 8;
 
-/// What a watch denoises, from `--denoise` / `--no-denoise` or the scene's `denoise`.
+/// What a watch denoises, from `--denoise` / `--no-denoise` or the scene's `denoise`: the
+/// library is loaded only when asked for, so a viewer alone never loads it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(super) enum Denoising {
     /// Nothing.
     #[default]
     Off,
-    /// The passes the viewer shows; the output file stays raw.
-    Viewer,
     /// The viewer's passes and the output file.
     Output,
 }

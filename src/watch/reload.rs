@@ -150,7 +150,6 @@ impl Watch {
         self.denoising = match self.options.denoise.or(info.settings.denoise) {
             Some(false) => Denoising::Off,
             Some(true) => Denoising::Output,
-            None if self.denoise_sink.is_some() => Denoising::Viewer,
             None => Denoising::Off,
         };
         self.renderer.set_features(self.denoising != Denoising::Off);
