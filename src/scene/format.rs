@@ -364,7 +364,7 @@ pub struct SettingsDesc {
     pub sampler: SamplerKind,
     /// Denoise the image: `Some(true)` writes a denoised image (`render`, and the image `watch`
     /// writes), `Some(false)` turns the denoiser off everywhere (also in `watch`'s viewer),
-    /// `None` (absent) denoises what only the viewer shows. The raw sums are never replaced.
+    /// `None` (absent) denoises nothing unless `--denoise` asks. The raw sums are never replaced.
     pub denoise: Option<bool>,
 }
 
