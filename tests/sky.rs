@@ -355,3 +355,32 @@ fn background_and_environment_are_exclusive_and_bad_suns_are_refused() {
         );
     }
 }
+
+#[test]
+fn an_environment_strength_that_overflows_its_texels_is_refused() {
+    // A texel of 1.7e38 is finite; 1e38 times it is not, and every sample would be dropped.
+    let dir = temp_dir("sky-overflow");
+    write_map(&dir, "hot.exr", 4, 2, |x, y| {
+        if (x, y) == (1, 0) { 1.7e38 } else { 1.0 }
+    });
+    let load = |strength: &str| {
+        let scene = write_scene(
+            &dir,
+            "hot.ron",
+            &format!(
+                "Scene(camera: Camera(position: (0, 0, -3), look_at: (0, 0, 0)), settings: Settings(environment: Environment(path: \"hot.exr\", strength: {strength})))"
+            ),
+        );
+        let mut r = rondo::Renderer::new(Some(1), rondo::PassPlan::Single).expect("pool");
+        r.load(&scene).map_err(|e| e.to_string())
+    };
+    let e = load("1e38").expect_err("overflowing strength refused");
+    assert!(
+        e.contains("hot.ron:1:")
+            && e.contains("settings.environment")
+            && e.contains("hot.exr")
+            && e.contains("too large to represent"),
+        "{e}"
+    );
+    load("1").expect("the map itself is finite");
+}

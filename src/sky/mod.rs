@@ -37,6 +37,30 @@ impl PartialEq for EnvironmentLight {
 }
 
 impl EnvironmentLight {
+    /// `map` scaled by `strength` (finite, ≥ 0) and turned by `world_from_map`. Refused if
+    /// the scaled radiance of a texel, or the light's power per unit of the scene's squared
+    /// radius, is too large for an `f32`: every sample would be dropped as non-finite.
+    pub fn new(
+        map: Arc<EnvironmentMap>,
+        strength: f32,
+        world_from_map: Mat3,
+    ) -> Result<Self, String> {
+        let brightest = strength * map.max();
+        let power = 4.0 * std::f32::consts::PI * strength * map.mean().max_element();
+        if !brightest.is_finite() || !power.is_finite() {
+            return Err(format!(
+                "strength {strength:e} times the map's brightest texel ({:e}) is too large to \
+                 represent",
+                map.max()
+            ));
+        }
+        Ok(Self {
+            map,
+            strength,
+            world_from_map,
+        })
+    }
+
     /// Radiance along world direction `d` and the density of [`DistantLight::sample`] there,
     /// from one texel lookup.
     #[inline]
@@ -155,5 +179,23 @@ mod tests {
             .sample(Vec2::new(0.3, 0.6), || Vec2::new(0.5, 0.5))
             .expect("lit");
         assert!(d.z < -0.9 && light.lookup(d).1 > 0.0, "{d}");
+    }
+
+    #[test]
+    fn a_strength_that_overflows_the_radiance_is_refused() {
+        // One texel of 1.7e38: finite on its own, infinite at strength 1e38 (and at 3).
+        let mut pixels = vec![0.5f32; 3 * 8 * 4];
+        pixels[3 * 9..3 * 10].copy_from_slice(&[1.7e38; 3]);
+        let map = Arc::new(EnvironmentMap::from_linear(8, 4, &pixels).expect("map"));
+        for strength in [1e38, 3.0] {
+            let e = EnvironmentLight::new(map.clone(), strength, Mat3::IDENTITY)
+                .expect_err("overflowing strength refused");
+            assert!(e.contains("too large to represent"), "{e}");
+        }
+        let light = EnvironmentLight::new(map, 1.5, Mat3::IDENTITY).expect("finite radiance");
+        assert_eq!(
+            DistantLight::Environment(light).max_radiance(),
+            1.5 * 1.7e38
+        );
     }
 }

@@ -346,18 +346,15 @@ impl Expander<'_> {
             Some(env) => {
                 let full = file.dir().join(&env.path);
                 self.depend(&full);
-                let map = self.assets.environment(&full).map_err(|e| {
+                let fail = |e: String| {
                     file.error(
                         Anchor::Quoted(&env.path),
                         None,
                         format!("settings.environment: {}: {e}", full.display()),
                     )
-                })?;
-                Some(EnvironmentLight {
-                    map,
-                    strength: env.strength,
-                    world_from_map: env.world_from_map(),
-                })
+                };
+                let map = self.assets.environment(&full).map_err(fail)?;
+                Some(EnvironmentLight::new(map, env.strength, env.world_from_map()).map_err(fail)?)
             }
         };
         let sun = settings
