@@ -1,7 +1,7 @@
 //! An 8-wide BVH collapsed from obvhs's binary BVH, with robust closure traversal.
 //!
 //! The binary tree is obvhs's (PLOC + reinsertion + leaf collapse), with the clustering of
-//! [`ploc`], which cannot degrade on coincident boxes; [`Bvh::build`] then
+//! the `ploc` submodule, which cannot degrade on coincident boxes; [`Bvh::build`] then
 //! collapses it into nodes of up to eight children (each inner node absorbs the children of its
 //! largest inner children, as in Wald et al.'s "Getting Rid of Packets", 2008), whose boxes are
 //! stored lane by lane so one call of [`RayQuery::enter_boxes`] tests all eight (two SIMD slab
