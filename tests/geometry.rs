@@ -161,6 +161,52 @@ fn bvh_closest_hit_equals_brute_force() {
 }
 
 #[test]
+fn coincident_triangles_and_concentric_spheres_hit_as_brute_force() {
+    // Boxes that coincide or nest are where clustering builds degenerate; the tree over them must
+    // still hold every primitive where a ray finds it.
+    let mut prims = Vec::new();
+    for i in 0..3_000u32 {
+        let p = [
+            Vec3::new(-2.0, 0.0, 1.0),
+            Vec3::new(2.0, 0.5, 1.0),
+            Vec3::new(0.0, 3.0, 1.5),
+        ];
+        let uv = [Vec2::ZERO; 3];
+        prims.push((i, Primitive::Triangle { p, uv }));
+        let (center, radius) = (Vec3::new(0.5, 1.0, -4.0), 0.5 + i as f32 * 1e-3);
+        let frame = glam::Mat3::IDENTITY;
+        prims.push((
+            i,
+            Primitive::Sphere {
+                center,
+                radius,
+                frame,
+            },
+        ));
+    }
+    let g = Geometry::build(&prims);
+    let mut rng = Rng::new(31, 3);
+    let mut hits = 0;
+    for _ in 0..2_000 {
+        let origin =
+            Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 20.0 - Vec3::splat(10.0);
+        let ray = Ray::new(origin, random_unit(&mut rng));
+        let (fast, slow) = (
+            g.intersect(&ray, f32::INFINITY),
+            g.intersect_brute_force(&ray, f32::INFINITY),
+        );
+        assert_eq!(
+            fast.map(|h| (h.t, h.kind)),
+            slow.map(|h| (h.t, h.kind)),
+            "{ray:?}"
+        );
+        assert_eq!(g.occluded(&ray, f32::INFINITY), slow.is_some());
+        hits += usize::from(slow.is_some());
+    }
+    assert!(hits > 100, "{hits} rays of 2,000 hit anything");
+}
+
+#[test]
 fn axis_aligned_rays_agree_with_brute_force() {
     let g = random_scene(300, false, 3);
     let mut rng = Rng::new(5, 6);
