@@ -788,13 +788,6 @@ mod tests {
 
     #[test]
     fn the_tree_is_obvhs_for_boxes_of_real_scenes() {
-        let mesh = crate::scene::mesh::load_obj(std::path::Path::new("scenes/meshes/bunny.obj"))
-            .expect("the bunny");
-        let bunny: Vec<Bounds> = mesh
-            .triangles
-            .iter()
-            .map(|t| triangle_bounds(t.map(|i| mesh.positions[i as usize])))
-            .collect();
         // A grid of equal boxes, whose union areas tie between neighbours.
         let grid: Vec<Bounds> = (0..1000)
             .map(|i| {
@@ -805,7 +798,6 @@ mod tests {
         for (name, boxes) in [
             ("random", random_boxes_and_rays(1000).0),
             ("grid", grid),
-            ("bunny", bunny),
             ("big mesh", big_mesh_boxes_and_rays().0),
         ] {
             let expected = obvhs_build(&boxes);
