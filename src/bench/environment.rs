@@ -1,4 +1,4 @@
-//! `rondo bench environment`: load time and memory of an environment map (issue 22 asks for a
+//! `rondo bench environment`: load time and memory of an environment map (the target: a
 //! 4096 × 2048 map loaded and built in at most 0.5 s, in at most 16 bytes per texel).
 //!
 //! A sky of the requested size (a gradient, a darker ground and a small sun of 2·10⁴ times the

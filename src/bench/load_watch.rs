@@ -1,5 +1,5 @@
 //! The edits of the watch benchmarks (`rondo bench watch`, `rondo bench load --watch-sizes`):
-//! the kinds of edit of issue 24's table, found in any scene's text.
+//! the kinds of edit a user makes (a material, a move, one entity), found in any scene's text.
 //!
 //! An edit is the scene's text with one thing changed in place: a material's colour, a small
 //! sphere's centre (or, without spheres, an entity's translation), a mesh entity's translation,

@@ -35,8 +35,7 @@ const WIDTH: usize = 8;
 /// one primitive test (obvhs assumes 3×): a wide node tests four or eight boxes per SIMD slab
 /// test, while a watertight triangle test is tens of instructions. Fewer primitives per leaf:
 /// −5.7 % instructions on the Cornell box, −3.5 % on `bunnies.ron`, −3 % on 2,000 random
-/// spheres, +1.2 % on `stress.ron`; leaves then hold ~1.03–1.08 primitives (BENCHMARKS.md,
-/// issue 11).
+/// spheres, +1.2 % on `stress.ron`; leaves then hold ~1.03–1.08 primitives (BENCHMARKS.md).
 const BUILD_PARAMS: BvhBuildParams = BvhBuildParams {
     collapse_traversal_cost: 1.0,
     ..BvhBuildParams::medium_build()
@@ -48,7 +47,7 @@ const LARGE_BUILD: usize = 1 << 17;
 
 /// The build of big meshes: PLOC pairs over a shorter window and a fifth of the reinsertion
 /// work. Reinsertion was most of obvhs's time on a 1M-triangle sphere; this build takes about
-/// half the time of [`BUILD_PARAMS`] for an SAH cost within 0.5 % (BENCHMARKS.md, issue 24).
+/// half the time of [`BUILD_PARAMS`] for an SAH cost within 0.5 % (BENCHMARKS.md).
 const LARGE_BUILD_PARAMS: BvhBuildParams = BvhBuildParams {
     ploc_search_distance: PlocSearchDistance::VeryLow,
     reinsertion_batch_ratio: 0.01,

@@ -115,7 +115,7 @@ mod tests {
     use super::super::files::{DEBOUNCE, Filter};
     use super::*;
 
-    /// Issue 25, item 16: a file written through a descriptor still open is loaded at its close
+    /// A file written through a descriptor still open is loaded at its close
     /// (where the platform reports closes), however long the writer pauses before it; a file
     /// only created or removed, or written where closes are not reported, waits for quiet.
     #[test]
@@ -172,7 +172,7 @@ mod tests {
         }
     }
 
-    /// The flaky `issue14_case3` test: a directory created, then a file written into it. Were
+    /// A directory created, then a file written into it (a race a test once hit). Were
     /// the creation complete, the loop would arm the directory and read at once, possibly
     /// after the write but before its events arrive; those events then load the same file
     /// again and report a second render, which a waiter takes for the render of its next save.
