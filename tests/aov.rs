@@ -173,26 +173,33 @@ fn a_spheres_normal_buffer_equals_its_analytic_normals() {
     assert!(sky > 100, "{sky} sky pixels");
 }
 
+/// The camera looks at a mirror (z = 0) of material `mirror` and sees, reflected, a diffuse wall
+/// behind itself (z = 4, wider than the view), rendered by `method`.
+fn mirror_scene(mirror: &str, method: &str) -> String {
+    format!(
+        r#"Scene(
+        camera: Camera(position: (0, 0, 2), look_at: (0, 0, 0), fov: 30),
+        settings: Settings(width: 16, height: 16, spp: 4, max_depth: 4, method: {method}),
+        materials: {{
+            "mirror": {mirror},
+            "wall": Diffuse(albedo: Constant((0.2, 0.4, 0.6))),
+        }},
+        entities: [
+            Entity(name: "m", material: "mirror",
+                shape: Quad(a: (-5, -5, 0), b: (5, -5, 0), c: (5, 5, 0), d: (-5, 5, 0))),
+            Entity(name: "w", material: "wall",
+                shape: Quad(a: (-20, -20, 4), b: (20, -20, 4), c: (20, 20, 4), d: (-20, 20, 4))),
+        ],
+    )"#
+    )
+}
+
 #[test]
 fn through_a_mirror_the_buffers_hold_the_mirrored_object_tinted_by_the_mirror() {
-    // The camera looks at a mirror (z = 0) and sees, reflected, a diffuse wall behind itself
-    // (z = 4, wider than the view).
     let scene = |tint: &str| {
-        format!(
-            r#"Scene(
-            camera: Camera(position: (0, 0, 2), look_at: (0, 0, 0), fov: 30),
-            settings: Settings(width: 16, height: 16, spp: 4, max_depth: 4, method: Naive),
-            materials: {{
-                "mirror": Metal(albedo: Constant({tint}), roughness: 0),
-                "wall": Diffuse(albedo: Constant((0.2, 0.4, 0.6))),
-            }},
-            entities: [
-                Entity(name: "m", material: "mirror",
-                    shape: Quad(a: (-5, -5, 0), b: (5, -5, 0), c: (5, 5, 0), d: (-5, 5, 0))),
-                Entity(name: "w", material: "wall",
-                    shape: Quad(a: (-20, -20, 4), b: (20, -20, 4), c: (20, 20, 4), d: (-20, 20, 4))),
-            ],
-        )"#
+        mirror_scene(
+            &format!("Metal(albedo: Constant({tint}), roughness: 0)"),
+            "Naive",
         )
     };
     for (tint, expected) in [
@@ -275,28 +282,10 @@ fn a_pixel_half_covering_the_sun_records_half_its_albedo() {
 
 #[test]
 fn a_mirror_like_pbr_or_glossy_records_what_it_reflects_as_a_smooth_metal_does() {
-    // As the mirror test above, with the mirror a roughness-0 `Metal`, a `Pbr` conductor of
-    // roughness 0 and a roughness-0 `Glossy`, each of the same colour: seen within 21° of the
-    // normal, Schlick's Fresnel of the last two is their colour to within 2·10⁻⁶, so all three
-    // record the wall times the tint and the wall's normal.
-    let scene = |mirror: &str| {
-        format!(
-            r#"Scene(
-            camera: Camera(position: (0, 0, 2), look_at: (0, 0, 0), fov: 30),
-            settings: Settings(width: 16, height: 16, spp: 4, max_depth: 4, method: Mis),
-            materials: {{
-                "mirror": {mirror},
-                "wall": Diffuse(albedo: Constant((0.2, 0.4, 0.6))),
-            }},
-            entities: [
-                Entity(name: "m", material: "mirror",
-                    shape: Quad(a: (-5, -5, 0), b: (5, -5, 0), c: (5, 5, 0), d: (-5, 5, 0))),
-                Entity(name: "w", material: "wall",
-                    shape: Quad(a: (-20, -20, 4), b: (20, -20, 4), c: (20, 20, 4), d: (-20, 20, 4))),
-            ],
-        )"#
-        )
-    };
+    // As the mirror test above (`mirror_scene`), with the mirror a roughness-0 `Metal`, a `Pbr`
+    // conductor of roughness 0 and a roughness-0 `Glossy`, each of the same colour: seen within
+    // 21° of the normal, Schlick's Fresnel of the last two is their colour to within 2·10⁻⁶, so
+    // all three record the wall times the tint and the wall's normal.
     let tint = "(0.5, 1, 0.25)";
     let expected = Vec3::new(0.1, 0.4, 0.15);
     for mirror in [
@@ -304,7 +293,7 @@ fn a_mirror_like_pbr_or_glossy_records_what_it_reflects_as_a_smooth_metal_does()
         format!("Pbr(base_color: Constant({tint}), metallic: 1, roughness: 0)"),
         format!("Glossy(albedo: Constant({tint}), roughness: 0)"),
     ] {
-        let r = render_features(&scene(&mirror), 4, None, PassPlan::Single);
+        let r = render_features(&mirror_scene(&mirror, "Mis"), 4, None, PassPlan::Single);
         for (a, n) in albedo_of(&r).iter().zip(normal_of(&r)) {
             assert!((*a - expected).abs().max_element() < 1e-5, "{mirror}: {a}");
             assert!(
