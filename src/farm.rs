@@ -10,7 +10,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crate::app::{Overrides, Renderer};
-use crate::film::{ALBEDO_SHIFT, DEFAULT_SHIFT, OutputKind};
+use crate::film::{ALBEDO_SHIFT, DEFAULT_SHIFT, OutputKind, Pixel};
 use crate::geometry::packed::LayoutKind;
 use crate::partial::{
     FORMAT_2, PartialError, PartialMeta, Sums, Tracing, image_hash, image_settings, normalize,
@@ -219,12 +219,20 @@ impl PartRender {
                 self.output.display()
             )));
         };
-        if let Some((_, base)) = &self.resume {
+        if let Some((path, base)) = &self.resume {
+            let overflow = || {
+                fail(format!(
+                    "{}: its sums and those rendered for {} overflow {} bits",
+                    path.display(),
+                    self.output.display(),
+                    32 * Pixel::WORDS
+                ))
+            };
             for (pixel, held) in film.sum.iter_mut().zip(&base.colour) {
-                pixel.merge(held);
+                *pixel = pixel.checked_merge(held).ok_or_else(overflow)?;
             }
             if let Some(held) = &base.features {
-                features.merge(held);
+                features.checked_merge(held).ok_or_else(overflow)?;
             }
         }
         write_output(&self.output, &self.meta, &film.sum, film.features.as_ref())

@@ -136,6 +136,17 @@ impl Pixel {
         }
     }
 
+    /// The sum of this and `other`, or `None` if a channel's leaves the [`Pixel::WORDS`] words
+    /// it is stored in (sums read from files, which anyone may have written).
+    pub fn checked_merge(&self, other: &Self) -> Option<Self> {
+        const BOUND: i128 = 1 << (32 * Pixel::WORDS - 1);
+        let mut sum = Self::ZERO;
+        for ((s, a), b) in sum.0.iter_mut().zip(self.0).zip(other.0) {
+            *s = a.checked_add(b).filter(|v| (-BOUND..BOUND).contains(v))?;
+        }
+        Some(sum)
+    }
+
     /// Channel `c`'s sum as [`Pixel::WORDS`] 32-bit words, least significant first.
     #[inline]
     pub fn words(&self, c: usize) -> [u32; Self::WORDS] {
@@ -249,15 +260,15 @@ impl Features {
     }
 
     /// Adds another film's feature sums (exact, so in any order), which must be in the same
-    /// fixed point (callers check partials' `albedo_shift` before they merge).
-    pub fn merge(&mut self, other: &Self) {
+    /// fixed point (callers check partials' `albedo_shift` before they merge). `None`, with
+    /// `self` partly added to, if a sum leaves its words ([`Pixel::checked_merge`]).
+    pub fn checked_merge(&mut self, other: &Self) -> Option<()> {
         debug_assert_eq!(self.albedo_shift, other.albedo_shift);
-        for (a, b) in self.albedo.iter_mut().zip(&other.albedo) {
-            a.merge(b);
+        let pairs = self.albedo.iter_mut().zip(&other.albedo);
+        for (a, b) in pairs.chain(self.normal.iter_mut().zip(&other.normal)) {
+            *a = a.checked_merge(b)?;
         }
-        for (a, b) in self.normal.iter_mut().zip(&other.normal) {
-            a.merge(b);
-        }
+        Some(())
     }
 
     /// The mean albedo of every pixel (`count` samples).
@@ -518,6 +529,21 @@ pub use crate::output_file::write_atomically;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn checked_merges_stop_at_the_96_bits_a_sum_is_stored_in() {
+        let top = (1i128 << 95) - 1;
+        let at = |v: i128| Pixel([v, 0, 0]);
+        assert_eq!(at(top - 1).checked_merge(&at(1)), Some(at(top)));
+        assert_eq!(at(top).checked_merge(&at(1)), None);
+        assert_eq!(at(-top).checked_merge(&at(-1)), Some(at(-top - 1)));
+        assert_eq!(at(-top - 1).checked_merge(&at(-1)), None);
+        assert_eq!(Pixel([0, top, 0]).checked_merge(&Pixel([0, top, 0])), None);
+        // What fits reads back from its words.
+        let mut back = Pixel::ZERO;
+        back.set_words(0, at(-top - 1).words(0));
+        assert_eq!(back, at(-top - 1));
+    }
 
     #[test]
     fn srgb_encoding_matches_the_standard() {

@@ -1170,3 +1170,74 @@ fn a_partial_with_a_broken_albedo_layer_is_refused_naming_the_file() {
     let other = variant("name.exr", &|b| b[name.start] = b'x');
     refused(&other, "expected the layer \"albedo\"");
 }
+
+/// A partial's sums are bounded by what its samples can reach (2^62 each in fixed point): a
+/// crafted file beyond it, which used to wrap around 96 bits into a negative sum when merged, is
+/// refused by name by a merge and by a resume; at the bound itself it still reads.
+#[test]
+fn sums_beyond_what_the_samples_reach_are_refused_by_merge_and_resume() {
+    let dir = common::temp_dir("farm-overflow");
+    let a = render_part(&dir, "a.exr", 0..4, small(), 2);
+    let b = render_part(&dir, "b.exr", 4..8, small(), 2);
+    let (meta, sums) = read_partial(&b).expect("read b");
+    let reach = 4i128 << 62;
+    let crafted = |name: &str, layer: usize, value: i128| {
+        let mut sums = sums.clone();
+        let features = sums.features.as_mut().expect("features");
+        let buffer = match layer {
+            0 => &mut sums.colour,
+            1 => &mut features.albedo,
+            _ => &mut features.normal,
+        };
+        buffer[7].0[1] = value;
+        let path = dir.join(name);
+        write_sums(&path, &meta, &sums);
+        path
+    };
+    // At the bound, either sign, the sums read back as written.
+    for value in [reach, -reach] {
+        let edge = crafted("edge.exr", 0, value);
+        assert_eq!(
+            read_partial(&edge).expect("at the bound").1.colour[7].0[1],
+            value
+        );
+    }
+    // The file: the top word 0x7fffffff, twice, wrapped to a negative sum.
+    let top = i128::from(0x7fff_ffff) << 64;
+    let x = crafted("x.exr", 0, top);
+    let e = merge(
+        std::slice::from_ref(&x),
+        &plan_merge(std::slice::from_ref(&x), None).expect("plan"),
+    )
+    .expect_err("beyond 4 samples")
+    .0;
+    assert!(
+        e.contains("x.exr") && e.contains("G sum of pixel (7, 0)") && e.contains("4 samples"),
+        "{e}"
+    );
+    for (layer, name) in [(0, "colour"), (1, "albedo"), (2, "normal")] {
+        for value in [reach + 1, -reach - 1, top] {
+            let file = format!("over-{name}.exr");
+            let over = crafted(&file, layer, value);
+            let paths = [a.clone(), over.clone()];
+            let plan = plan_merge(&paths, None).expect("the metadata is a render's");
+            let e = merge(&paths, &plan).expect_err("refused").0;
+            assert!(
+                e.contains(&file) && e.contains("beyond what 4 samples reach"),
+                "{e}"
+            );
+            let mut r = Renderer::new(Some(1), PassPlan::Single).expect("pool");
+            let o = Overrides {
+                spp: Some(SPP),
+                ..small()
+            };
+            let resume = Samples::Resume(over.clone());
+            let e = prepare(&mut r, o, &cornell(), &dir.join("more.exr"), &resume)
+                .err()
+                .unwrap_or_else(|| panic!("a resume from {file} ({value}) is refused"))
+                .to_string();
+            assert!(e.contains(&file) && e.contains("beyond what"), "{e}");
+            assert!(!dir.join("more.exr").exists());
+        }
+    }
+}

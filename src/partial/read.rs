@@ -384,6 +384,8 @@ pub fn add_partial(path: &Path, sums: &mut Sums) -> Result<PartialMeta, PartialE
         ));
     }
     let (width, height) = (meta.width as usize, meta.height as usize);
+    // A render clamps each sample to 2^62 in its fixed point, so no sum it writes is larger.
+    let limit = u128::from(meta.count()) << 62;
     // The layers are as many as the targets (checked by `meta_of`). Each grid has at most one
     // cell per pixel, so at most 2²⁶ (as the pixels are limited).
     let mut parts = Vec::with_capacity(targets.len());
@@ -483,33 +485,56 @@ pub fn add_partial(path: &Path, sums: &mut Sums) -> Result<PartialMeta, PartialE
                 ));
             }
             *cell = true;
+            // The block's sums, put together from their words, checked, then added.
+            let mut local = vec![Pixel::ZERO; size.0 * size.1];
             for line in b.lines(&part.channels) {
                 let Some(&Some((colour, word))) = part.roles.get(line.location.channel) else {
                     continue;
                 };
-                let (x, y) = (line.location.position.x(), line.location.position.y());
-                let start = y * width + x;
-                let pixels = part
-                    .target
-                    .get_mut(start..start + line.location.sample_count)
-                    .ok_or_else(|| error(path, "a block lies outside the image"))?;
+                let (lx, ly) = (line.location.position.x(), line.location.position.y());
+                let pixels = lx
+                    .checked_sub(x)
+                    .zip(ly.checked_sub(y))
+                    .map(|(dx, dy)| dy * size.0 + dx)
+                    .and_then(|start| local.get_mut(start..start + line.location.sample_count))
+                    .ok_or_else(|| error(path, "a line lies outside its block"))?;
                 // Samples are little-endian u32 (OpenEXR's byte order).
                 let values = line.value.chunks_exact(4);
                 if values.len() != pixels.len() {
                     return Err(error(path, "a line has the wrong length"));
                 }
-                let shift = 32 * word;
-                // Two's complement in 96 bits: the top word carries the sign.
-                let signed = word + 1 == Pixel::WORDS;
                 for (pixel, bytes) in pixels.iter_mut().zip(values) {
                     let v = u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]);
-                    let part = if signed {
-                        i128::from(v as i32)
-                    } else {
-                        i128::from(v)
-                    };
-                    pixel.0[colour] += part << shift;
+                    let mut words = pixel.words(colour);
+                    words[word] = v;
+                    pixel.set_words(colour, words);
                 }
+            }
+            for (i, pixel) in local.iter().enumerate() {
+                let (px, py) = (x + i % size.0, y + i / size.0);
+                if let Some(c) = (0..3).find(|&c| pixel.0[c].unsigned_abs() > limit) {
+                    return Err(error(
+                        path,
+                        format!(
+                            "the {} sum of pixel ({px}, {py}){} is {}, beyond what {} samples reach (at most 2^62 each)",
+                            ["R", "G", "B"][c],
+                            in_layer(layer),
+                            pixel.0[c],
+                            meta.count()
+                        ),
+                    ));
+                }
+                let target = &mut part.target[py * width + px];
+                *target = target.checked_merge(pixel).ok_or_else(|| {
+                    error(
+                        path,
+                        format!(
+                            "pixel ({px}, {py}){}: its sums and those added before overflow {} bits",
+                            in_layer(layer),
+                            32 * Pixel::WORDS
+                        ),
+                    )
+                })?;
             }
         }
     }
