@@ -17,8 +17,8 @@ use crate::geometry::store::{SphereStore, TriangleStore};
 use crate::geometry::surface::Surface;
 use crate::lights::{LightSet, Sampled};
 use crate::scene::format::{MAX_DEPTH, Method};
-use crate::shading::maps::NormalMap;
-use crate::shading::material::{Material, Scatter};
+use crate::shading::bsdf::Bsdf;
+use crate::shading::material::Material;
 use crate::shading::rng::Rng;
 use crate::shading::sampler::{IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};
 
@@ -257,8 +257,8 @@ pub fn trace_path<L: Layout, S: Sampler>(
 
 /// [`trace_path`] with the BVHs' box tests as wide as `lanes`, and the path's features for the
 /// denoiser: the albedo and the shading normal (on the side the path arrived from) of the first
-/// hit that is not a perfect mirror or glass ([`Material::is_specular`]) nor absent where an
-/// alpha mask says so, the albedo ([`Material::feature_albedo`]: reflectance plus emission)
+/// hit that is not a perfect mirror or glass ([`Bsdf::is_specular`]) nor absent where an
+/// alpha mask says so, the albedo ([`Bsdf::feature_albedo`]: reflectance plus emission)
 /// tinted by the specular bounces before it; the background and distant lights seen along the
 /// ray as albedo (and a zero normal) if the path leaves the scene first; zero if it ends first.
 /// Each sample's albedo is clamped to [0, 1] per channel ([`feature_albedo`]) before it is
@@ -313,25 +313,19 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
             });
             break;
         };
-        let mut s = view.geometry.surface(&ray, &hit);
+        let s = view.geometry.surface(&ray, &hit);
         let material = &view.materials[view.owner_material[s.owner as usize] as usize];
-        if let Material::Pbr {
-            normal_map: Some(map),
-            ..
-        } = material
-        {
-            s.ns = normal_mapped(view.geometry, &hit, &s, map);
-        }
-        if features.is_none() && (!material.is_specular(s.uv) || depth + 1 == view.max_depth) {
-            let n = shading_normal(&s, material);
-            let albedo = material.feature_albedo(ray.direction, s.n, s.uv);
+        let bsdf = material.bsdf(ray.direction, s.n, s.ns, s.uv, || {
+            view.geometry.uv_tangent(&hit).map(|t| (t.tangent, t.sign))
+        });
+        if features.is_none() && (!bsdf.is_specular() || depth + 1 == view.max_depth) {
+            let n = bsdf.shading_normal();
             features = Some(FeatureSample {
-                albedo: feature_albedo(throughput / eta_scale * albedo),
+                albedo: feature_albedo(throughput / eta_scale * bsdf.feature_albedo()),
                 normal: if ray.direction.dot(n) < 0.0 { n } else { -n },
             });
         }
-        if material.is_emissive() {
-            let emitted = material.emitted(ray.direction, s.n, s.uv);
+        if let Some(emitted) = bsdf.emitted() {
             let from = previous.filter(|_| sample_lights);
             let weight = emission_weight(view.method, from, |p_prev| {
                 view.lights
@@ -339,36 +333,25 @@ fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
             });
             radiance += throughput * emitted * weight;
         }
-        if depth + 1 == view.max_depth || !material.scatters() {
+        if depth + 1 == view.max_depth || !bsdf.scatters() {
             break;
         }
         // Only a vertex the path continues from needs the hit point's error bound.
         let err = point_error(view.geometry, &hit, s.p);
         let dimension = 1 + depth * BOUNCE_DIMENSIONS;
-        if sample_lights && material.samples_lights() {
+        if sample_lights && bsdf.samples_lights() {
             sampler.seek(dimension + LIGHT_CHOICE_DIMENSION);
             let vertex = Vertex {
                 surface: &s,
                 err,
-                d: ray.direction,
-                material,
+                bsdf: &bsdf,
                 dimension,
             };
             radiance += throughput * direct_light(lanes, view, vertex, sampler, stats);
         }
         sampler.seek(dimension + BSDF_DIMENSION);
-        let Some(scatter) =
-            material.scatter(ray.direction, shading_normal(&s, material), s.uv, sampler)
-        else {
+        let Some(scatter) = bsdf.sample(sampler) else {
             break;
-        };
-        let scatter = if is_smooth(&s, material) {
-            let Some(folded) = fold(&s, material, ray.direction, scatter) else {
-                break;
-            };
-            folded
-        } else {
-            scatter
         };
         previous = scatter.pdf.map(|pdf| (s.p, pdf));
         throughput *= scatter.attenuation;
@@ -399,109 +382,13 @@ fn feature_albedo(albedo: Vec3) -> Vec3 {
     Vec3::from_array(albedo.to_array().map(|c| c.clamp(0.0, 1.0)))
 }
 
-/// The shading normal of `s` perturbed by `map`, where the hit has a texture tangent (see
-/// [`Geometry::uv_tangent`]); `s.ns` elsewhere. Out of line: only normal-mapped hits get here.
-#[inline(never)]
-fn normal_mapped<L: Layout>(
-    geometry: &Geometry<L>,
-    hit: &Hit,
-    s: &Surface,
-    map: &NormalMap,
-) -> Vec3 {
-    geometry
-        .uv_tangent(hit)
-        .map_or(s.ns, |t| map.perturb(s.uv, s.n, s.ns, t.tangent, t.sign))
-}
-
-/// The normal a material shades with: the interpolated vertex normal of a smooth mesh (perturbed
-/// by a normal map, see [`normal_mapped`]), except for glass, whose refraction must follow the
-/// true surface to stay watertight.
-#[inline]
-fn shading_normal(s: &Surface, material: &Material) -> Vec3 {
-    if matches!(material, Material::Dielectric { .. }) {
-        s.n
-    } else {
-        s.ns
-    }
-}
-
-/// Whether the material shades `s` with a normal other than the geometric one (a smooth mesh,
-/// glass excepted), so that its lobe can reach through the surface.
-#[inline]
-fn is_smooth(s: &Surface, material: &Material) -> bool {
-    s.ns != s.n && !matches!(material, Material::Dielectric { .. })
-}
-
-/// `w` mirrored at the plane of unit normal `n`.
-#[inline]
-fn mirror(w: Vec3, n: Vec3) -> Vec3 {
-    w - 2.0 * w.dot(n) * n
-}
-
-/// The geometric normal of `s` on the side a ray travelling along `d` arrives from.
-#[inline]
-fn front(s: &Surface, d: Vec3) -> Vec3 {
-    if d.dot(s.n) < 0.0 { s.n } else { -s.n }
-}
-
-/// A smooth surface's lobe, sampled around the shading normal, folded onto the side of the
-/// geometric surface the ray came from: a direction that would pass through the surface (near
-/// silhouettes) is mirrored at it. Following such a direction would leak light through the
-/// mesh, and dropping it darkened the silhouettes (a white 10×6 UV sphere in a white furnace
-/// averaged 0.993, silhouette pixels 0.69); folded, the lobe keeps its energy on the right
-/// side. Its value and density at a direction are the sums over the direction and its mirror
-/// image ([`folded_eval`]), so the sampled weight is their ratio (exactly the albedo for a
-/// diffuse surface) and next-event estimation and MIS use the very density sampled from. `None`
-/// for a direction in the surface's plane or of zero density.
-#[inline]
-fn fold(s: &Surface, material: &Material, d: Vec3, scatter: Scatter) -> Option<Scatter> {
-    let n = front(s, d);
-    let direction = if scatter.direction.dot(n) > 0.0 {
-        scatter.direction
-    } else {
-        mirror(scatter.direction, n).normalize()
-    };
-    if direction.dot(n) <= 0.0 {
-        return None;
-    }
-    if scatter.pdf.is_none() {
-        // A lobe without a density (the fuzzed metal): only its direction is folded.
-        return Some(Scatter {
-            direction,
-            ..scatter
-        });
-    }
-    let (f_cos, pdf) = folded_eval(s, material, d, direction)?;
-    (pdf > 0.0).then(|| Scatter {
-        direction,
-        attenuation: f_cos / pdf,
-        pdf: Some(pdf),
-        radiance_scale: 1.0,
-    })
-}
-
-/// [`Material::eval`] of a smooth surface's folded lobe (see [`fold`]) at `wi`, on the side the
-/// ray arriving along `d` came from: the lobe's value and density at `wi` plus those at its mirror
-/// image below the surface; zero for a `wi` that passes through the surface.
-#[inline]
-fn folded_eval(s: &Surface, material: &Material, d: Vec3, wi: Vec3) -> Option<(Vec3, f32)> {
-    let n = front(s, d);
-    if wi.dot(n) <= 0.0 {
-        return Some((Vec3::ZERO, 0.0));
-    }
-    let (f_above, pdf_above) = material.eval(d, wi, s.ns, s.uv)?;
-    let (f_below, pdf_below) = material.eval(d, mirror(wi, n), s.ns, s.uv)?;
-    Some((f_above + f_below, pdf_above + pdf_below))
-}
-
-/// A vertex a path continues from: the surface it hit, that point's error bound, the direction
-/// the ray arrived along, and the surface's material.
+/// A vertex a path continues from: the surface it hit, that point's error bound, and the BSDF
+/// there.
 #[derive(Clone, Copy)]
 struct Vertex<'a> {
     surface: &'a Surface,
     err: Vec3,
-    d: Vec3,
-    material: &'a Material,
+    bsdf: &'a Bsdf<'a>,
     /// The bounce's first sampler dimension.
     dimension: u32,
 }
@@ -520,8 +407,7 @@ fn direct_light<L: Layout, W: Lanes>(
     let Vertex {
         surface: s,
         err,
-        d,
-        material,
+        bsdf,
         ..
     } = vertex;
     // The emitter from its own dimension, the point from the next (a map's texel, then the
@@ -584,12 +470,7 @@ fn direct_light<L: Layout, W: Lanes>(
     if emitted == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    let evaluated = if is_smooth(s, material) {
-        folded_eval(s, material, d, wi)
-    } else {
-        material.eval(d, wi, shading_normal(s, material), s.uv)
-    };
-    let Some((f_cos, pdf_bsdf)) = evaluated else {
+    let Some((f_cos, pdf_bsdf)) = bsdf.eval(wi) else {
         return Vec3::ZERO;
     };
     if f_cos == Vec3::ZERO {

@@ -42,7 +42,10 @@ fn integrate(m: &Material, d: Vec3, n: usize, k: usize) -> (f64, f64) {
     for i in 0..n {
         for j in 0..k {
             let (wi, dw) = cell(i, j, n, k);
-            let (f_cos, pdf) = m.eval(d, wi, Vec3::Z, Vec2::ZERO).expect("evaluable");
+            let (f_cos, pdf) = m
+                .bsdf_at(d, Vec3::Z, Vec2::ZERO)
+                .eval(wi)
+                .expect("evaluable");
             f += f64::from(f_cos.x) * dw;
             p += f64::from(pdf) * dw;
         }
@@ -102,7 +105,10 @@ fn eval_and_scatter_agree_on_density_and_weight() {
                 continue;
             };
             let pdf = s.pdf.expect("Glossy has a density");
-            let (f_cos, eval_pdf) = m.eval(d, s.direction, n, Vec2::ZERO).expect("evaluable");
+            let (f_cos, eval_pdf) = m
+                .bsdf_at(d, n, Vec2::ZERO)
+                .eval(s.direction)
+                .expect("evaluable");
             let rel = (eval_pdf - pdf).abs() / pdf;
             assert!(
                 rel < 2e-3,
@@ -133,7 +139,8 @@ fn below_alpha_one_thousandth_glossy_is_a_perfect_mirror_of_schlicks_fresnel() {
             roughness,
         };
         assert!(
-            !m.samples_lights() && m.is_specular(Vec2::ZERO),
+            !m.bsdf_at(-Vec3::Z, Vec3::Z, Vec2::ZERO).samples_lights()
+                && m.bsdf_at(-Vec3::Z, Vec3::Z, Vec2::ZERO).is_specular(),
             "{roughness}"
         );
         for theta in [0.0f32, 0.5, 1.2, 1.5] {
@@ -148,14 +155,15 @@ fn below_alpha_one_thousandth_glossy_is_a_perfect_mirror_of_schlicks_fresnel() {
                 "{roughness} {theta}"
             );
             assert_eq!(s.pdf, None);
-            assert_eq!(m.eval(d, s.direction, Vec3::Z, Vec2::ZERO), None);
+            assert_eq!(m.bsdf_at(d, Vec3::Z, Vec2::ZERO).eval(s.direction), None);
         }
     }
     let rough = Material::Glossy {
         albedo: Texture::Constant(f0),
         roughness: 0.0317,
     };
-    assert!(rough.samples_lights() && !rough.is_specular(Vec2::ZERO));
+    let at = rough.bsdf_at(-Vec3::Z, Vec3::Z, Vec2::ZERO);
+    assert!(at.samples_lights() && !at.is_specular());
 }
 
 #[test]
@@ -210,7 +218,10 @@ fn sampled_directions_pass_a_chi_square_test_against_the_density() {
         for i in 0..nc * sub {
             for j in 0..nphi * sub {
                 let (wi, dw) = cell(i, j, nc * sub, nphi * sub);
-                let (_, pdf) = m.eval(d, wi, Vec3::Z, Vec2::ZERO).expect("evaluable");
+                let (_, pdf) = m
+                    .bsdf_at(d, Vec3::Z, Vec2::ZERO)
+                    .eval(wi)
+                    .expect("evaluable");
                 expected[(i / sub) * nphi + j / sub] += f64::from(pdf) * dw;
             }
         }

@@ -1,5 +1,6 @@
-//! The GGX (Trowbridge–Reitz) microfacet distribution: density, Smith masking, and sampling of
-//! the visible normals. Used by `Material::Glossy`. No ECS here.
+//! The GGX (Trowbridge–Reitz) microfacet distribution: density, Smith masking, sampling of the
+//! visible normals, and the terms of one reflection ([`Terms`]) that both GGX lobes (the
+//! conductor and the metallic–roughness mix) evaluate. No ECS here.
 //!
 //! References: Walter et al., "Microfacet Models for Refraction through Rough Surfaces" (EGSR
 //! 2007) for D and Λ; Heitz, "Understanding the Masking-Shadowing Function in Microfacet-Based
@@ -98,6 +99,37 @@ pub fn sample_visible_normal(wo: Vec3, alpha: f32, u: Vec2) -> Vec3 {
     let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
     let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
     Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(0.0)).normalize()
+}
+
+/// The GGX terms of a reflection from unit `wo` to unit `wi` about unit normal `n`: what a
+/// microfacet lobe needs to evaluate its value and density.
+#[derive(Clone, Copy, Debug)]
+pub struct Terms {
+    /// D(h) of the half vector.
+    pub d: f32,
+    /// Smith Λ of `wo`.
+    pub lo: f32,
+    /// Smith Λ of `wi`.
+    pub li: f32,
+    /// `wo · h`, for Fresnel (signed: the lobes differ in how they fold it).
+    pub cos_oh: f32,
+}
+
+impl Terms {
+    /// The terms of GGX `alpha` for the reflection `wo` → `wi` about `n`.
+    #[inline]
+    pub fn new(wo: Vec3, wi: Vec3, n: Vec3, alpha: f32) -> Self {
+        let h = (wo + wi).normalize();
+        let (c2h, s2h) = cos2_sin2(h, n);
+        let (c2o, s2o) = cos2_sin2(wo, n);
+        let (c2i, s2i) = cos2_sin2(wi, n);
+        Self {
+            d: distribution(c2h, s2h, alpha),
+            lo: lambda(c2o, s2o, alpha),
+            li: lambda(c2i, s2i, alpha),
+            cos_oh: wo.dot(h),
+        }
+    }
 }
 
 /// Schlick's Fresnel with a per-channel reflectance `f0` at normal incidence.

@@ -1,5 +1,12 @@
-//! Shading kernels: random numbers, samplers, sampling, textures and materials. No ECS here.
+//! Shading kernels: random numbers, samplers, sampling, textures, materials and the BSDF they
+//! become at a hit, one file per lobe. No ECS here.
 
+pub mod bsdf;
+pub mod conductor;
+pub mod dielectric;
+pub mod diffuse;
+pub mod emission;
+pub mod fuzzed;
 pub mod maps;
 pub mod material;
 pub mod microfacet;
@@ -7,4 +14,5 @@ pub mod pbr;
 pub mod rng;
 pub mod sampler;
 pub mod sampling;
+pub mod scatter;
 pub mod texture;

@@ -25,8 +25,7 @@ use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
 use super::microfacet::{
-    alpha_from_roughness, cos2_sin2, distribution, is_specular_alpha, lambda,
-    sample_visible_normal, schlick_rgb,
+    Terms, alpha_from_roughness, is_specular_alpha, sample_visible_normal, schlick_rgb,
 };
 use super::sampling::{Frame, cosine_hemisphere};
 
@@ -133,7 +132,7 @@ impl Pbr {
     /// sampling, G₁(wo) D / (4 cos θo).
     #[inline]
     fn specular(&self, t: &Terms, cos_o: f32) -> (Vec3, f32) {
-        let f = schlick_rgb(self.f0(), t.cos_oh);
+        let f = schlick_rgb(self.f0(), t.cos_oh.abs());
         let q = t.d / (4.0 * cos_o);
         (f * (q / (1.0 + t.lo + t.li)), q / (1.0 + t.lo))
     }
@@ -141,7 +140,7 @@ impl Pbr {
     /// The diffuse BRDF, `(1 − metallic)(1 − F_d(|V·H|)) base / π`.
     #[inline]
     fn diffuse_term(&self, t: &Terms) -> Vec3 {
-        let fd = schlick_rgb(Vec3::splat(DIELECTRIC_F0), t.cos_oh).x;
+        let fd = schlick_rgb(Vec3::splat(DIELECTRIC_F0), t.cos_oh.abs()).x;
         self.diffuse() * ((1.0 - fd) * FRAC_1_PI)
     }
 
@@ -183,33 +182,6 @@ impl Pbr {
             weight: f_cos / pdf,
             pdf: Some(pdf),
         })
-    }
-}
-
-/// The GGX terms of a reflection from `wo` to `wi` about `n`.
-struct Terms {
-    /// D(h) of the half vector.
-    d: f32,
-    /// Smith Λ of `wo` and of `wi`.
-    lo: f32,
-    li: f32,
-    /// `|wo · h|`, for Fresnel.
-    cos_oh: f32,
-}
-
-impl Terms {
-    #[inline]
-    fn new(wo: Vec3, wi: Vec3, n: Vec3, alpha: f32) -> Self {
-        let h = (wo + wi).normalize();
-        let (c2h, s2h) = cos2_sin2(h, n);
-        let (c2o, s2o) = cos2_sin2(wo, n);
-        let (c2i, s2i) = cos2_sin2(wi, n);
-        Self {
-            d: distribution(c2h, s2h, alpha),
-            lo: lambda(c2o, s2o, alpha),
-            li: lambda(c2i, s2i, alpha),
-            cos_oh: wo.dot(h).abs(),
-        }
     }
 }
 

@@ -50,6 +50,12 @@ pub fn cosine_hemisphere(u: Vec2) -> Vec3 {
     Vec3::new(d.x, d.y, z)
 }
 
+/// Mirror reflection of `d` about `n`.
+#[inline]
+pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
+    d - 2.0 * d.dot(n) * n
+}
+
 /// A uniformly distributed point inside the unit ball.
 #[inline]
 pub fn uniform_ball(u: Vec3) -> Vec3 {
