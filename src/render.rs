@@ -13,8 +13,10 @@ use crate::film::{FeatureSample, Film, FilmBand, FixedPoint, Pixel};
 use crate::geometry::layout::{DefaultLayout, Layout};
 use crate::geometry::packed::{Geometry, Hit, HitKind, LayoutKind};
 use crate::geometry::ray::{Ray, gamma, spawn_origin};
+use crate::geometry::sphere::sphere_point_error;
 use crate::geometry::store::{SphereStore, TriangleStore};
 use crate::geometry::surface::Surface;
+use crate::geometry::triangle::triangle_point_error;
 use crate::lights::{LightSet, Sampled};
 use crate::scene::format::{MAX_DEPTH, Method};
 use crate::shading::bsdf::Bsdf;
@@ -167,12 +169,11 @@ pub fn point_error<L: Layout>(geometry: &Geometry<L>, hit: &Hit, p: Vec3) -> Vec
     match hit.kind {
         HitKind::Sphere => {
             let (c, r) = geometry.spheres.get(i);
-            gamma(6.0) * (c.abs() + Vec3::splat(r))
+            sphere_point_error(c, r)
         }
         HitKind::Triangle => {
-            let [p0, p1, p2] = geometry.triangles.get(i);
             let b0 = 1.0 - hit.b1 - hit.b2;
-            gamma(7.0) * ((b0 * p0).abs() + (hit.b1 * p1).abs() + (hit.b2 * p2).abs())
+            triangle_point_error(geometry.triangles.get(i), [b0, hit.b1, hit.b2])
         }
         HitKind::Plane => gamma(8.0) * (p.abs() + geometry.planes[i].point.abs()),
         HitKind::Instance { triangle } => geometry

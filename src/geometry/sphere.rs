@@ -1,9 +1,11 @@
-//! Ray–sphere intersection and the sphere's surface parameterisation.
+//! The sphere: ray intersection, surface parameterisation, and the sampling of points on it that
+//! light sampling uses (uniformly by area, or in the cone it subtends).
 
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
-use super::ray::Ray;
+use super::ray::{Ray, gamma};
+use crate::shading::sampling::Frame;
 
 /// Distance to the nearest intersection of `ray` with the sphere in `(0, t_max)`, or `None`.
 ///
@@ -41,8 +43,8 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Opt
 /// its centre column facing +z, unmirrored seen from outside:
 /// `u = atan2(−x, −z) / 2π` wrapped into [0, 1), `v = 1 − acos(y) / π` (v = 1 is the image's top
 /// row). This is the environment maps' convention (`u = atan2(x, −z) / 2π`, for a direction seen
-/// from inside) with x mirrored, because a sphere is seen from outside. (The thesis's formula put
-/// the pole on +z and showed the image mirrored.)
+/// from inside) with x mirrored, because a sphere is seen from outside (the RTIOW-style thesis in
+/// `../shared/seed` puts the pole on +z and shows the image mirrored).
 #[inline]
 pub fn sphere_uv(unit: Vec3) -> Vec2 {
     let u = (-unit.x).atan2(-unit.z) / (2.0 * PI);
@@ -50,6 +52,72 @@ pub fn sphere_uv(unit: Vec3) -> Vec2 {
     // atan2 of (−0, −1) is −π: u + 1 then rounds to 1, the same seam as 0.
     let u = if u >= 1.0 { 0.0 } else { u };
     Vec2::new(u, 1.0 - unit.y.clamp(-1.0, 1.0).acos() / PI)
+}
+
+/// The outward unit normal of a point uniformly distributed by area on a sphere (the point is
+/// `centre + radius · normal`), from the uniform pair `u`.
+#[inline]
+pub fn sample_sphere_area(u: Vec2) -> Vec3 {
+    let z = 1.0 - 2.0 * u.x;
+    let s = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3::new(s * phi.cos(), s * phi.sin(), z)
+}
+
+/// Absolute error bound, per component, of a point computed on the sphere of centre `c` and
+/// radius `r` (pbrt-v4, Section 6.8.5).
+#[inline(always)]
+pub fn sphere_point_error(c: Vec3, r: f32) -> Vec3 {
+    gamma(6.0) * (c.abs() + Vec3::splat(r))
+}
+
+/// `1 − cos θmax` of the cone that a sphere subtends from a point outside it, given
+/// `sin² θmax = r² / d²`. Small cones use the Taylor form `sin² θmax / 2`, which keeps its
+/// precision where `1 − √(1 − s)` would cancel (pbrt-v4, `Sphere::Sample`). The cone's solid
+/// angle is `2π` times this; [`sample_sphere_cone`] uses the same value.
+#[inline]
+pub fn cone_one_minus_cos(sin2_max: f32) -> f32 {
+    if sin2_max < SMALL_CONE_SIN2 {
+        0.5 * sin2_max
+    } else {
+        1.0 - (1.0 - sin2_max).max(0.0).sqrt()
+    }
+}
+
+/// sin² of 1.5°: below it the cone is sampled by its Taylor expansion.
+const SMALL_CONE_SIN2: f32 = 0.000_685_23;
+
+/// A point on the part of the sphere (centre `c`, radius `r`) visible from `p`, which must lie
+/// outside it, chosen uniformly in the solid angle of the cone the sphere subtends (pbrt-v4,
+/// `Sphere::Sample`): density `1 / (2π · cone_one_minus_cos(r²/|c − p|²))` per steradian.
+/// Returns the point and the sphere's outward unit normal there.
+#[inline]
+pub fn sample_sphere_cone(c: Vec3, r: f32, p: Vec3, u: Vec2) -> (Vec3, Vec3) {
+    let to_centre = c - p;
+    let dc2 = to_centre.length_squared();
+    let sin2_max = r * r / dc2;
+    let sin_max = sin2_max.sqrt();
+    let sin2_t = if sin2_max < SMALL_CONE_SIN2 {
+        sin2_max * u.x
+    } else {
+        let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+        let cos_t = (cos_max - 1.0) * u.x + 1.0;
+        1.0 - cos_t * cos_t
+    };
+    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
+    // Angle at the centre between the axis and the sampled point.
+    let cos_alpha = sin2_t / sin_max + cos_t * (1.0 - sin2_t / sin2_max).max(0.0).sqrt();
+    let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    let frame = Frame::from_normal(to_centre / dc2.sqrt());
+    let n = frame
+        .to_world(-Vec3::new(
+            sin_alpha * phi.cos(),
+            sin_alpha * phi.sin(),
+            cos_alpha,
+        ))
+        .normalize();
+    (c + r * n, n)
 }
 
 #[cfg(test)]

@@ -1,6 +1,8 @@
-//! Watertight ray–triangle intersection (the scalar reference kernel).
+//! The triangle: watertight ray intersection (the scalar reference kernel), and the sampling of
+//! points on it that light sampling uses (uniformly by area, or in the solid angle it subtends).
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
 
 use super::aabb::RayQuery;
 use super::ray::gamma;
@@ -81,6 +83,114 @@ pub fn intersect_triangle(
         b1: e1 * inv_det,
         b2: e2 * inv_det,
     })
+}
+
+/// Area of triangle `[a, b, c]`.
+#[inline]
+pub fn triangle_area([a, b, c]: [Vec3; 3]) -> f32 {
+    0.5 * (b - a).cross(c - a).length()
+}
+
+/// Barycentric coordinates of a point uniformly distributed by area on a triangle, from the
+/// uniform pair `u`.
+#[inline]
+pub fn sample_triangle_area(u: Vec2) -> [f32; 3] {
+    let su = u.x.sqrt();
+    let (b0, b1) = (1.0 - su, u.y * su);
+    [b0, b1, 1.0 - b0 - b1]
+}
+
+/// Absolute error bound, per component, of the point `b0·a + b1·b + b2·c` of triangle
+/// `[a, b, c]` (pbrt-v4, Section 6.8.5).
+#[inline(always)]
+pub fn triangle_point_error([a, b, c]: [Vec3; 3], [b0, b1, b2]: [f32; 3]) -> Vec3 {
+    gamma(7.0) * ((b0 * a).abs() + (b1 * b).abs() + (b2 * c).abs())
+}
+
+/// The angle between unit vectors, accurate at both ends of its range (pbrt-v4).
+#[inline]
+fn angle_between(a: Vec3, b: Vec3) -> f32 {
+    if a.dot(b) < 0.0 {
+        PI - 2.0 * (0.5 * (a + b).length()).min(1.0).asin()
+    } else {
+        2.0 * (0.5 * (b - a).length()).min(1.0).asin()
+    }
+}
+
+/// The part of `v` orthogonal to unit `w`.
+#[inline]
+fn gram_schmidt(v: Vec3, w: Vec3) -> Vec3 {
+    v - v.dot(w) * w
+}
+
+/// Solid angle of triangle `v` seen from `p` (Van Oosterom & Strackee, 1983).
+#[inline]
+pub fn triangle_solid_angle(v: [Vec3; 3], p: Vec3) -> f32 {
+    let [a, b, c] = v.map(|x| (x - p).normalize_or_zero());
+    2.0 * a
+        .dot(b.cross(c))
+        .abs()
+        .atan2(1.0 + a.dot(b) + a.dot(c) + b.dot(c))
+        .abs()
+}
+
+/// Barycentric coordinates of a point of triangle `v` chosen uniformly in the solid angle it
+/// subtends from `p` (Arvo, "Stratified Sampling of Spherical Triangles", 1995; as in pbrt-v4's
+/// `SampleSphericalTriangle`). `solid_angle` must be `triangle_solid_angle(v, p)`: the sub-triangle
+/// areas are fractions of it, so the density is exactly `1 / solid_angle` per steradian, the
+/// value the light's pdf reports (pbrt-v4 recomputes the area from the angles instead, a second
+/// formula for the same quantity). `None` when the triangle is degenerate as seen from `p`.
+#[inline]
+pub fn sample_spherical_triangle(
+    v: [Vec3; 3],
+    p: Vec3,
+    solid_angle: f32,
+    u: Vec2,
+) -> Option<[f32; 3]> {
+    let [a, b, c] = v.map(|x| (x - p).normalize_or_zero());
+    let (n_ab, n_bc, n_ca) = (a.cross(b), b.cross(c), c.cross(a));
+    if [n_ab, n_bc, n_ca].iter().any(|n| n.length_squared() == 0.0) {
+        return None;
+    }
+    let (n_ab, n_ca) = (n_ab.normalize(), n_ca.normalize());
+    // The spherical triangle's angle at a. The sub-triangle (a, b, c') of area u.x times the
+    // whole fixes c' on the arc a–c; its angles sum to π plus that area.
+    let alpha = angle_between(n_ab, -n_ca);
+    let area_pi = PI + u.x * solid_angle;
+    let (sin_alpha, cos_alpha) = alpha.sin_cos();
+    let (sin_area, cos_area) = area_pi.sin_cos();
+    let sin_phi = sin_area * cos_alpha - cos_area * sin_alpha;
+    let cos_phi = cos_area * cos_alpha + sin_area * sin_alpha;
+    let k1 = cos_phi + cos_alpha;
+    let k2 = sin_phi - sin_alpha * a.dot(b);
+    let cos_bp = (k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha)
+        / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha);
+    if cos_bp.is_nan() {
+        return None;
+    }
+    let cos_bp = cos_bp.clamp(-1.0, 1.0);
+    let sin_bp = (1.0 - cos_bp * cos_bp).max(0.0).sqrt();
+    let cp = cos_bp * a + sin_bp * gram_schmidt(c, a).normalize();
+    // Then a direction on the arc b–c', uniform in the sub-triangle's area.
+    let cos_t = 1.0 - u.y * (1.0 - cp.dot(b));
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let w = cos_t * b + sin_t * gram_schmidt(cp, b).normalize_or_zero();
+    // Where the direction meets the triangle's plane, in barycentrics.
+    let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
+    let s1 = w.cross(e2);
+    let divisor = s1.dot(e1);
+    if divisor == 0.0 || !divisor.is_finite() {
+        return None;
+    }
+    let s = p - v[0];
+    let b1 = (s.dot(s1) / divisor).clamp(0.0, 1.0);
+    let b2 = (w.dot(s.cross(e1)) / divisor).clamp(0.0, 1.0);
+    let (b1, b2) = if b1 + b2 > 1.0 {
+        (b1 / (b1 + b2), b2 / (b1 + b2))
+    } else {
+        (b1, b2)
+    };
+    Some([1.0 - b1 - b2, b1, b2])
 }
 
 #[cfg(test)]

@@ -1,69 +1,34 @@
-//! Emitters as a sampling distribution, for next-event estimation. No ECS here.
+//! Lights as a sampling distribution, for next-event estimation: the light table. No ECS here.
 //!
-//! Every sphere and triangle whose material is a `Light` (or an emissive `Pbr`) is an emitter, and so is every triangle
-//! of an emissive instanced mesh (placed through its instance transform, with its area in world
-//! space). One is chosen with probability proportional to its power (area × intensity × mean
-//! emitted colour), then a point on it:
-//! - on a sphere, uniformly in the cone of directions it subtends from the shading point (only
-//!   the visible cap), or uniformly by area from inside it;
-//! - on a triangle, uniformly in the solid angle it subtends (a spherical triangle, Arvo 1995)
-//!   when it is near (area ≥ 0.3 × squared distance) and that angle is neither tiny nor near a
-//!   hemisphere, else uniformly by area.
-//!
-//! [`LightSet::sample`] and [`LightSet::pdf`] decide the strategy by the same rule, so the
-//! density a BSDF-sampled hit is weighted with is the one the light sample would have had.
-//! Infinite planes are never light-sampled: their emission is only found by BSDF sampling, at
-//! full weight.
-//!
-//! The distant lights of the scene's [`Sky`] (an environment map, a sun) follow the emitters in
-//! the table, with their power as the scene receives it ([`DistantLight::power`]); a sample of
-//! one is a direction ([`DistantSample`]), and a path that leaves the scene finds them.
-//!
-//! The selection table holds cumulative counts out of 2²⁴, the resolution of the random numbers
-//! (`Rng::next_f32`): an emitter's probability is its count / 2²⁴, exactly the frequency with
-//! which a 24-bit `u_select` picks it, within 2⁻²⁴ of its share of the power (the running sum is
-//! taken in f64). An emitter whose count rounds to 0 is never picked and has density 0, so it is
-//! left to BSDF sampling at full weight.
+//! Every sphere and triangle whose material emits ([`crate::shading::material::Material::emission`])
+//! is an area light ([`area`]), and so is every triangle of an emissive instanced mesh (placed
+//! through its instance transform, with its area in world space); the distant lights of the
+//! scene's sky ([`distant`]) follow them in the table. One is chosen with probability
+//! proportional to its power ([`table`]: area × intensity × mean emitted colour for an area
+//! light, what the scene receives for a distant one), then a point on it or a direction towards
+//! it. [`LightSet::sample`] and [`LightSet::pdf`] decide an area light's strategy by the same
+//! rule, so the density a BSDF-sampled hit is weighted with is the one the light sample would
+//! have had. Infinite planes are never light-sampled: their emission is only found by BSDF
+//! sampling, at full weight.
+
+pub mod area;
+pub mod distant;
+pub mod table;
 
 use glam::{Vec2, Vec3};
 
 use crate::geometry::layout::Layout;
 use crate::geometry::packed::{Geometry, HitKind};
-use crate::geometry::ray::gamma;
-use crate::geometry::sphere::sphere_uv;
 use crate::geometry::store::{SphereStore, TriangleStore};
 use crate::shading::material::Material;
-use crate::shading::sampling::{
-    cone_one_minus_cos, sample_sphere_cone, sample_spherical_triangle, triangle_solid_angle,
-};
-use crate::shading::texture::Texture;
-use crate::sky::{DistantLight, Sky};
+use crate::sky::Sky;
+
+use area::{Emitter, LightSample, radiance_scale};
+use distant::{DistantLight, DistantSample};
+use table::PowerTable;
 
 /// Marks a primitive slot that is not an emitter.
 const NONE: u32 = u32::MAX;
-
-/// Resolution of the selection table: cumulative counts out of 2²⁴.
-const SELECT_SCALE: u32 = 1 << 24;
-
-/// Solid angles (sr) between which a triangle is sampled by solid angle; outside, by area.
-/// Below the lower bound the spherical triangle's angles lose precision in f32 and area
-/// sampling is as good; near 2π the construction breaks down (pbrt-v4's bounds).
-const SPHERICAL_MIN: f32 = 3e-4;
-const SPHERICAL_MAX: f32 = 6.22;
-/// Triangles with area below this times their squared distance from the shading point are
-/// sampled by area, without computing their solid angle.
-const SPHERICAL_MIN_AREA_RATIO: f32 = 0.3;
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Emitter {
-    kind: HitKind,
-    index: u32,
-    area: f32,
-    material: u32,
-    /// A sphere's centre, or the centroid of a triangle's world-space vertices: where the
-    /// choice of strategy measures the distance from.
-    centroid: Vec3,
-}
 
 /// A light sample: a point on an emitter or a direction towards a distant light.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,57 +39,12 @@ pub enum Sampled {
     Distant(DistantSample),
 }
 
-/// A direction sampled towards a distant light.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DistantSample {
-    /// Unit direction towards the light.
-    pub direction: Vec3,
-    /// Radiance the light sends along it.
-    pub radiance: Vec3,
-    /// Probability density of the direction per steradian, selection included: what
-    /// [`LightSet::distant_lookup`] gives for it.
-    pub pdf: f32,
-}
-
-/// A point sampled on an emitter.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LightSample {
-    /// The point.
-    pub p: Vec3,
-    /// Unit geometric normal of the emitter at `p`.
-    pub n: Vec3,
-    /// Texture coordinates at `p`.
-    pub uv: Vec2,
-    /// Material index of the emitter.
-    pub material: u32,
-    /// Probability density of the direction from the shading point to `p`, per steradian
-    /// (emitter selection included): what [`LightSet::pdf`] gives for the same point.
-    pub pdf: f32,
-    /// Absolute error bound of `p`, per component.
-    pub err: Vec3,
-}
-
-/// How a point is chosen on one emitter from one shading point.
-#[derive(Clone, Copy, Debug)]
-enum Strategy {
-    /// Uniformly by area.
-    Area,
-    /// Uniformly in a sphere's visible cone; `2π` times this is its solid angle.
-    Cone { one_minus_cos: f32 },
-    /// Uniformly in a triangle's solid angle; its world-space vertices, fetched (for an
-    /// instance: transformed) once for both the choice and the sample.
-    Spherical {
-        solid_angle: f32,
-        vertices: [Vec3; 3],
-    },
-}
-
-/// The emitters of a scene with their selection probabilities.
+/// The lights of a scene with their selection probabilities.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LightSet {
     emitters: Vec<Emitter>,
-    /// Cumulative selection counts out of [`SELECT_SCALE`], ending at it.
-    cdf: Vec<u32>,
+    /// Selection by power: the emitters, then the distant lights.
+    table: PowerTable,
     /// Emitter index per sphere slot, or `NONE`.
     sphere_emitter: Vec<u32>,
     /// Emitter index per triangle slot, or `NONE`.
@@ -134,37 +54,6 @@ pub struct LightSet {
     instance_emitter: Vec<u32>,
     /// The distant lights: entries `emitters.len() + k` of the table.
     distant: Vec<DistantLight>,
-}
-
-/// Mean of a texture's colour, estimated from a few texture coordinates (exact for constants).
-fn mean_colour(t: &Texture) -> f32 {
-    let grid = [0.125f32, 0.375, 0.625, 0.875];
-    let mut sum = Vec3::ZERO;
-    for u in grid {
-        for v in grid {
-            sum += t.eval(Vec2::new(u, v));
-        }
-    }
-    (sum / 16.0).element_sum() / 3.0
-}
-
-/// Area of triangle `[a, b, c]`.
-#[inline]
-fn triangle_area([a, b, c]: [Vec3; 3]) -> f32 {
-    0.5 * (b - a).cross(c - a).length()
-}
-
-impl Emitter {
-    /// The triangle emitter `(kind, index)` with world-space vertices `v`.
-    fn triangle(kind: HitKind, index: usize, v: [Vec3; 3], material: u32) -> Self {
-        Self {
-            kind,
-            index: index as u32,
-            area: triangle_area(v),
-            material,
-            centroid: (v[0] + v[1] + v[2]) * (1.0 / 3.0),
-        }
-    }
 }
 
 impl LightSet {
@@ -188,17 +77,8 @@ impl LightSet {
     ) -> Self {
         let power_of = |owner: u32| -> Option<(u32, f32)> {
             let m = *owner_material.get(owner as usize)?;
-            match materials.get(m as usize)? {
-                Material::Light {
-                    emit, intensity, ..
-                } => Some((m, intensity * mean_colour(emit))),
-                pbr @ Material::Pbr {
-                    emissive,
-                    emissive_strength,
-                    ..
-                } if pbr.is_emissive() => Some((m, emissive_strength * mean_colour(emissive))),
-                _ => None,
-            }
+            let emission = materials.get(m as usize)?.emission()?;
+            Some((m, radiance_scale(&emission)))
         };
         let mut set = Self {
             sphere_emitter: vec![NONE; geometry.sphere_owner.len()],
@@ -207,23 +87,16 @@ impl LightSet {
             ..Self::default()
         };
         let mut powers: Vec<f64> = Vec::new();
-        // Adds an emitter, returning its index; one of no (or no finite) power is never picked.
+        // Adds an emitter, returning its index.
         let mut add = |set: &mut Self, emitter: Emitter, power: f32| {
-            let p = f64::from(emitter.area) * f64::from(power);
-            powers.push(if p > 0.0 && p.is_finite() { p } else { 0.0 });
+            powers.push(f64::from(emitter.area()) * f64::from(power));
             set.emitters.push(emitter);
             (set.emitters.len() - 1) as u32
         };
         for (i, &owner) in geometry.sphere_owner.iter().enumerate() {
             if let Some((material, power)) = power_of(owner) {
                 let (c, r) = geometry.spheres.get(i);
-                let emitter = Emitter {
-                    kind: HitKind::Sphere,
-                    index: i as u32,
-                    area: 4.0 * std::f32::consts::PI * r * r,
-                    material,
-                    centroid: c,
-                };
+                let emitter = Emitter::sphere(i, c, r, material);
                 set.sphere_emitter[i] = add(&mut set, emitter, power);
             }
         }
@@ -248,20 +121,17 @@ impl LightSet {
                 add(&mut set, Emitter::triangle(kind, i, v, material), power);
             }
         }
-        let distant = sky.lights();
+        let distant = distant::lights_of(sky);
         if !distant.is_empty() {
             let radius = geometry.finite_bounds().map_or(1.0, |(lo, hi)| {
                 let r = 0.5 * (hi - lo).length();
                 if r > 0.0 && r.is_finite() { r } else { 1.0 }
             });
-            for light in &distant {
-                let p = f64::from(light.power(radius));
-                powers.push(if p > 0.0 && p.is_finite() { p } else { 0.0 });
-            }
+            powers.extend(distant.iter().map(|light| f64::from(light.power(radius))));
         }
         set.distant = distant;
-        let total: f64 = powers.iter().sum();
-        if !(total > 0.0 && total.is_finite()) {
+        set.table = PowerTable::new(&powers);
+        if set.table.is_empty() {
             // Emitters with zero power (or none at all): nothing worth sampling.
             return Self {
                 sphere_emitter: vec![NONE; set.sphere_emitter.len()],
@@ -271,23 +141,12 @@ impl LightSet {
                 ..Self::default()
             };
         }
-        let mut acc = 0.0f64;
-        set.cdf = powers
-            .iter()
-            .map(|p| {
-                acc += p;
-                ((acc / total) * f64::from(SELECT_SCALE)).round() as u32
-            })
-            .collect();
-        if let Some(last) = set.cdf.last_mut() {
-            *last = SELECT_SCALE;
-        }
         set
     }
 
     /// Whether there is nothing to sample.
     pub fn is_empty(&self) -> bool {
-        self.cdf.is_empty()
+        self.table.is_empty()
     }
 
     /// Number of emitters (distant lights not included).
@@ -318,89 +177,17 @@ impl LightSet {
         (radiance, pmf * pdf)
     }
 
-    /// Probability that [`LightSet::select`] picks emitter `k` (0 for an index out of range).
+    /// Probability that [`LightSet::select`] picks light `k` (0 for an index out of range).
     #[inline]
     pub fn selection_pmf(&self, k: usize) -> f32 {
-        let Some(&hi) = self.cdf.get(k) else {
-            return 0.0;
-        };
-        let lo = if k == 0 { 0 } else { self.cdf[k - 1] };
-        (hi - lo) as f32 * (1.0 / SELECT_SCALE as f32)
+        self.table.pmf(k)
     }
 
-    /// The emitter that `u_select` ∈ [0, 1) picks, read at 24-bit resolution, with its
-    /// selection probability; `None` if there are no emitters.
+    /// The light that `u_select` ∈ [0, 1) picks, read at 24-bit resolution, with its
+    /// selection probability; `None` if there are no lights.
     #[inline]
     pub fn select(&self, u_select: f32) -> Option<(usize, f32)> {
-        if self.cdf.is_empty() {
-            return None;
-        }
-        let g = ((u_select * SELECT_SCALE as f32) as u32).min(SELECT_SCALE - 1);
-        let k = self.cdf.partition_point(|&c| c <= g);
-        Some((k, self.selection_pmf(k)))
-    }
-
-    /// How emitter `e` is sampled from shading point `p_ref`.
-    #[inline(always)]
-    fn strategy<L: Layout>(geometry: &Geometry<L>, e: &Emitter, p_ref: Vec3) -> Strategy {
-        let i = e.index as usize;
-        match e.kind {
-            HitKind::Sphere => {
-                let (c, r) = geometry.spheres.get(i);
-                let dc2 = (c - p_ref).length_squared();
-                if dc2 > r * r {
-                    Strategy::Cone {
-                        one_minus_cos: cone_one_minus_cos(r * r / dc2),
-                    }
-                } else {
-                    Strategy::Area
-                }
-            }
-            HitKind::Triangle | HitKind::Instance { .. } => {
-                // Far from the shading point (area / distance² small), area sampling's density
-                // hardly varies over the triangle: the spherical construction would cost more
-                // than it saves.
-                if e.area < SPHERICAL_MIN_AREA_RATIO * (e.centroid - p_ref).length_squared() {
-                    return Strategy::Area;
-                }
-                let v = Self::vertices(geometry, e);
-                let solid_angle = triangle_solid_angle(v, p_ref);
-                if (SPHERICAL_MIN..=SPHERICAL_MAX).contains(&solid_angle) {
-                    Strategy::Spherical {
-                        solid_angle,
-                        vertices: v,
-                    }
-                } else {
-                    Strategy::Area
-                }
-            }
-            HitKind::Plane => Strategy::Area,
-        }
-    }
-
-    /// World-space vertices of a triangle emitter.
-    #[inline]
-    fn vertices<L: Layout>(geometry: &Geometry<L>, e: &Emitter) -> [Vec3; 3] {
-        match e.kind {
-            HitKind::Instance { triangle } => geometry.instances.world_triangle(e.index, triangle),
-            _ => geometry.triangles.get(e.index as usize),
-        }
-    }
-
-    /// Density per steradian, at `p_ref`, of the point `p` (unit normal `n`) on emitter `e`
-    /// sampled by `strategy`, selection excluded.
-    #[inline]
-    fn density(e: &Emitter, strategy: Strategy, p_ref: Vec3, p: Vec3, n: Vec3) -> f32 {
-        match strategy {
-            Strategy::Area => {
-                let to = p - p_ref;
-                let dist2 = to.length_squared();
-                let cos = (to.dot(n) / dist2.sqrt()).abs();
-                dist2 / (e.area * cos)
-            }
-            Strategy::Cone { one_minus_cos } => 1.0 / (2.0 * std::f32::consts::PI * one_minus_cos),
-            Strategy::Spherical { solid_angle, .. } => 1.0 / solid_angle,
-        }
+        self.table.select(u_select)
     }
 
     /// Samples a light seen from shading point `p_ref`: `u_select` picks it, `u` the point on
@@ -433,62 +220,7 @@ impl LightSet {
                 pdf,
             }));
         };
-        let i = e.index as usize;
-        let strategy = Self::strategy(geometry, &e, p_ref);
-        let (p, n, uv, err) = match e.kind {
-            HitKind::Sphere => {
-                let (c, r) = geometry.spheres.get(i);
-                let n = match strategy {
-                    Strategy::Cone { .. } => sample_sphere_cone(c, r, p_ref, u).1,
-                    _ => {
-                        let z = 1.0 - 2.0 * u.x;
-                        let s = (1.0 - z * z).max(0.0).sqrt();
-                        let phi = 2.0 * std::f32::consts::PI * u.y;
-                        Vec3::new(s * phi.cos(), s * phi.sin(), z)
-                    }
-                };
-                let uv = sphere_uv(geometry.sphere_frame[i].transpose() * n);
-                (c + r * n, n, uv, gamma(6.0) * (c.abs() + Vec3::splat(r)))
-            }
-            HitKind::Triangle | HitKind::Instance { .. } => {
-                let [b0, b1, b2] = match strategy {
-                    Strategy::Spherical {
-                        vertices,
-                        solid_angle,
-                    } => sample_spherical_triangle(vertices, p_ref, solid_angle, u)?,
-                    _ => {
-                        let su = u.x.sqrt();
-                        let (b0, b1) = (1.0 - su, u.y * su);
-                        [b0, b1, 1.0 - b0 - b1]
-                    }
-                };
-                if let HitKind::Instance { triangle } = e.kind {
-                    let s = geometry.instances.surface(e.index, triangle, b1, b2);
-                    let err = geometry.instances.point_error(e.index, triangle, b1, b2);
-                    (s.p, s.n, s.uv, err)
-                } else {
-                    let [a, b, c] = geometry.triangles.get(i);
-                    let [ta, tb, tc] = geometry.triangle_uv[i];
-                    let n = geometry.triangle_normal[i];
-                    let err = gamma(7.0) * ((b0 * a).abs() + (b1 * b).abs() + (b2 * c).abs());
-                    (
-                        b0 * a + b1 * b + b2 * c,
-                        n,
-                        b0 * ta + b1 * tb + b2 * tc,
-                        err,
-                    )
-                }
-            }
-            HitKind::Plane => return None,
-        };
-        Some(Sampled::Surface(LightSample {
-            p,
-            n,
-            uv,
-            material: e.material,
-            pdf: pmf * Self::density(&e, strategy, p_ref, p, n),
-            err,
-        }))
+        e.sample(geometry, p_ref, u, pmf).map(Sampled::Surface)
     }
 
     /// Density per steradian with which [`LightSet::sample`], called at `p_ref`, picks the
@@ -523,7 +255,7 @@ impl LightSet {
             return 0.0;
         }
         let e = &self.emitters[k as usize];
-        pmf * Self::density(e, Self::strategy(geometry, e, p_ref), p_ref, p, n)
+        pmf * e.density(e.strategy(geometry, p_ref), p_ref, p, n)
     }
 }
 
@@ -531,6 +263,7 @@ impl LightSet {
 mod tests {
     use super::*;
     use crate::geometry::packed::Primitive;
+    use crate::shading::texture::Texture;
 
     /// Surface emitters never ask for the second pair of numbers.
     fn no_jitter() -> Vec2 {
