@@ -4,11 +4,10 @@
 //! [`Transform`] and [`MaterialRef`] components; systems ([`systems`]) pack them into
 //! structure-of-arrays geometry with a BVH (obvhs) only when geometry changed, and the path
 //! tracer ([`render`]) renders the packed snapshot with rayon. Kernels ([`geometry`],
-//! [`shading`], [`camera`], [`film`]) know nothing about the ECS. See `ARCHITECTURE.md`.
+//! [`shading`], [`lights`], [`film`]) know nothing about the ECS. See `ARCHITECTURE.md`.
 
 pub mod app;
 pub mod bench;
-pub mod camera;
 pub mod cli;
 pub mod cpu;
 pub mod denoise;

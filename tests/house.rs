@@ -1,5 +1,6 @@
 //! The layout of `src/`: no two files import each other, the scene loader (`scene/`) knows
-//! no ECS (`ecs/`), and no new circle between folders appears.
+//! no ECS (`ecs/`), the kernels know no scene format (`scene/format`), and no new circle between
+//! folders appears.
 //!
 //! Imports are read from the source text: `use crate::…`, `use super::…`, `use self::…` (with
 //! their `{…}` groups) and paths `crate::a::b`, `super::a`, `self::a` anywhere in code. A
@@ -406,6 +407,69 @@ fn the_loader_knows_no_ecs() {
         wrong.is_empty(),
         "scene/ imports ecs/:{}",
         show(&wrong, "->")
+    );
+}
+
+/// The kernels: code that runs per ray or per pixel and takes plain values, never the scene
+/// file's descriptions (`scene/format`), which the ECS and the app convert at their boundary.
+const KERNELS: &[&str] = &["render", "shading", "lights", "geometry", "sky"];
+
+/// Imports of `scene/format` (the file, or a folder of that name) by the kernels.
+fn kernel_imports_of_the_format(
+    graph: &BTreeMap<PathBuf, BTreeSet<PathBuf>>,
+) -> Vec<(PathBuf, PathBuf)> {
+    graph
+        .iter()
+        .filter(|(a, _)| KERNELS.contains(&folder(a).as_str()))
+        .flat_map(|(a, deps)| deps.iter().map(move |b| (a.clone(), b.clone())))
+        .filter(|(_, b)| {
+            let b = b.to_string_lossy().replace('\\', "/");
+            b == "scene/format.rs" || b.starts_with("scene/format/")
+        })
+        .collect()
+}
+
+#[test]
+fn kernels_import_no_scene_format() {
+    let wrong = kernel_imports_of_the_format(&imports(&src()));
+    assert!(
+        wrong.is_empty(),
+        "kernels import the scene format:{}",
+        show(&wrong, "->")
+    );
+}
+
+#[test]
+fn a_kernel_importing_the_format_is_found() {
+    let graph = graph_of(&[
+        (
+            "lib.rs",
+            "mod render;
+mod scene;
+",
+        ),
+        (
+            "render/mod.rs",
+            "use crate::scene::format::Method;
+",
+        ),
+        (
+            "scene/mod.rs",
+            "pub mod format;
+",
+        ),
+        (
+            "scene/format.rs",
+            "pub enum Method {}
+",
+        ),
+    ]);
+    assert_eq!(
+        kernel_imports_of_the_format(&graph),
+        vec![(
+            PathBuf::from("render/mod.rs"),
+            PathBuf::from("scene/format.rs")
+        )]
     );
 }
 

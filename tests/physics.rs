@@ -10,12 +10,12 @@ use std::sync::atomic::AtomicBool;
 
 use common::{point_estimate, render, scenes_dir, temp_dir, write_scene};
 use glam::{Affine3A, Mat3, Quat, Vec2, Vec3};
-use rondo::camera::Camera;
 use rondo::geometry::instance::MeshBlas;
 use rondo::geometry::packed::{Geometry, HitKind, Primitive};
 use rondo::lights::area::LightSample;
 use rondo::lights::{LightSet, Sampled};
 use rondo::model::MeshData;
+use rondo::render::camera::Camera;
 use rondo::render::{SceneView, render_pass};
 use rondo::scene::format::Method;
 use rondo::shading::material::Material;
@@ -483,7 +483,7 @@ fn non_finite_samples_are_counted_and_dropped() {
         }];
         let lights = LightSet::build(&g, &materials, &[0]);
         let camera = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0);
-        for method in [Method::Naive, Method::Mis] {
+        for method in [rondo::render::Method::Naive, rondo::render::Method::Mis] {
             let view = SceneView {
                 geometry: &g,
                 materials: &materials,
@@ -563,7 +563,7 @@ fn a_glass_ball_in_a_white_furnace_is_exactly_white_sample_by_sample() {
         camera: &camera,
         background: Vec3::ONE,
         max_depth: 64,
-        method: Method::Naive,
+        method: rondo::render::Method::Naive,
         roulette: true,
         sampler: rondo::shading::sampler::SamplerKind::Independent,
         masked: false,

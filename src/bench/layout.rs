@@ -35,7 +35,6 @@ use bevy_ecs::prelude::*;
 use cpu_time::ProcessTime;
 use glam::Vec3;
 
-use crate::camera::Camera;
 use crate::ecs::components::{EntityName, Shape, Transform};
 use crate::film::Film;
 use crate::geometry::aabb::RayQuery;
@@ -44,8 +43,9 @@ use crate::geometry::packed::{BvhPlan, Geometry, Primitive};
 use crate::geometry::ray::Ray;
 use crate::geometry::world::world_primitives;
 use crate::lights::LightSet;
+use crate::render::Method;
+use crate::render::camera::Camera;
 use crate::render::{SceneView, has_masks, render_pass};
-use crate::scene::format::Method;
 use crate::shading::material::Material;
 use crate::shading::rng::Rng;
 use crate::shading::sampler::SamplerKind;

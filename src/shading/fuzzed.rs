@@ -1,7 +1,6 @@
-//! The fuzzed mirror of the RTIOW-style thesis in `../shared/seed` ("Metal"): the mirror
-//! direction plus `roughness` times a random point of the unit ball; directions that end up
-//! below the surface are absorbed. It has no density, so next-event estimation leaves it to
-//! BSDF sampling. No ECS here.
+//! The fuzzed mirror ("Metal"): the mirror direction plus `roughness` times a random point of
+//! the unit ball; directions that end up below the surface are absorbed. It has no density, so
+//! next-event estimation leaves it to BSDF sampling. No ECS here.
 
 use glam::Vec3;
 

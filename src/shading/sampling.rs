@@ -43,7 +43,7 @@ pub fn sin_cos_quarter(phi: f32) -> (f32, f32) {
 }
 
 /// A cosine-distributed direction about +z (pdf cos θ / π), by Malley's method. Its z is always
-/// ≥ 0 and its length 1, so it is never the zero vector the thesis's `N + random` can produce.
+/// ≥ 0 and its length 1, so it is never the zero vector that `N + random` can produce.
 #[inline]
 pub fn cosine_hemisphere(u: Vec2) -> Vec3 {
     let d = concentric_disk(u);

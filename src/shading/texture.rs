@@ -140,7 +140,7 @@ impl ImageTexture {
 
     /// Index of the texel at `uv`: `i = min(⌊u·W⌋, W−1)`, `j = min(⌊(1−v)·H⌋, H−1)` (v = 0 is
     /// the bottom row), with u and v clamped to [0, 1], so every texel covers an equal square of
-    /// texture space (the thesis's `⌊u(W−1)⌋` never reaches the last column and row).
+    /// texture space (`⌊u(W−1)⌋` would never reach the last column and row).
     #[inline]
     fn nearest_clamped(&self, uv: Vec2) -> usize {
         let u = uv.x.clamp(0.0, 1.0);
@@ -220,7 +220,7 @@ fn srgb_table() -> Vec<f32> {
 pub enum Texture {
     /// The same colour everywhere.
     Constant(Vec3),
-    /// The thesis's checker: `even` where `sin(k·u)·sin(k·v) > 0`, else `odd`.
+    /// A checker: `even` where `sin(k·u)·sin(k·v) > 0`, else `odd`.
     Checker {
         /// The frequency `k`.
         scale: f32,

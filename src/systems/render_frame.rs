@@ -7,14 +7,15 @@ use bevy_ecs::prelude::*;
 
 use glam::Vec3;
 
-use crate::camera::Camera;
 use crate::ecs::resources::{
     Accumulation, ActiveCamera, Counters, OwnerMaterials, PackedGeometry, PassPlan, Preview,
     RenderControl, RenderSettings, SceneVersion, Timings,
 };
 use crate::film::shift_for;
 use crate::geometry::packed::{Aos, Hybrid, LayoutCache, LayoutKind, Soa, SoaSimd};
-use crate::render::{SceneView, has_masks, render_pass, render_preview};
+use crate::render::camera::Camera;
+use crate::render::{Method, SceneView, has_masks, render_pass, render_preview};
+use crate::scene::format::{self, CameraDesc};
 use crate::shading::material::Material;
 
 /// Paths a live preview traces at most, unless the smallest block gives more: about 9 ms on the
@@ -32,6 +33,23 @@ pub fn preview_block(smallest: u32, width: u32, height: u32) -> u32 {
         block *= 2;
     }
     block
+}
+
+// The kernels lay out the sampler's dimensions for paths as deep as the format accepts.
+const _: () = assert!(crate::render::MAX_DEPTH == format::MAX_DEPTH);
+
+/// The kernels' light-transport method for the scene file's.
+pub fn method(m: format::Method) -> Method {
+    match m {
+        format::Method::Naive => Method::Naive,
+        format::Method::Nee => Method::Nee,
+        format::Method::Mis => Method::Mis,
+    }
+}
+
+/// The camera a description places.
+pub fn camera_of(c: &CameraDesc) -> Camera {
+    Camera::new(c.position, c.direction, c.up, c.fov).with_lens(c.aperture, c.focus_distance)
 }
 
 /// The fixed-point shift of a scene's film: from its brightest radiance, emitted by any material
@@ -54,6 +72,7 @@ pub fn render_frame(
     packed: Res<PackedGeometry>,
     materials: Res<OwnerMaterials>,
     camera: Res<ActiveCamera>,
+    mut built: Local<Option<Camera>>,
     settings: Res<RenderSettings>,
     version: Res<SceneVersion>,
     control: Res<RenderControl>,
@@ -104,9 +123,11 @@ pub fn render_frame(
         PassPlan::Progressive { first } if done == 0 => first.min(s.spp),
         PassPlan::Progressive { .. } => (2 * done).min(s.spp),
     };
-    let c = camera.0;
-    let cam =
-        Camera::new(c.position, c.direction, c.up, c.fov).with_lens(c.aperture, c.focus_distance);
+    // Built once per edit of the camera, not per pass.
+    if camera.is_changed() {
+        *built = None;
+    }
+    let cam = *built.get_or_insert_with(|| camera_of(&camera.0));
     let start = Instant::now();
     let progress = |rows: u64| {
         if let Some(bar) = &control.progress {
@@ -128,7 +149,7 @@ pub fn render_frame(
                 camera: &cam,
                 background: s.background,
                 max_depth: s.max_depth,
-                method: s.method,
+                method: method(s.method),
                 roulette: control.roulette,
                 sampler: s.sampler,
                 masked: has_masks(&materials.materials),

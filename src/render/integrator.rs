@@ -1,127 +1,27 @@
-//! The path tracer: traces camera paths through packed geometry into a [`Film`]. No ECS here.
+//! The path tracer: radiance along a camera ray by BSDF sampling, next-event estimation or
+//! both (multiple importance sampling), with the path's denoiser features. No ECS here.
 
-use std::marker::PhantomData;
-use std::ops::Range;
-use std::sync::atomic::{AtomicBool, Ordering};
+use glam::Vec3;
 
-use glam::{DVec3, Vec3};
-use rayon::prelude::*;
-
-use crate::camera::Camera;
-use crate::cpu::{Isa, Kernel, Lanes, Sse};
-use crate::film::{FeatureSample, Film, FilmBand, FixedPoint, Pixel};
-use crate::geometry::layout::{DefaultLayout, Layout};
-use crate::geometry::packed::{Geometry, Hit, HitKind, LayoutKind};
+use super::{
+    BOUNCE_DIMENSIONS, BSDF_DIMENSION, LIGHT_CHOICE_DIMENSION, LIGHT_POINT_DIMENSION,
+    MAX_PASS_THROUGHS, Method, ROULETTE_DIMENSION, SceneView, TEXEL_DIMENSION, TraceStats,
+};
+use crate::cpu::{Lanes, Sse};
+use crate::film::FeatureSample;
+use crate::geometry::layout::Layout;
+use crate::geometry::packed::{Geometry, Hit, HitKind};
 use crate::geometry::ray::{Ray, gamma, spawn_origin};
 use crate::geometry::sphere::sphere_point_error;
 use crate::geometry::store::{SphereStore, TriangleStore};
 use crate::geometry::surface::Surface;
 use crate::geometry::triangle::triangle_point_error;
-use crate::lights::{LightSet, Sampled};
-use crate::scene::format::{MAX_DEPTH, Method};
+use crate::lights::Sampled;
 use crate::shading::bsdf::Bsdf;
-use crate::shading::material::Material;
-use crate::shading::rng::Rng;
-use crate::shading::sampler::{IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};
-
-/// Rows per parallel work item. Small enough to balance two cores and to cancel promptly.
-const BAND_ROWS: usize = 4;
-
-/// Everything a render reads: a snapshot of the scene, independent of the ECS. Generic over the
-/// geometry's layout, so that the whole pass is monomorphised per layout (no dispatch per ray).
-#[derive(Clone, Copy)]
-pub struct SceneView<'a, L: Layout = DefaultLayout> {
-    /// Packed geometry and its BVHs.
-    pub geometry: &'a Geometry<L>,
-    /// Material table.
-    pub materials: &'a [Material],
-    /// Material index of every owner slot.
-    pub owner_material: &'a [u32],
-    /// Emitters, for next-event estimation.
-    pub lights: &'a LightSet,
-    /// The camera.
-    pub camera: &'a Camera,
-    /// Radiance of rays that leave the scene.
-    pub background: Vec3,
-    /// Rays per path, camera ray included.
-    pub max_depth: u32,
-    /// Light-transport method.
-    pub method: Method,
-    /// Whether paths may be ended early by Russian roulette (unbiased either way).
-    pub roulette: bool,
-    /// Sample generator of the converging passes.
-    pub sampler: SamplerKind,
-    /// Whether some material has an alpha mask ([`has_masks`] of `materials`): only then are
-    /// hits tested for presence, so that scenes without masks pay nothing for them.
-    pub masked: bool,
-}
-
-/// Whether any of `materials` has an alpha mask ([`Material::is_masked`]): the value of
-/// [`SceneView::masked`].
-pub fn has_masks(materials: &[Material]) -> bool {
-    materials.iter().any(Material::is_masked)
-}
-
-/// Most surfaces one ray passes through where their alpha masks say they are absent; the next
-/// hit then counts as present whatever its mask says. A bound on the work a hostile scene (a
-/// stack of thousands of masked layers) can cause, far beyond what real scenes reach.
-pub const MAX_PASS_THROUGHS: u32 = 1024;
-
-/// Counters of one render.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct TraceStats {
-    /// Rays traced (camera, scattered and shadow rays).
-    pub rays: u64,
-    /// Samples whose radiance was NaN or infinite; they are dropped, never written.
-    pub nonfinite: u64,
-    /// Samples with a channel beyond the film's range (2^[`crate::film::HEADROOM_BITS`] times
-    /// the scene's brightest radiance); they are clamped to it.
-    pub clamped: u64,
-    /// Passes traced in each layout, in the order of [`LayoutKind::ALL`]: which monomorphised
-    /// code really ran.
-    pub layout_passes: [u64; 4],
-}
-
-impl std::ops::Add for TraceStats {
-    type Output = Self;
-    fn add(self, o: Self) -> Self {
-        Self {
-            rays: self.rays + o.rays,
-            nonfinite: self.nonfinite + o.nonfinite,
-            clamped: self.clamped + o.clamped,
-            layout_passes: std::array::from_fn(|k| self.layout_passes[k] + o.layout_passes[k]),
-        }
-    }
-}
-
-/// The render was cancelled before it finished; the film holds a partial pass.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Cancelled;
+use crate::shading::sampler::Sampler;
 
 /// Bounces after which Russian roulette may end a path.
 const ROULETTE_DEPTH: u32 = 3;
-
-/// The sampler's dimension layout: dimension 0 is the pixel position; bounce `b` then owns
-/// dimensions `1 + b·BOUNCE_DIMENSIONS + k` with `k` one of the offsets below. Past the bounces
-/// of the deepest path a scene may ask for, from [`EXTRA_DIMENSION`], come the dimensions added
-/// later ([`LENS_DIMENSION`], [`TEXEL_DIMENSION`]): adding them moved no earlier dimension, so
-/// a scene that does not use them renders exactly as before.
-pub const BOUNCE_DIMENSIONS: u32 = 5;
-/// The choice of an emitter for next-event estimation (1D).
-pub const LIGHT_CHOICE_DIMENSION: u32 = 0;
-/// The point on the chosen emitter (2D).
-pub const LIGHT_POINT_DIMENSION: u32 = 1;
-/// The BSDF's 2D sample, then one more 1D value (glass's choice, metal's fuzz depth).
-pub const BSDF_DIMENSION: u32 = 2;
-/// Russian roulette (1D).
-pub const ROULETTE_DIMENSION: u32 = 4;
-/// The first dimension past every bounce of a path of [`MAX_DEPTH`] rays.
-pub const EXTRA_DIMENSION: u32 = 1 + MAX_DEPTH * BOUNCE_DIMENSIONS;
-/// The position on the lens (2D), drawn only by a camera with an aperture.
-pub const LENS_DIMENSION: u32 = EXTRA_DIMENSION;
-/// Bounce `b`'s position within an environment map's texel (2D) at `TEXEL_DIMENSION + b`, drawn
-/// only when next-event estimation picked the map.
-pub const TEXEL_DIMENSION: u32 = EXTRA_DIMENSION + 1;
 
 /// Veach's power heuristic (β = 2) weight of a strategy with density `a` against one with `b`.
 #[inline]
@@ -234,7 +134,7 @@ fn first_present<L: Layout, W: Lanes>(
 }
 
 /// Radiance arriving along `ray`, by path tracing with the view's [`Method`]:
-/// - `Naive`: BSDF sampling only; emitters count when a path hits them (the thesis's algorithm).
+/// - `Naive`: BSDF sampling only; emitters count when a path hits them.
 /// - `Nee`: at every diffuse vertex a shadow ray goes to a point sampled on an emitter; emitters
 ///   hit by the BSDF-sampled continuation of such a vertex are then not counted again.
 /// - `Mis`: both, weighted by the power heuristic (Veach 1997, ch. 9).
@@ -267,7 +167,7 @@ pub fn trace_path<L: Layout, S: Sampler>(
 /// not; without `collect` (a film without feature buffers) they are not computed and come back
 /// zero.
 #[inline(always)]
-fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
+pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     lanes: W,
     view: &SceneView<L>,
     mut ray: Ray,
@@ -496,211 +396,4 @@ fn direct_light<L: Layout, W: Lanes>(
         1.0
     };
     f_cos * emitted * (weight / pdf_light)
-}
-
-/// Adds samples `samples` of every pixel to `film`, in parallel over bands of rows.
-///
-/// Each sample draws from its own generator (the view's [`SamplerKind`]) seeded by (seed,
-/// pixel, sample index) and is added to its pixel's sum in sample order, so the film is
-/// bit-identical whatever the thread count and however the samples are split into passes.
-/// `progress(rows)` is called as bands finish. If `cancel` becomes true, remaining bands are
-/// skipped and `Err(Cancelled)` is returned.
-pub fn render_pass<L: Layout>(
-    view: &SceneView<L>,
-    film: &mut Film,
-    seed: u64,
-    samples: Range<u32>,
-    cancel: &AtomicBool,
-    progress: &(dyn Fn(u64) + Sync),
-) -> Result<TraceStats, Cancelled> {
-    // Matched once per pass, like the layout: each sampler gets its own copy of the loop.
-    match view.sampler {
-        SamplerKind::Independent => {
-            render_pass_with::<L, IndependentPixel>(view, film, seed, samples, cancel, progress)
-        }
-        SamplerKind::Sobol => {
-            render_pass_with::<L, SobolPixel>(view, film, seed, samples, cancel, progress)
-        }
-    }
-}
-
-fn render_pass_with<L: Layout, S: PixelSampler>(
-    view: &SceneView<L>,
-    film: &mut Film,
-    seed: u64,
-    samples: Range<u32>,
-    cancel: &AtomicBool,
-    progress: &(dyn Fn(u64) + Sync),
-) -> Result<TraceStats, Cancelled> {
-    let (width, height) = (film.width, film.height);
-    let isa = Isa::selected();
-    let fixed = film.fixed();
-    let stats = film
-        .bands(BAND_ROWS)
-        .into_par_iter()
-        .enumerate()
-        .map(|(band, pixels)| {
-            if cancel.load(Ordering::Relaxed) {
-                return TraceStats::default();
-            }
-            let first = band * BAND_ROWS * width as usize;
-            let rows = (pixels.sum.len() / width as usize) as u64;
-            let stats = isa.run(Band::<L, S> {
-                view,
-                pixels,
-                first,
-                size: (width, height),
-                seed,
-                samples: samples.clone(),
-                fixed,
-                sampler: PhantomData,
-            });
-            progress(rows);
-            stats
-        })
-        .reduce(TraceStats::default, |a, b| a + b);
-    if cancel.load(Ordering::Relaxed) {
-        return Err(Cancelled);
-    }
-    film.samples = samples.end;
-    let mut stats = stats;
-    if let Some(slot) = LayoutKind::ALL.iter().position(|&k| k == L::KIND) {
-        stats.layout_passes[slot] += 1;
-    }
-    Ok(stats)
-}
-
-/// The camera ray of one sample of pixel `(x, y)` of an image of `size`: the position in the
-/// pixel from dimension 0, and for a camera with a lens the position on it from
-/// [`LENS_DIMENSION`] (a pinhole draws nothing more, so its renders are what they always were).
-#[inline(always)]
-fn camera_ray(
-    camera: &Camera,
-    x: f32,
-    y: f32,
-    size: (u32, u32),
-    sampler: &mut impl Sampler,
-) -> Ray {
-    let j = sampler.next_2d();
-    let (fx, fy) = (x + j.x, y + j.y);
-    if camera.has_lens() {
-        sampler.seek(LENS_DIMENSION);
-        let u = sampler.next_2d();
-        camera.lens_ray(fx, fy, size.0, size.1, u)
-    } else {
-        camera.ray(fx, fy, size.0, size.1)
-    }
-}
-
-/// Samples `samples` of the pixels of one band, whose first pixel has index `first`, added to
-/// their sums: the work of a pass that [`Isa::run`] compiles once per instruction set.
-struct Band<'a, L: Layout, S> {
-    view: &'a SceneView<'a, L>,
-    pixels: FilmBand<'a>,
-    first: usize,
-    size: (u32, u32),
-    seed: u64,
-    samples: Range<u32>,
-    fixed: FixedPoint,
-    sampler: PhantomData<S>,
-}
-
-impl<L: Layout, S: PixelSampler> Kernel for Band<'_, L, S> {
-    type Output = TraceStats;
-
-    #[inline(always)]
-    fn run<W: Lanes>(mut self, lanes: W) -> TraceStats {
-        let width = self.size.0;
-        let mut stats = TraceStats::default();
-        let collect = self.pixels.features.is_some();
-        for offset in 0..self.pixels.sum.len() {
-            let index = self.first + offset;
-            let (x, y) = (
-                (index % width as usize) as f32,
-                (index / width as usize) as f32,
-            );
-            let mut pixel = S::for_pixel(self.seed, index as u64);
-            for sample in self.samples.clone() {
-                let mut sampler = pixel.start_sample(sample);
-                let ray = camera_ray(self.view.camera, x, y, self.size, &mut sampler);
-                let (l, features) =
-                    trace_path_with(lanes, self.view, ray, &mut sampler, &mut stats, collect);
-                match self.pixels.add(offset, l, &features, self.fixed) {
-                    None => stats.nonfinite += 1,
-                    Some(clamped) => stats.clamped += u64::from(clamped),
-                }
-            }
-        }
-        stats
-    }
-}
-
-/// A quick preview for live editing: one sample per `block`×`block` block of pixels, written to
-/// every pixel of the block (so it costs 1/`block`² of a 1-spp pass). The film then holds one
-/// "sample" per pixel that is *not* part of the converging image: the caller discards it before
-/// the real passes. Cancellation works as in [`render_pass`].
-pub fn render_preview<L: Layout>(
-    view: &SceneView<L>,
-    film: &mut Film,
-    seed: u64,
-    block: usize,
-    cancel: &AtomicBool,
-) -> Result<TraceStats, Cancelled> {
-    let (width, height) = (film.width as usize, film.height as usize);
-    let block = block.max(1);
-    let fixed = film.fixed();
-    let stats = film
-        .bands(block)
-        .into_par_iter()
-        .enumerate()
-        .map(|(band, mut rows)| {
-            let mut stats = TraceStats::default();
-            if cancel.load(Ordering::Relaxed) {
-                return stats;
-            }
-            let collect = rows.features.is_some();
-            let lines = rows.sum.len() / width;
-            let cy = band * block + lines / 2;
-            for bx in (0..width).step_by(block) {
-                let cols = block.min(width - bx);
-                let cx = bx + cols / 2;
-                let mut rng = Rng::for_sample(seed, (cy * width + cx) as u64, 0);
-                let size = (width as u32, height as u32);
-                let ray = camera_ray(view.camera, cx as f32, cy as f32, size, &mut rng);
-                let (l, features) = trace_path_with(Sse, view, ray, &mut rng, &mut stats, collect);
-                // The block's centre pixel gets the sample; the rest of the block copies it.
-                let centre = (lines / 2) * width + cx;
-                match rows.add(centre, l, &features, fixed) {
-                    None => stats.nonfinite += 1,
-                    Some(clamped) => stats.clamped += u64::from(clamped),
-                }
-                fill_block(rows.sum, centre, width, bx..bx + cols, lines);
-                if let Some((albedo, normal)) = &mut rows.features {
-                    fill_block(albedo, centre, width, bx..bx + cols, lines);
-                    fill_block(normal, centre, width, bx..bx + cols, lines);
-                }
-            }
-            stats
-        })
-        .reduce(TraceStats::default, |a, b| a + b);
-    if cancel.load(Ordering::Relaxed) {
-        return Err(Cancelled);
-    }
-    film.samples = 1;
-    Ok(stats)
-}
-
-/// Copies pixel `from` of a band of `lines` rows of `width` pixels to the columns `cols` of
-/// every row.
-fn fill_block(rows: &mut [Pixel], from: usize, width: usize, cols: Range<usize>, lines: usize) {
-    let value = rows[from];
-    for line in 0..lines {
-        rows[line * width + cols.start..line * width + cols.end].fill(value);
-    }
-}
-
-/// Mean of a film's pixels, a convenience for tests and reports.
-pub fn film_mean(film: &Film) -> DVec3 {
-    let n = film.sum.len().max(1) as f64;
-    film.mean().iter().map(|m| m.as_dvec3()).sum::<DVec3>() / n
 }
