@@ -14,7 +14,11 @@ use crate::sky::{EnvironmentLight, Sky, Sun};
 impl Expander<'_> {
     /// The sky of the scene `file`'s settings: its environment map loaded (a dependency)
     /// through the cache, its sun placed.
-    pub(super) fn sky(&mut self, file: &SourceFile, settings: &SettingsDesc) -> Result<Sky, SceneError> {
+    pub(super) fn sky(
+        &mut self,
+        file: &SourceFile,
+        settings: &SettingsDesc,
+    ) -> Result<Sky, SceneError> {
         let environment = match &settings.environment {
             None => None,
             Some(env) => {

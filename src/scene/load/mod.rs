@@ -21,7 +21,7 @@ use crate::shading::material::Material;
 use crate::shading::texture::ImageTexture;
 use crate::sky::Sky;
 
-mod gltf;
+mod gltf_place;
 mod materials;
 mod prefab;
 mod reach;
