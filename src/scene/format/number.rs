@@ -7,18 +7,18 @@ use serde::{Deserialize, Deserializer};
 
 use crate::scene::error::{VALUE, number};
 
-/// A number type read as `$read` (matched by `$pat`) that refuses the value `$v` unless `$ok`,
+/// A number type read as `$read` (matched by `$pat`) that refuses the value `$v` when `$bad`,
 /// with "the value must be `$rule` (got …)", and keeps `$value`.
 macro_rules! validated_number {
     ($(#[$meta:meta])* $name:ident($t:ty) reads $read:ty as $pat:pat,
-     checks $v:ident: $ok:expr, $rule:literal, keeps $value:expr) => {
+     refuses $v:ident: $bad:expr, $rule:literal, keeps $value:expr) => {
         $(#[$meta])*
         pub struct $name(pub $t);
 
         impl<'de> Deserialize<'de> for $name {
             fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
                 let $pat = <$read>::deserialize(d)?;
-                if !$ok {
+                if $bad {
                     return Err(D::Error::custom(format!(
                         "{VALUE} must be {} (got {})",
                         $rule,
@@ -34,25 +34,25 @@ macro_rules! validated_number {
 validated_number! {
     /// A finite number (RON accepts `inf` and `NaN`; scenes may not).
     #[derive(Clone, Copy, Debug, PartialEq)]
-    Real(f32) reads f64 as v, checks v: (v as f32).is_finite(), "a finite number", keeps v as f32
+    Real(f32) reads f64 as v, refuses v: !(v as f32).is_finite(), "a finite number", keeps v as f32
 }
 
 validated_number! {
     /// A number > 0.
     #[derive(Clone, Copy, Debug, PartialEq)]
-    Positive(f32) reads Real as Real(v), checks v: v > 0.0, "> 0", keeps v
+    Positive(f32) reads Real as Real(v), refuses v: v <= 0.0, "> 0", keeps v
 }
 
 validated_number! {
     /// A number ≥ 0.
     #[derive(Clone, Copy, Debug, PartialEq)]
-    NonNegative(f32) reads Real as Real(v), checks v: v >= 0.0, ">= 0", keeps v
+    NonNegative(f32) reads Real as Real(v), refuses v: v < 0.0, ">= 0", keeps v
 }
 
 validated_number! {
     /// A number in [0, 1].
     #[derive(Clone, Copy, Debug, PartialEq)]
-    UnitInterval(f32) reads Real as Real(v), checks v: (0.0..=1.0).contains(&v),
+    UnitInterval(f32) reads Real as Real(v), refuses v: !(0.0..=1.0).contains(&v),
     "between 0 and 1", keeps v
 }
 
@@ -60,7 +60,7 @@ validated_number! {
     /// A whole number ≥ 1 that fits a `u32`: image sides, samples, path depths.
     #[derive(Clone, Copy, Debug, PartialEq, Eq)]
     Count(u32) reads f64 as v,
-    checks v: v >= 1.0 && v <= f64::from(u32::MAX) && v.fract() == 0.0,
+    refuses v: !(v >= 1.0 && v <= f64::from(u32::MAX) && v.fract() == 0.0),
     "a whole number >= 1", keeps v as u32
 }
 
