@@ -21,7 +21,6 @@ pub mod lights;
 pub mod metrics;
 pub mod model;
 pub mod output_file;
-pub mod partial;
 pub mod render;
 pub mod scene;
 pub mod serve;

@@ -36,7 +36,7 @@ enum Command {
         output: PathBuf,
         /// Render only samples A..B of every pixel into a partial (.exr) for `rondo merge`
         /// (docs/farm.md). The range's end takes the place of --spp.
-        #[arg(long, value_name = "A..B", value_parser = rondo::partial::parse_range, conflicts_with = "resume")]
+        #[arg(long, value_name = "A..B", value_parser = rondo::farm::partial::parse_range, conflicts_with = "resume")]
         samples: Option<std::ops::Range<u32>>,
         /// Continue the partial PATH (from --samples or `rondo merge`) with the samples after its
         /// last one, up to --spp; the output holds them all.

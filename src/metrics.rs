@@ -198,11 +198,6 @@ pub fn lamp_out_rmse(a: &Image, r: &Image) -> Option<f64> {
     Some((se / n as f64).sqrt())
 }
 
-/// Reads two image files and compares the first against the second (the reference).
-pub fn compare_files(path: &Path, reference: &Path) -> Result<ErrorMetrics, MetricsError> {
-    Ok(diff_files(path, reference, None)?.metrics)
-}
-
 /// What [`diff_files`] found.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Diff {

@@ -338,8 +338,8 @@ fn features_are_the_same_bits_for_any_thread_count_and_pass_split_and_leave_the_
 /// does not merge with a partial whose albedo is in the albedo's own scale.
 #[test]
 fn a_partial_with_the_albedo_in_the_colours_fixed_point_is_read_and_kept_apart() {
+    use rondo::farm::partial::{PartialMeta, plan_merge, read_partial, write_partial};
     use rondo::film::{ALBEDO_SHIFT, Features, FixedPoint, Pixel};
-    use rondo::partial::{PartialMeta, plan_merge, read_partial, write_partial};
     let dir = temp_dir("aov-old-partial");
     let (width, height, count) = (4u32, 2u32, 3u32);
     let pixels = (width * height) as usize;

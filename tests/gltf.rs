@@ -10,7 +10,7 @@ use std::sync::Arc;
 use common::gltf_doc::{Bin, doc, glb};
 use common::temp_dir;
 use glam::{Vec2, Vec3};
-use rondo::scene::gltf::{GltfImage, GltfScene, read_gltf, read_gltf_within};
+use rondo::scene::gltf_read::{GltfImage, GltfScene, read_gltf, read_gltf_within};
 use rondo::shading::rng::Rng;
 use serde_json::{Value, json};
 
@@ -240,15 +240,17 @@ fn materials_and_emissive_strength() {
     assert_eq!(m.base_color_factor, [0.5, 0.25, 1.0, 1.0]);
     assert_eq!((m.metallic, m.roughness), (0.75, 0.5));
     assert_eq!(m.emissive, Vec3::new(4.0, 2.0, 0.0));
-    assert_eq!(m.alpha_mode, rondo::scene::gltf::AlphaMode::Mask(0.25));
+    assert_eq!(m.alpha_mode, rondo::scene::gltf_read::AlphaMode::Mask(0.25));
     let t = m.base_color_texture.as_ref().expect("texture");
     assert_eq!(t.image, 0);
-    assert_eq!(t.wrap_s, rondo::scene::gltf::Wrap::MirroredRepeat);
-    assert_eq!(t.wrap_t, rondo::scene::gltf::Wrap::ClampToEdge);
+    assert_eq!(t.wrap_s, rondo::scene::gltf_read::Wrap::MirroredRepeat);
+    assert_eq!(t.wrap_t, rondo::scene::gltf_read::Wrap::ClampToEdge);
     assert!(t.nearest);
     assert_eq!(
         scene.images,
-        vec![rondo::scene::gltf::GltfImage::File("tex ture.png".into())]
+        vec![rondo::scene::gltf_read::GltfImage::File(
+            "tex ture.png".into()
+        )]
     );
 }
 

@@ -7,8 +7,8 @@ use std::path::Path;
 
 use exr::meta::attribute::{AttributeValue, Text};
 use exr::prelude::WritableImage;
+use rondo::farm::partial::read_meta;
 use rondo::farm::{Samples, prepare};
-use rondo::partial::read_meta;
 use rondo::{Overrides, PassPlan, Renderer};
 
 /// A copy of the partial `from` at `to` whose `rondo.samples` is `samples`.

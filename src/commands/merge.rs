@@ -34,14 +34,14 @@ pub fn run(
     } else {
         None
     };
-    let plan = rondo::partial::plan_merge(inputs, spp)?;
+    let plan = rondo::farm::partial::plan_merge(inputs, spp)?;
     if denoise && !plan.meta.features {
         bail!(
             "--denoise needs the partials' albedo and normal buffers, which rondo-partial-2             files do not have"
         );
     }
     if !plan.missing.is_empty() {
-        let missing = rondo::partial::format_ranges(&plan.missing).replace(',', ", ");
+        let missing = rondo::farm::partial::format_ranges(&plan.missing).replace(',', ", ");
         if !allow_gaps {
             bail!(
                 "missing samples {missing} (render them, or merge what is there with --allow-gaps)"
@@ -50,7 +50,7 @@ pub fn run(
         eprintln!("warning: missing samples {missing}; the image averages the samples present");
     }
     let start = std::time::Instant::now();
-    let sums = rondo::partial::merge(inputs, &plan)?;
+    let sums = rondo::farm::partial::merge(inputs, &plan)?;
     match denoiser {
         Some(d) => {
             let film = Film {
@@ -66,9 +66,12 @@ pub fn run(
             let image = images.denoise(d, Quality::High, &AtomicBool::new(false))?;
             write_layers(output, film.width, film.height, &image, &[], true)
         }
-        None => {
-            rondo::partial::write_output(output, &plan.meta, &sums.colour, sums.features.as_ref())
-        }
+        None => rondo::farm::partial::write_output(
+            output,
+            &plan.meta,
+            &sums.colour,
+            sums.features.as_ref(),
+        ),
     }
     .with_context(|| format!("{}: cannot write", output.display()))?;
     eprintln!(
@@ -76,7 +79,7 @@ pub fn run(
         inputs.len(),
         plan.meta.width,
         plan.meta.height,
-        rondo::partial::format_ranges(&plan.meta.ranges),
+        rondo::farm::partial::format_ranges(&plan.meta.ranges),
         if plan.meta.features {
             "with the albedo and normal buffers"
         } else {

@@ -89,7 +89,7 @@ pub fn run(
         bail!("{e}");
     }
     if let Some(part) = part {
-        let ranges = rondo::partial::format_ranges(part.ranges());
+        let ranges = rondo::farm::partial::format_ranges(part.ranges());
         part.finish(&mut r)?;
         eprintln!("{} holds samples {ranges}", output.display());
     }

@@ -86,11 +86,6 @@ impl MeshBlas {
     pub fn is_empty(&self) -> bool {
         self.triangles.is_empty()
     }
-
-    /// Heap bytes held by the triangles (the BVH nodes come on top).
-    pub fn triangle_bytes(&self) -> usize {
-        self.triangles.len() * std::mem::size_of::<[Vec3; 3]>()
-    }
 }
 
 /// Bottom-level BVHs by mesh, kept across geometry rebuilds: an unchanged mesh file keeps its

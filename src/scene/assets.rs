@@ -5,7 +5,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
-use super::gltf::{GltfImage, GltfScene, read_gltf};
+use super::gltf_read::{GltfImage, GltfScene, read_gltf};
 use crate::model::MeshData;
 use crate::shading::texture::ImageTexture;
 use crate::sky::EnvironmentMap;
@@ -191,7 +191,7 @@ fn read_asset(path: &Path) -> Result<(std::fs::Metadata, Vec<u8>), String> {
 }
 
 /// Refuses `path`, a glTF file's buffer or image below the file's folder `dir` (by its URI,
-/// checked by [`super::gltf::relative_uri`]), when it resolves outside that folder through a
+/// checked by [`super::gltf_read::relative_uri`]), when it resolves outside that folder through a
 /// symlink. A path that does not resolve is left for the read to report (and for a watcher to
 /// wait for).
 pub fn inside_folder(dir: &Path, path: &Path) -> Result<(), String> {
@@ -251,7 +251,7 @@ fn cached<T>(
     Ok((value, true))
 }
 
-/// An embedded image's bytes ([`super::gltf::SharedBytes::identity`]) and its encoding.
+/// An embedded image's bytes ([`super::gltf_read::SharedBytes::identity`]) and its encoding.
 type EmbeddedKey = ((usize, usize, usize), Encoding);
 
 /// A glTF file as read, with the external buffer files it was read from and its embedded

@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use crate::model::MeshData;
 
 /// Most triangles one OBJ file may produce (the limit of glTF files too).
-pub const MAX_TRIANGLES: usize = crate::scene::gltf::MAX_TRIANGLES;
+pub const MAX_TRIANGLES: usize = crate::scene::gltf_read::MAX_TRIANGLES;
 
 /// Bytes of text per chunk parsed on its own (the last line of a chunk runs on to its end).
 const CHUNK_BYTES: usize = 1 << 20;

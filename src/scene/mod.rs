@@ -23,7 +23,7 @@ mod assets;
 pub mod check;
 pub mod error;
 pub mod format;
-pub mod gltf;
+pub mod gltf_read;
 pub mod incremental;
 pub mod load;
 pub mod locate;

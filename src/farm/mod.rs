@@ -3,19 +3,21 @@
 //!
 //! Every sample's random numbers depend only on (seed, pixel, sample index) and the film sums
 //! exactly ([`crate::film`]), so a render splits into independent sample ranges whose merge
-//! ([`crate::partial`]) equals the single-process image bit for bit. See `docs/farm.md`.
+//! ([`crate::farm::partial`]) equals the single-process image bit for bit. See `docs/farm.md`.
+
+pub mod partial;
 
 use std::fmt::Write as _;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use crate::app::{Overrides, Renderer};
-use crate::film::{ALBEDO_SHIFT, DEFAULT_SHIFT, OutputKind, Pixel};
-use crate::geometry::packed::LayoutKind;
-use crate::partial::{
+use self::partial::{
     FORMAT_2, PartialError, PartialMeta, Sums, Tracing, image_hash, image_settings, normalize,
     read_partial, setting_difference, write_output,
 };
+use crate::app::{Overrides, Renderer};
+use crate::film::{ALBEDO_SHIFT, DEFAULT_SHIFT, OutputKind, Pixel};
+use crate::geometry::packed::LayoutKind;
 use crate::scene::error::SceneError;
 use crate::scene::format::SettingsDesc;
 

@@ -18,7 +18,7 @@ use crate::model::{MeshRef, Shape, Transform};
 use crate::scene::assets::{Encoding, GltfAsset, inside_folder};
 use crate::scene::error::SceneError;
 use crate::scene::format::EntityDesc;
-use crate::scene::gltf::{AlphaMode, GltfImage, GltfMaterial, GltfTexture, Wrap as GltfWrap};
+use crate::scene::gltf_read::{AlphaMode, GltfImage, GltfMaterial, GltfTexture, Wrap as GltfWrap};
 use crate::shading::maps::{AlphaMask, NormalMap};
 use crate::shading::material::Material;
 use crate::shading::texture::{Filter, ImageTexture, Sampling, Texture, Wrap};

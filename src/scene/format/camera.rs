@@ -1,0 +1,132 @@
+//! The camera as written: `Camera(position, look_at | direction, …)`.
+
+use glam::Vec3;
+use serde::Deserialize;
+
+use super::number::{NonNegative, Positive, Real, V3};
+use super::settings::MAX_COORDINATE;
+use crate::scene::error::{number, vector};
+
+/// `Camera(position, look_at | direction, up, fov, aperture, focus_distance | focus_on)`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Camera", try_from = "RawCamera")]
+pub struct CameraDesc {
+    /// Eye position.
+    pub position: Vec3,
+    /// View direction (from `look_at − position` or `direction`), non-zero.
+    pub direction: Vec3,
+    /// Up vector, not parallel to `direction`.
+    pub up: Vec3,
+    /// Vertical field of view in degrees, in (0, 180).
+    pub fov: f32,
+    /// Radius of the thin lens in scene units; 0 (the default) is a pinhole.
+    pub aperture: f32,
+    /// Distance of the plane of focus along the view direction, > 0: `focus_distance`, or the
+    /// depth of `focus_on`, or by default that of `look_at` (1 for a pinhole given a
+    /// `direction`, where it does not matter).
+    pub focus_distance: f32,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename = "Camera")]
+struct RawCamera {
+    position: V3,
+    look_at: Option<V3>,
+    direction: Option<V3>,
+    #[serde(default = "default_up")]
+    up: V3,
+    #[serde(default = "default_fov")]
+    fov: Real,
+    aperture: Option<NonNegative>,
+    focus_distance: Option<Positive>,
+    focus_on: Option<V3>,
+}
+
+fn default_up() -> V3 {
+    V3(Vec3::Y)
+}
+
+fn default_fov() -> Real {
+    Real(40.0)
+}
+
+impl TryFrom<RawCamera> for CameraDesc {
+    type Error = String;
+    fn try_from(raw: RawCamera) -> Result<Self, String> {
+        let direction = match (raw.look_at, raw.direction) {
+            (Some(at), None) => at.0 - raw.position.0,
+            (None, Some(d)) => d.0,
+            (Some(_), Some(_)) => {
+                return Err("give `look_at` or `direction`, not both".into());
+            }
+            (None, None) => return Err("`look_at` or `direction` is required".into()),
+        };
+        // Only the directions of `direction` and `up` matter. Scaling each by its largest
+        // component makes any non-zero length safe to square: `up: (3e38, 0, -3e38)` made the
+        // camera's right vector ∞ · 0 = NaN, and a tiny direction's square underflowed to 0.
+        let unit_max = |v: Vec3| {
+            let m = v.abs().max_element();
+            if m > 0.0 { v / m } else { v }
+        };
+        let direction = unit_max(direction);
+        if direction == Vec3::ZERO || !direction.is_finite() {
+            return Err("the view direction is zero (`look_at` equals `position`?)".into());
+        }
+        if raw.position.0.abs().max_element() > MAX_COORDINATE {
+            return Err(format!(
+                "position must be within ±{MAX_COORDINATE:e} on every axis (got {})",
+                vector(raw.position.0)
+            ));
+        }
+        let up = unit_max(raw.up.0);
+        if direction.normalize().cross(up).length_squared() < 1e-12 {
+            return Err("`up` must be non-zero and not parallel to the view direction".into());
+        }
+        let fov = raw.fov.0;
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(format!(
+                "fov must be in (0, 180) degrees (got {})",
+                number(fov)
+            ));
+        }
+        let aperture = raw.aperture.map_or(0.0, |a| a.0);
+        // Depth along the view, in f64: coordinates up to 1e9 square without overflow.
+        let depth = |p: Vec3| {
+            (p - raw.position.0)
+                .as_dvec3()
+                .dot(direction.as_dvec3().normalize()) as f32
+        };
+        let focus_distance = match (raw.focus_distance, raw.focus_on, raw.look_at) {
+            (Some(_), Some(_), _) => {
+                return Err("give `focus_distance` or `focus_on`, not both".into());
+            }
+            (Some(d), None, _) => d.0,
+            (None, Some(p), _) => {
+                let d = depth(p.0);
+                if !(d > 0.0 && d.is_finite()) {
+                    return Err(format!(
+                        "focus_on {} is not in front of the camera",
+                        vector(p.0)
+                    ));
+                }
+                d
+            }
+            (None, None, Some(at)) => depth(at.0),
+            (None, None, None) if aperture > 0.0 => {
+                return Err(
+                    "a camera with an aperture and a `direction` needs `focus_distance` or `focus_on`"
+                        .into(),
+                );
+            }
+            (None, None, None) => 1.0,
+        };
+        Ok(Self {
+            position: raw.position.0,
+            direction,
+            up,
+            fov,
+            aperture,
+            focus_distance,
+        })
+    }
+}

@@ -1,0 +1,151 @@
+//! Materials and textures as written.
+
+use glam::Vec3;
+use serde::Deserialize;
+
+use super::number::{Color, NonNegative, Positive, Real, UnitInterval};
+use crate::shading::texture::{Filter, Wrap};
+
+/// A texture: wherever a colour is expected.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum TextureDesc {
+    /// `Constant((r, g, b))`.
+    Constant(Color),
+    /// `Checker(scale, even, odd)`: `even` where `sin(scale·u)·sin(scale·v) > 0`.
+    Checker {
+        /// Frequency k.
+        scale: Real,
+        /// Texture of the positive cells.
+        even: Box<TextureDesc>,
+        /// Texture of the other cells.
+        odd: Box<TextureDesc>,
+    },
+    /// `Image(path: "file.png", filter: Nearest, wrap: Clamp)`, relative to the scene file.
+    Image {
+        /// Path to a PNG file.
+        path: String,
+        /// `Nearest` (the default) or `Bilinear`.
+        #[serde(default)]
+        filter: Filter,
+        /// `Clamp` (the default), `Repeat` or `MirroredRepeat`.
+        #[serde(default)]
+        wrap: Wrap,
+    },
+}
+
+/// A material.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum MaterialDesc {
+    /// `Diffuse(albedo)`.
+    Diffuse {
+        /// Reflectance.
+        albedo: TextureDesc,
+    },
+    /// `Metal(albedo, roughness)`; roughness is clamped to [0, 1].
+    Metal {
+        /// Reflectance.
+        albedo: TextureDesc,
+        /// Fuzz.
+        #[serde(default = "zero")]
+        roughness: Real,
+    },
+    /// `Glossy(albedo, roughness)`: GGX microfacet reflection; roughness is clamped to
+    /// [0.01, 1].
+    Glossy {
+        /// Reflectance at normal incidence.
+        albedo: TextureDesc,
+        /// Roughness; GGX α = roughness².
+        roughness: Real,
+    },
+    /// `Dielectric(ior)`.
+    Dielectric {
+        /// Index of refraction.
+        ior: Positive,
+    },
+    /// `Light(emit, intensity, two_sided)`.
+    Light {
+        /// Emitted colour.
+        emit: TextureDesc,
+        /// Scale of `emit`.
+        #[serde(default = "one")]
+        intensity: NonNegative,
+        /// Emit on both sides.
+        #[serde(default)]
+        two_sided: bool,
+    },
+    /// `Pbr(base_color, metallic, roughness, emissive, emissive_strength, normal_map)`: the
+    /// glTF 2.0 metallic–roughness material, with glTF's defaults (base colour 1, metallic 1,
+    /// roughness 1, no emission, strength 1, no normal map).
+    Pbr {
+        /// Base colour.
+        #[serde(default = "white")]
+        base_color: TextureDesc,
+        /// Metalness in [0, 1].
+        #[serde(default = "unit_one")]
+        metallic: UnitInterval,
+        /// Perceptual roughness in [0, 1]; GGX α = roughness² (at least 0.01²).
+        #[serde(default = "unit_one")]
+        roughness: UnitInterval,
+        /// Emitted colour.
+        #[serde(default = "black")]
+        emissive: TextureDesc,
+        /// Scale of `emissive`.
+        #[serde(default = "one")]
+        emissive_strength: NonNegative,
+        /// Tangent-space normal map (none by default).
+        #[serde(default)]
+        normal_map: Option<NormalMapDesc>,
+        /// Alpha mask (glTF's `alphaMode: MASK`): where the alpha of the `base_color` image is
+        /// below this cutoff the surface is absent and rays pass through it. No mask by default.
+        #[serde(default)]
+        alpha_cutoff: Option<NonNegative>,
+    },
+}
+
+/// `NormalMap(path: "n.png", scale: 1.0, filter: Nearest, wrap: Clamp)`: a tangent-space normal
+/// map, relative to the scene file, decoded as linear data; the texel's RGB encodes the normal
+/// `2·rgb − 1` in the frame (tangent ∂p/∂u, bitangent, shading normal), x and y scaled by
+/// `scale`; green points towards the image's top (OpenGL's convention, glTF's). Tangents come
+/// from the triangles' texture coordinates, so it acts on triangles, quads, boxes and meshes
+/// with texture coordinates, not on spheres and planes.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, rename = "NormalMap")]
+pub struct NormalMapDesc {
+    /// Path to an image file.
+    pub path: String,
+    /// Scale of the map's x and y (1, the default, as drawn; 0 flattens it).
+    #[serde(default = "one_real")]
+    pub scale: Real,
+    /// `Nearest` (the default) or `Bilinear`.
+    #[serde(default)]
+    pub filter: Filter,
+    /// `Clamp` (the default), `Repeat` or `MirroredRepeat`.
+    #[serde(default)]
+    pub wrap: Wrap,
+}
+
+fn one_real() -> Real {
+    Real(1.0)
+}
+
+fn white() -> TextureDesc {
+    TextureDesc::Constant(Color(Vec3::ONE))
+}
+
+fn black() -> TextureDesc {
+    TextureDesc::Constant(Color(Vec3::ZERO))
+}
+
+fn unit_one() -> UnitInterval {
+    UnitInterval(1.0)
+}
+
+fn zero() -> Real {
+    Real(0.0)
+}
+
+fn one() -> NonNegative {
+    NonNegative(1.0)
+}

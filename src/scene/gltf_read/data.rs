@@ -1,0 +1,212 @@
+//! What a glTF file is read into: plain data with no tie to the `gltf` crate's document, and the
+//! limits the reader holds a file to.
+
+use std::ops::Range;
+use std::sync::Arc;
+
+use glam::{Affine3A, Vec3};
+
+use crate::model::MeshData;
+
+/// Most triangles (all primitives together) one file may produce.
+pub const MAX_TRIANGLES: usize = 1 << 26;
+/// Most vertices (all primitives together) one file may produce.
+pub const MAX_VERTICES: usize = 1 << 26;
+/// Most elements of an accessor without a buffer view (zeros, perhaps with sparse values): such
+/// an accessor costs nothing in the file, so its size is bounded on its own.
+pub const MAX_ZERO_FILLED: usize = 1 << 22;
+/// Most node instances listed for the default scene (a node reached through several parents
+/// counts once per path).
+pub const MAX_NODE_INSTANCES: usize = 1 << 20;
+/// Deepest node hierarchy followed (deeper nodes, and cycles, are an error).
+pub const MAX_NODE_DEPTH: usize = 256;
+
+/// A glTF file read into plain data.
+#[derive(Debug, Default)]
+pub struct GltfScene {
+    /// The file's meshes, in file order (indexed by [`GltfNode::mesh`]).
+    pub meshes: Vec<GltfMesh>,
+    /// The nodes of the default scene (or of the first scene if none is marked default), in
+    /// depth-first order. A node reached twice is listed twice.
+    pub nodes: Vec<GltfNode>,
+    /// The file's materials, in file order (indexed by [`GltfPrimitive::material`]).
+    pub materials: Vec<GltfMaterial>,
+    /// The file's images, in file order (indexed by [`GltfTexture::image`]).
+    pub images: Vec<GltfImage>,
+    /// What was skipped or ignored, one sentence each.
+    pub warnings: Vec<String>,
+    /// Bytes held by the file's buffers (each source once), at most [`MAX_BUFFER_BYTES`].
+    pub held_bytes: u64,
+}
+
+/// A glTF mesh: its triangle primitives (points and lines are left out).
+#[derive(Debug)]
+pub struct GltfMesh {
+    /// The mesh's name in the file.
+    pub name: Option<String>,
+    /// Its triangle primitives. Each is its own [`MeshData`], shared (and instanced) by every
+    /// node that uses the mesh.
+    pub primitives: Vec<GltfPrimitive>,
+}
+
+/// One triangle primitive of a mesh.
+#[derive(Debug)]
+pub struct GltfPrimitive {
+    /// Its geometry, in the mesh's object space.
+    pub data: Arc<MeshData>,
+    /// Index into [`GltfScene::materials`]; `None` for the glTF default material.
+    pub material: Option<usize>,
+}
+
+/// A node of the default scene.
+#[derive(Debug, Clone)]
+pub struct GltfNode {
+    /// The node's index in the file (for names of unnamed nodes).
+    pub index: usize,
+    /// The node's name in the file.
+    pub name: Option<String>,
+    /// Object to file space: the node's transform composed with its ancestors'.
+    pub world_from_node: Affine3A,
+    /// Index into [`GltfScene::meshes`].
+    pub mesh: Option<usize>,
+}
+
+/// How a material's alpha is used.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AlphaMode {
+    /// Alpha is ignored.
+    Opaque,
+    /// Rays pass where alpha is below the cutoff.
+    Mask(f32),
+    /// Blended transparency.
+    Blend,
+}
+
+/// A texture coordinate wrap mode of a sampler.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Wrap {
+    /// Repeat (the default).
+    Repeat,
+    /// Repeat, mirrored every other time.
+    MirroredRepeat,
+    /// Clamp to the edge texel.
+    ClampToEdge,
+}
+
+/// A material's reference to a texture.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GltfTexture {
+    /// Index into [`GltfScene::images`].
+    pub image: usize,
+    /// Which `TEXCOORD_n` set it uses (only set 0 is read).
+    pub texcoord: u32,
+    /// Wrap mode along u.
+    pub wrap_s: Wrap,
+    /// Wrap mode along v.
+    pub wrap_t: Wrap,
+    /// Whether magnification is nearest-texel (`NEAREST`); linear otherwise.
+    pub nearest: bool,
+}
+
+/// An image referenced by a texture.
+#[derive(Debug, Clone, PartialEq)]
+pub enum GltfImage {
+    /// A file, as a path relative to the glTF file's directory (percent-decoded; checked by
+    /// [`relative_uri`]).
+    File(String),
+    /// Image bytes held in the file (a buffer view or a data URI), with their MIME type.
+    Bytes {
+        /// The encoded image, shared with the buffer that holds it.
+        bytes: SharedBytes,
+        /// Its MIME type, e.g. `image/png`.
+        mime_type: String,
+    },
+}
+
+/// A metallic–roughness material as the file gives it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GltfMaterial {
+    /// The material's name in the file.
+    pub name: Option<String>,
+    /// Linear RGBA base colour factor.
+    pub base_color_factor: [f32; 4],
+    /// Base colour texture (sRGB).
+    pub base_color_texture: Option<GltfTexture>,
+    /// Metallic factor.
+    pub metallic: f32,
+    /// Perceptual roughness factor.
+    pub roughness: f32,
+    /// Metallic (B) and roughness (G) texture (linear).
+    pub metallic_roughness_texture: Option<GltfTexture>,
+    /// Normal map (linear) and its scale.
+    pub normal_texture: Option<(GltfTexture, f32)>,
+    /// Emitted radiance: the emissive factor × `KHR_materials_emissive_strength`.
+    pub emissive: Vec3,
+    /// Emissive texture (sRGB).
+    pub emissive_texture: Option<GltfTexture>,
+    /// Alpha mode.
+    pub alpha_mode: AlphaMode,
+    /// Whether back faces are shaded as front faces.
+    pub double_sided: bool,
+    /// `KHR_materials_transmission`'s factor (0 without the extension).
+    pub transmission: f32,
+    /// Whether the transmission factor is multiplied by a texture.
+    pub transmission_texture: bool,
+    /// Index of refraction (`KHR_materials_ior`; 1.5 without it).
+    pub ior: f32,
+}
+
+/// Bytes of a glTF file's buffers: a range of one shared allocation, so that a source named by
+/// several buffers, and the images held in their views, are held once.
+#[derive(Clone, Debug)]
+pub struct SharedBytes {
+    pub(super) data: Arc<Vec<u8>>,
+    pub(super) range: Range<usize>,
+}
+
+impl SharedBytes {
+    /// All of `data`.
+    pub(super) fn whole(data: Arc<Vec<u8>>) -> Self {
+        let range = 0..data.len();
+        Self { data, range }
+    }
+
+    /// The part `range` (relative to these bytes), if inside them.
+    pub(super) fn slice(&self, range: Range<usize>) -> Option<Self> {
+        let start = self.range.start.checked_add(range.start)?;
+        let end = self.range.start.checked_add(range.end)?;
+        (start <= end && end <= self.range.end).then(|| Self {
+            data: self.data.clone(),
+            range: start..end,
+        })
+    }
+
+    /// The size of the allocation these bytes keep alive (they may be a part of it).
+    pub fn allocation_len(&self) -> usize {
+        self.data.len()
+    }
+
+    /// What identifies these bytes without reading them: the allocation and the range in it
+    /// (two images on one buffer view have the same identity).
+    pub fn identity(&self) -> (usize, usize, usize) {
+        (
+            Arc::as_ptr(&self.data) as usize,
+            self.range.start,
+            self.range.end,
+        )
+    }
+}
+
+impl std::ops::Deref for SharedBytes {
+    type Target = [u8];
+
+    fn deref(&self) -> &[u8] {
+        &self.data[self.range.clone()]
+    }
+}
+
+impl PartialEq for SharedBytes {
+    fn eq(&self, other: &Self) -> bool {
+        **self == **other
+    }
+}

@@ -1,0 +1,139 @@
+//! glTF metallic–roughness materials and their textures, each factor checked to be in range.
+
+use std::ops::RangeInclusive;
+
+use glam::Vec3;
+
+use super::data::{AlphaMode, GltfMaterial, GltfTexture, Wrap};
+
+/// A texture reference with its sampler.
+pub(super) fn texture(tex: &gltf::Texture, texcoord: u32) -> GltfTexture {
+    use gltf::texture::{MagFilter, WrappingMode};
+    let wrap = |w| match w {
+        WrappingMode::Repeat => Wrap::Repeat,
+        WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+    };
+    let sampler = tex.sampler();
+    GltfTexture {
+        image: tex.source().index(),
+        texcoord,
+        wrap_s: wrap(sampler.wrap_s()),
+        wrap_t: wrap(sampler.wrap_t()),
+        nearest: sampler.mag_filter() == Some(MagFilter::Nearest),
+    }
+}
+
+/// Checks that a material's field `field` holds `v`, a finite number within `range` (the
+/// spec's range for it; the RON loader refuses the same quantities out of range).
+pub(super) fn check_field(
+    what: &dyn Fn() -> String,
+    field: &str,
+    v: f32,
+    range: RangeInclusive<f32>,
+) -> Result<(), String> {
+    if v.is_finite() && range.contains(&v) {
+        return Ok(());
+    }
+    let (lo, hi) = (range.start(), range.end());
+    let within = if hi.is_finite() {
+        format!("in [{lo}, {hi}]")
+    } else if lo.is_finite() {
+        format!("finite and at least {lo}")
+    } else {
+        "finite".into()
+    };
+    Err(format!("{}: {field} is {v}, must be {within}", what()))
+}
+
+/// Reads a material, checking its factors against the spec's ranges.
+pub(super) fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> {
+    let pbr = m.pbr_metallic_roughness();
+    let name = m.name().map(str::to_owned);
+    let what = || match (&name, m.index()) {
+        (Some(n), Some(i)) => format!("material \"{n}\" (materials[{i}])"),
+        (None, Some(i)) => format!("materials[{i}]"),
+        (_, None) => "default material".into(),
+    };
+    let unit = 0.0..=1.0;
+    let any = f32::NEG_INFINITY..=f32::INFINITY;
+    let at_least_0 = 0.0..=f32::INFINITY;
+    for (k, v) in pbr.base_color_factor().into_iter().enumerate() {
+        let field = format!("pbrMetallicRoughness.baseColorFactor[{k}]");
+        check_field(&what, &field, v, unit.clone())?;
+    }
+    let metallic = pbr.metallic_factor();
+    check_field(
+        &what,
+        "pbrMetallicRoughness.metallicFactor",
+        metallic,
+        unit.clone(),
+    )?;
+    let roughness = pbr.roughness_factor();
+    check_field(
+        &what,
+        "pbrMetallicRoughness.roughnessFactor",
+        roughness,
+        unit.clone(),
+    )?;
+    for (k, v) in m.emissive_factor().into_iter().enumerate() {
+        check_field(&what, &format!("emissiveFactor[{k}]"), v, unit.clone())?;
+    }
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    let field = "extensions.KHR_materials_emissive_strength.emissiveStrength";
+    check_field(&what, field, strength, at_least_0.clone())?;
+    let emissive = Vec3::from(m.emissive_factor()) * strength;
+    if !emissive.is_finite() {
+        return Err(format!(
+            "{}: emissiveFactor × emissiveStrength is not finite",
+            what()
+        ));
+    }
+    let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
+    let field = "extensions.KHR_materials_transmission.transmissionFactor";
+    check_field(&what, field, transmission, unit)?;
+    let ior = m.ior().unwrap_or(1.5);
+    if !(ior.is_finite() && ior > 0.0) {
+        return Err(format!(
+            "{}: extensions.KHR_materials_ior.ior is {ior}, must be finite and above 0",
+            what()
+        ));
+    }
+    if let Some(t) = m.normal_texture() {
+        check_field(&what, "normalTexture.scale", t.scale(), any)?;
+    }
+    if let Some(cutoff) = m.alpha_cutoff() {
+        check_field(&what, "alphaCutoff", cutoff, at_least_0)?;
+    }
+    let alpha_mode = match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+        gltf::material::AlphaMode::Mask => AlphaMode::Mask(m.alpha_cutoff().unwrap_or(0.5)),
+        gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+    };
+    Ok(GltfMaterial {
+        base_color_factor: pbr.base_color_factor(),
+        base_color_texture: pbr
+            .base_color_texture()
+            .map(|t| texture(&t.texture(), t.tex_coord())),
+        metallic,
+        roughness,
+        metallic_roughness_texture: pbr
+            .metallic_roughness_texture()
+            .map(|t| texture(&t.texture(), t.tex_coord())),
+        normal_texture: m
+            .normal_texture()
+            .map(|t| (texture(&t.texture(), t.tex_coord()), t.scale())),
+        emissive,
+        emissive_texture: m
+            .emissive_texture()
+            .map(|t| texture(&t.texture(), t.tex_coord())),
+        alpha_mode,
+        double_sided: m.double_sided(),
+        transmission,
+        transmission_texture: m
+            .transmission()
+            .is_some_and(|t| t.transmission_texture().is_some()),
+        ior,
+        name,
+    })
+}
