@@ -179,13 +179,28 @@ fn delete_and_recreate_rerenders_and_keeps_the_image_meanwhile() {
 fn broken_saves_report_line_and_column_and_keep_the_image() {
     let (f, _) = Fixture::start("broken", &simple(RED), &[]);
     let before = std::fs::read(&f.out).expect("image");
+    // (what, scene, line, the text the column points at, the field at fault if the parser knows)
     let cases = [
-        ("syntax error", simple("Constant((1.0, 0.0 0.0))"), 5),
-        ("invalid value", simple("Constant((-1.0, 0.0, 0.0))"), 5),
+        (
+            "syntax error",
+            simple("Constant((1.0, 0.0 0.0))"),
+            5,
+            "0.0))",
+            Some("materials.wall.emit"),
+        ),
+        (
+            "invalid value",
+            simple("Constant((-1.0, 0.0, 0.0))"),
+            5,
+            "-1.0",
+            Some("materials.wall.emit[0]"),
+        ),
         (
             "missing texture",
             simple(r#"Image(path: "missing.png")"#),
             5,
+            "",
+            None,
         ),
         (
             "unknown material",
@@ -194,32 +209,48 @@ fn broken_saves_report_line_and_column_and_keep_the_image() {
                 r#"Entity(name: "wall", material: "nope""#,
             ),
             9,
+            "",
+            None,
         ),
     ];
-    for (what, text, line) in cases {
+    for (what, text, line, at, field) in cases {
         f.write_scene(&text);
-        let Report::Failed {
-            message,
-            source_line,
-        } = f.wait(what, |r| {
+        let Report::Failed(error) = f.wait(what, |r| {
             assert!(
                 !matches!(r, Report::Wrote { .. } | Report::Rendered(_)),
                 "{what}: rendered a broken scene: {r:?}"
             );
             matches!(r, Report::Failed { .. })
-        })
-        else {
+        }) else {
             unreachable!()
         };
-        let located = format!("scene.ron:{line}:");
+        // The place is in fields of its own; the text shows it too.
+        assert_eq!(error.path, f.scene, "{what}: the file");
+        let location = error.location.expect("a location");
+        assert_eq!(location.line, line, "{what}: the line");
+        let source = text.lines().nth(line - 1).expect("the line");
+        let from_column: String = source.chars().skip(location.col - 1).collect();
         assert!(
-            message.contains(&located),
+            from_column.starts_with(at),
+            "{what}: column {} points at `{from_column}`, not `{at}`",
+            location.col
+        );
+        assert_eq!(error.field.as_deref(), field, "{what}: the field");
+        assert!(
+            !error.message.contains("scene.ron"),
+            "{what}: the message holds no place: {}",
+            error.message
+        );
+        let located = format!("scene.ron:{line}:{}: {}", location.col, error.message);
+        let message = error.to_string();
+        assert!(
+            message.ends_with(&located),
             "{what}: `{message}` lacks {located}"
         );
         // The report quotes the line of the scene (all of it: these lines are short).
         assert_eq!(
-            source_line.as_deref(),
-            text.lines().nth(line - 1),
+            error.source_line.as_deref(),
+            Some(source),
             "{what}: the quoted line"
         );
         assert_eq!(
@@ -305,11 +336,10 @@ fn a_bad_save_during_a_render_resumes_the_old_scene_without_worse_images() {
 #[test]
 fn a_scene_broken_from_the_start_is_reported_then_rendered_once_fixed() {
     let f = Fixture::open("broken-start", &simple("Constant((1.0, 0.0 0.0))"), &[]);
-    let Report::Failed { message, .. } =
-        f.wait("the error", |r| matches!(r, Report::Failed { .. }))
-    else {
+    let Report::Failed(error) = f.wait("the error", |r| matches!(r, Report::Failed { .. })) else {
         unreachable!()
     };
+    let message = error.to_string();
     assert!(message.contains("scene.ron:5:"), "{message}");
     assert!(!f.out.exists(), "no image from a broken scene");
     f.write_scene(&simple(BLUE));
@@ -541,7 +571,7 @@ fn placed_wall(prefab: &str) -> String {
 
 fn failed(f: &Fixture, what: &str) -> String {
     match f.wait(what, |r| matches!(r, Report::Failed { .. })) {
-        Report::Failed { message, .. } => message,
+        Report::Failed(error) => error.to_string(),
         _ => unreachable!(),
     }
 }
@@ -929,4 +959,56 @@ fn a_same_size_same_mtime_rewrite_with_an_event_is_read_again() {
     let r = f.rendered();
     assert_eq!(r.asset_bytes_read, aside.len() as u64, "{r:?}");
     assert_eq!(f.centre(), [255, 0, 0]);
+}
+
+/// Each run of the schedule says what its systems did: the first frame of a load applies the
+/// scene, builds the BVH over every primitive and assigns materials; a frame of an unchanged
+/// scene only renders; a material edit assigns materials without touching the BVH; a move in
+/// a progressive render refits for the preview and builds before the first real pass.
+#[test]
+fn each_frame_reports_what_its_systems_did() {
+    use rondo::PassPlan;
+    use rondo::ecs::frame_log::BvhWork;
+
+    let dir = common::temp_dir("frame-log");
+    let path = dir.join("scene.ron");
+    std::fs::write(&path, simple(RED)).expect("write scene");
+    let mut r =
+        rondo::Renderer::new(Some(1), PassPlan::Progressive { first: 1 }).expect("renderer");
+    r.load(&path).expect("loads");
+    let frame = r.run_once();
+    let changes = frame.applied.expect("the scene is applied");
+    assert_eq!(changes.added, 2, "the wall and the ball");
+    let geometry = frame.geometry.expect("geometry built");
+    assert_eq!(geometry.bvh, BvhWork::Built);
+    // A quad is two triangles, the ball one sphere.
+    assert_eq!(geometry.primitives, 3);
+    assert!(frame.materials);
+    let pass = frame.pass.expect("the preview pass");
+    assert!(pass.preview && pass.samples == 1, "{pass:?}");
+
+    let frame = r.run_once();
+    assert_eq!(frame.applied, None);
+    assert_eq!(frame.geometry, None);
+    assert!(!frame.materials);
+    let pass = frame.pass.expect("the first real pass");
+    assert!(!pass.preview && pass.samples == 1, "{pass:?}");
+
+    std::fs::write(&path, simple(BLUE)).expect("write scene");
+    r.load(&path).expect("loads");
+    let frame = r.run_once();
+    assert!(frame.applied.expect("applied").materials);
+    assert_eq!(frame.geometry, None, "a material edit builds no BVH");
+    assert!(frame.materials);
+
+    std::fs::write(&path, scene(BLUE, GREY, 0.5, 4)).expect("write scene");
+    r.load(&path).expect("loads");
+    let frame = r.run_once();
+    assert_eq!(frame.applied.expect("applied").changed, 1, "the ball moved");
+    let geometry = frame.geometry.expect("geometry refitted");
+    assert_eq!(geometry.bvh, BvhWork::Refitted);
+    assert!(frame.pass.expect("the preview").preview);
+    let frame = r.run_once();
+    assert_eq!(frame.geometry.map(|g| g.bvh), Some(BvhWork::Built));
+    assert!(!frame.pass.expect("a real pass").preview);
 }

@@ -9,8 +9,8 @@
 //! {"kind":"progress","reload":3,"rows":128,"height":512}
 //! {"kind":"done","reload":3,"spp":64,"full_ms":812.0,"line":"reload 3: materials | …"}
 //! {"kind":"denoised","reload":3,"spp":16,"quality":"balanced","took_ms":210.4,"since_save_ms":380.2}
-//! {"kind":"error","message":"scene.ron:6:40: …","file":"scene.ron","line":6,"col":40,
-//!  "source_line":"        \"red\": Diffuse(albedo: …","reload":2}
+//! {"kind":"error","file":"scene.ron","line":6,"column":40,"field":"materials.red.albedo",
+//!  "message":"material \"red\": …","source_line":"        \"red\": Diffuse(albedo: …","reload":2}
 //! ```
 //!
 //! `reload` starts a render of a good save (and clears an error), `pass` says a new image is
@@ -22,7 +22,9 @@
 //! `reload` is the number of the render still shown). A new client first gets the latest
 //! `reload`, `pass`, `denoised`, `done` and `error` that still apply.
 //!
-//! An error's `message` is at most [`MAX_MESSAGE`] bytes and its `source_line` (the report's,
+//! An error's place is its own fields, as the loader found it: `file`, and `line`, `column` and
+//! `field` where known (`null` otherwise); `message` says what is wrong, without the place. Its
+//! `message` is at most [`MAX_MESSAGE`] bytes and its `source_line` (the report's,
 //! from a scene or prefab file only) at most [`MAX_SOURCE_LINE`] characters, each ending in
 //! [`CUT`] when cut, whatever the watch loop sends; events are kept and replayed, so they must
 //! stay small. JSON escapes every control character, so an event is always one `data:` line.
@@ -574,33 +576,20 @@ impl Feed {
                 "full_ms": r.full.map(ms),
                 "line": r.to_string(),
             }),
-            (
-                Report::Failed {
-                    message,
-                    source_line,
-                },
-                _,
-            ) => {
-                let (file, line, col) = match error_location(message) {
-                    Some((f, l, c)) => (Some(f.display().to_string()), Some(l), Some(c)),
-                    None => (None, None, None),
-                };
-                json!({
-                    "kind": "error",
-                    "message": bounded(message, MAX_MESSAGE),
-                    "file": file.map(|f| bounded(&f, MAX_MESSAGE)),
-                    "line": line,
-                    "col": col,
-                    "source_line": source_line.as_deref().map(|l| bounded_chars(l, MAX_SOURCE_LINE)),
-                    "reload": shown,
-                })
-            }
+            (Report::Failed(error), _) => json!({
+                "kind": "error",
+                "file": bounded(&error.path.display().to_string(), MAX_MESSAGE),
+                "line": error.location.map(|l| l.line),
+                "column": error.location.map(|l| l.col),
+                "field": error.field.as_deref().map(|f| bounded(f, MAX_MESSAGE)),
+                "message": bounded(&error.message, MAX_MESSAGE),
+                "source_line": error.source_line.as_deref().map(|l| bounded_chars(l, MAX_SOURCE_LINE)),
+                "reload": shown,
+            }),
             (Report::SceneMissing { path }, _) => json!({
                 "kind": "error",
-                "message": bounded(
-                    &format!("{}: deleted; waiting for it to come back", path.display()),
-                    MAX_MESSAGE,
-                ),
+                "file": bounded(&path.display().to_string(), MAX_MESSAGE),
+                "message": "deleted; waiting for it to come back",
                 "reload": shown,
             }),
             _ => return,
@@ -666,17 +655,6 @@ pub fn changed_text(c: &ChangeSummary) -> String {
     }
 }
 
-/// Where an error message points: `(file, line, col)` from its `file:line:col: ` prefix.
-pub fn error_location(message: &str) -> Option<(PathBuf, usize, usize)> {
-    message.match_indices(": ").find_map(|(at, _)| {
-        let mut parts = message[..at].rsplitn(3, ':');
-        let col = parts.next()?.parse().ok()?;
-        let line = parts.next()?.parse().ok()?;
-        let file = parts.next().filter(|f| !f.is_empty())?;
-        Some((PathBuf::from(file), line, col))
-    })
-}
-
 /// `text` if it has at most `max` bytes, else its longest start of at most `max` bytes that
 /// ends on a character boundary, followed by [`CUT`].
 fn bounded(text: &str, max: usize) -> String {
@@ -701,20 +679,6 @@ fn bounded_chars(text: &str, max: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn error_locations_come_from_the_prefix() {
-        assert_eq!(
-            error_location("dir/scene.ron:6:40: entity \"ball\": unknown material \"whit\""),
-            Some((PathBuf::from("dir/scene.ron"), 6, 40))
-        );
-        assert_eq!(
-            error_location("C:\\x:y\\s.ron:12:3: bad: worse"),
-            Some((PathBuf::from("C:\\x:y\\s.ron"), 12, 3))
-        );
-        assert_eq!(error_location("scene.ron: cannot read: gone"), None);
-        assert_eq!(error_location("no location at all"), None);
-    }
 
     #[test]
     fn long_texts_are_cut_on_a_character_boundary() {

@@ -13,6 +13,7 @@ use super::job::Job;
 use super::pending::{Failure, Pending};
 use super::report::{ReloadReport, Report};
 use super::{Emitter, Watch};
+use crate::app::AssetWork;
 
 impl Watch {
     /// Acts on due changes: reports a failure that stood, or loads. A failed load is kept
@@ -26,15 +27,9 @@ impl Watch {
                         out.emit(Report::SceneMissing { path }, None);
                     }
                 }
-                Failure::Error(message, source_line) => {
-                    self.last_error = Some(message.clone());
-                    out.emit(
-                        Report::Failed {
-                            message,
-                            source_line,
-                        },
-                        None,
-                    );
+                Failure::Error(error) => {
+                    self.last_error = Some(error.to_string());
+                    out.emit(Report::Failed(error), None);
                 }
             }
             return None;
@@ -44,7 +39,7 @@ impl Watch {
             Err(failure) => {
                 let message = match &failure {
                     Failure::Missing => format!("{}: missing", self.options.scene.display()),
-                    Failure::Error(m, _) => m.clone(),
+                    Failure::Error(e) => e.to_string(),
                 };
                 out.emit(Report::Deferred { message }, None);
                 p.failed = Some((failure, Instant::now() + 3 * self.options.debounce));
@@ -92,10 +87,6 @@ impl Watch {
         // The pass this change interrupted is gone; the next one must run.
         self.cancel.store(false, Ordering::SeqCst);
         let scene = self.options.scene.clone();
-        let decodes = self.renderer.texture_decodes();
-        let environments = self.renderer.environment_builds();
-        let before = self.renderer.counters();
-        let bytes_read = self.renderer.asset_bytes_read();
         // The cache reads again only the files named by events (all of them if events were lost)
         // or whose metadata changed.
         if p.overflow {
@@ -107,6 +98,8 @@ impl Watch {
         // last load did not read): a change to it between the read and the watch would go
         // unnoticed, as its events were dropped until then.
         let mut retried = false;
+        // What every load of this reload read, the one retried included.
+        let mut assets = AssetWork::default();
         let (info, parse) = loop {
             if matches!(std::fs::metadata(&scene), Err(e) if e.kind() == std::io::ErrorKind::NotFound)
             {
@@ -117,7 +110,10 @@ impl Watch {
             let result = self.renderer.load(&scene);
             let parse = start.elapsed();
             let info = match result {
-                Ok(info) => info,
+                Ok(info) => {
+                    assets += info.assets;
+                    info
+                }
                 Err(e) => {
                     let mut files = self.good_files.clone();
                     files.extend(self.renderer.requested());
@@ -127,7 +123,7 @@ impl Watch {
                         self.renderer.invalidate_all();
                         continue;
                     }
-                    return Err(Failure::Error(e.to_string(), e.source_line));
+                    return Err(Failure::Error(Box::new(e)));
                 }
             };
             let files = self.dependencies(info.dependencies.clone(), out);
@@ -173,18 +169,14 @@ impl Watch {
         );
         self.job = Some(Job {
             report: ReloadReport {
-                textures_decoded: self.renderer.texture_decodes().saturating_sub(decodes),
-                environments_built: self
-                    .renderer
-                    .environment_builds()
-                    .saturating_sub(environments),
-                asset_bytes_read: self.renderer.asset_bytes_read().saturating_sub(bytes_read),
+                textures_decoded: assets.textures_decoded,
+                environments_built: assets.environments_built,
+                asset_bytes_read: assets.bytes_read,
                 parse,
-                counters: before,
+                counters: self.renderer.counters(),
                 ..ReloadReport::started(number, p.paths.clone(), info.settings.spp)
             },
             saved: p.last,
-            before,
         });
         Ok(())
     }
