@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use rondo::farm::{Samples, prepare, task_range};
-use rondo::film::{Features, Pixel, write_atomically};
+use rondo::film::{Features, Pixel};
+use rondo::output_file::write_atomically;
 use rondo::partial::{PartialMeta, Sums, merge, plan_merge, read_meta, read_partial, write_output};
 use rondo::scene::format::{MAX_SPP, Method};
 use rondo::shading::sampler::SamplerKind;

@@ -36,12 +36,11 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock, PoisonError};
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
-use image::ImageFormat;
 use indicatif::ProgressBar;
 use serde_json::{Value, json};
 
 use crate::ecs::resources::ChangeSummary;
-use crate::film::Film;
+use crate::film::{Film, OutputKind, encode_output};
 use crate::watch::{DenoiseSink, DenoisedFrame, Observer, Report};
 
 /// The first 8 bytes of `/image.f32`. Then four little-endian `u32`: width, height, reload
@@ -123,17 +122,17 @@ impl Frame {
         }
     }
 
-    /// PNG, encoded as [`Film::write`] encodes a `.png`.
+    /// PNG: the bytes of the `.png` file the output sink writes of this film.
     pub fn png(&self) -> Result<&[u8], &str> {
         encoded(&self.png, |out| {
-            self.film.to_srgb8().write_to(out, ImageFormat::Png)
+            encode_output(&self.film.image(), OutputKind::Png, out)
         })
     }
 
-    /// OpenEXR, encoded as [`Film::write`] encodes an `.exr`.
+    /// OpenEXR: the bytes of the `.exr` file the output sink writes of this film.
     pub fn exr(&self) -> Result<&[u8], &str> {
         encoded(&self.exr, |out| {
-            self.film.to_linear().write_to(out, ImageFormat::OpenExr)
+            encode_output(&self.film.image(), OutputKind::Exr, out)
         })
     }
 }
@@ -234,7 +233,7 @@ impl DenoisedImages {
 /// The encoding in `cell`, made by `write` on first use.
 fn encoded(
     cell: &OnceLock<Result<Vec<u8>, String>>,
-    write: impl FnOnce(&mut Cursor<Vec<u8>>) -> image::ImageResult<()>,
+    write: impl FnOnce(&mut Cursor<Vec<u8>>) -> std::io::Result<()>,
 ) -> Result<&[u8], &str> {
     cell.get_or_init(|| {
         let mut out = Cursor::new(Vec::new());
@@ -679,6 +678,26 @@ fn bounded_chars(text: &str, max: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The viewer's `/image.png` and `/image.exr` are the files the output sink writes, byte
+    /// for byte (one encoder for files and the viewer).
+    #[test]
+    fn the_viewers_images_are_the_files_written() {
+        let mut film = Film::new(3, 2);
+        let fixed = film.fixed();
+        for (i, p) in film.sum.iter_mut().enumerate() {
+            p.add(Vec3::new(i as f32 * 0.7, 2.5, -0.25), fixed);
+        }
+        film.samples = 1;
+        let dir = tempfile::tempdir().expect("temporary directory");
+        let frame = Frame::new(0, film.clone());
+        for (name, bytes) in [("x.png", frame.png()), ("x.exr", frame.exr())] {
+            let path = dir.path().join(name);
+            film.write(&path).expect("written");
+            let file = std::fs::read(&path).expect("read back");
+            assert_eq!(bytes.ok(), Some(file.as_slice()), "{name}");
+        }
+    }
 
     #[test]
     fn long_texts_are_cut_on_a_character_boundary() {

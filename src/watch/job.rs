@@ -10,6 +10,7 @@ use super::denoiser::{self, DenoiseWorker, Denoising, HIGH_QUALITY_FROM_SPP};
 use super::report::{ReloadReport, Report};
 use super::{Emitter, Watch};
 use crate::ecs::frame_log::BvhWork;
+use crate::film::{Durability, write_output};
 
 /// The samples of the image on disk for the current scene. After a cancelled pass the film
 /// restarts from zero; images are written again only once they are better than this (passes are
@@ -116,7 +117,9 @@ impl Watch {
                 // No output file with `--serve` alone: the observer shows the image. A
                 // denoised output is written by the denoise thread.
                 let written = match self.options.output.as_deref() {
-                    Some(o) if self.denoising != Denoising::Output => film.write_live(o),
+                    Some(o) if self.denoising != Denoising::Output => {
+                        write_output(o, &film.image(), Durability::Live)
+                    }
                     _ => Ok(()),
                 };
                 match written {
