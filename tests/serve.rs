@@ -586,7 +586,7 @@ fn peak_rss_kib(pid: u32) -> u64 {
 #[cfg(target_os = "linux")]
 #[test]
 fn an_oversized_request_head_is_refused_without_being_kept() {
-    // Issue 25, item 13: tiny_http kept a 200 MB header line in memory.
+    // A header line is bounded: a 200 MB one must not be kept in memory.
     let rondo = Rondo::start("big-head", &scene(RED, 32, 4), &[]);
     rondo.events().done(0);
     let pid = rondo.child.id();
@@ -640,7 +640,7 @@ fn an_oversized_request_head_is_refused_without_being_kept() {
 
 #[test]
 fn connections_over_the_limit_are_refused_and_idle_ones_do_not_block_a_request() {
-    // Issue 25, item 13: tiny_http started a thread for every connection, without a limit.
+    // Connections are capped: a thread per connection without a limit exhausts the process.
     let limits = Limits {
         max_connections: 8,
         head_timeout: WAIT,
@@ -676,7 +676,7 @@ fn connections_over_the_limit_are_refused_and_idle_ones_do_not_block_a_request()
 
 #[test]
 fn a_client_that_does_not_finish_its_head_in_time_is_disconnected() {
-    // Issue 25, item 13: tiny_http set no read timeout, so an idle connection held its thread
+    // Reads time out: without, an idle connection would hold its thread
     // forever.
     let (viewer, _feed) = library_server(Limits {
         head_timeout: Duration::from_millis(200),
@@ -701,7 +701,7 @@ fn a_client_that_does_not_finish_its_head_in_time_is_disconnected() {
 
 #[test]
 fn any_bind_answers_only_ip_addresses_localhost_and_allowed_names() {
-    // Issue 25, item 14: on 0.0.0.0 the Host check was off, so DNS rebinding worked.
+    // The Host check holds on 0.0.0.0 too, or DNS rebinding would reach the viewer.
     let rondo = Rondo::start_on("any-bind", &scene(RED, 32, 4), "0.0.0.0:0", &[]);
     rondo.events().done(0);
     let port = rondo.addr.port();
@@ -754,7 +754,7 @@ fn any_bind_answers_only_ip_addresses_localhost_and_allowed_names() {
 
 #[test]
 fn head_requests_get_headers_and_no_body() {
-    // Issue 25, item 17: HEAD /events streamed events.
+    // HEAD /events sends the head only, never the stream.
     let (viewer, _feed) = library_server(Limits::default());
     let events = request(viewer.addr(), "HEAD", "/events");
     assert_eq!(events.status, 200);

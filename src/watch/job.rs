@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use super::denoiser::{self, DenoiseWorker, Denoising, HIGH_QUALITY_FROM_SPP};
 use super::report::{ReloadReport, Report};
-use super::{Emitter, Watch};
+use super::{Reporter, Watch};
 use crate::ecs::frame_log::BvhWork;
 use crate::film::{Durability, write_output};
 
@@ -62,7 +62,7 @@ impl Watch {
 
     /// Runs one frame of the current job: applies the scene if new, renders a pass, writes the
     /// image if it improved, and finishes the job when the film is complete.
-    pub(super) fn step(&mut self, out: &mut Emitter<'_>) {
+    pub(super) fn step(&mut self, out: &mut Reporter<'_>) {
         let Some(job) = self.job.as_mut() else {
             return;
         };
@@ -200,11 +200,11 @@ mod tests {
         let mut w = Watch::new(WatchOptions::new(&scene, dir.join("out.png"))).expect("watch");
         let mut reports = Vec::new();
         let mut sink = |r: Report| reports.push(r);
-        let mut out = Emitter {
+        let mut out = Reporter {
             observer: None,
             report: &mut sink,
         };
-        let render = |w: &mut Watch, out: &mut Emitter<'_>| {
+        let render = |w: &mut Watch, out: &mut Reporter<'_>| {
             assert!(w.reload(&Pending::initial(), out).is_ok(), "loads");
             while w.job.is_some() {
                 w.step(out);

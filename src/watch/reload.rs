@@ -12,13 +12,13 @@ use super::files::watch_key;
 use super::job::Job;
 use super::pending::{Failure, Pending};
 use super::report::{ReloadReport, Report};
-use super::{Emitter, Watch};
+use super::{Reporter, Watch};
 use crate::app::AssetWork;
 
 impl Watch {
     /// Acts on due changes: reports a failure that stood, or loads. A failed load is kept
     /// pending, to be reported three windows later unless another event comes first.
-    pub(super) fn act(&mut self, mut p: Pending, out: &mut Emitter<'_>) -> Option<Pending> {
+    pub(super) fn act(&mut self, mut p: Pending, out: &mut Reporter<'_>) -> Option<Pending> {
         if let Some((failure, _)) = p.failed.take() {
             match failure {
                 Failure::Missing => {
@@ -49,7 +49,7 @@ impl Watch {
     }
 
     /// Watches `files`; returns whether anything new is watched (see [`FileWatcher::set_files`]).
-    fn watch_files(&mut self, files: &[PathBuf], out: &mut Emitter<'_>) -> bool {
+    fn watch_files(&mut self, files: &[PathBuf], out: &mut Reporter<'_>) -> bool {
         let (dirs, count) = (self.watcher.directories(), self.watcher.file_count());
         let (added, warnings) = self.watcher.set_files(files);
         for message in warnings {
@@ -62,7 +62,7 @@ impl Watch {
     }
 
     /// The dependencies of a load to watch: all but the output image (which we write).
-    fn dependencies(&mut self, dependencies: Vec<PathBuf>, out: &mut Emitter<'_>) -> Vec<PathBuf> {
+    fn dependencies(&mut self, dependencies: Vec<PathBuf>, out: &mut Reporter<'_>) -> Vec<PathBuf> {
         let mut files = Vec::with_capacity(dependencies.len());
         for dep in dependencies {
             let is_output = self.output_key.is_some()
@@ -83,7 +83,7 @@ impl Watch {
     /// Loads the scene after a change. On success the new scene is queued and a new job starts;
     /// on failure the old scene keeps rendering (if it was not finished), the image on disk is
     /// left alone, and the files the failed load asked for are watched too.
-    pub(super) fn reload(&mut self, p: &Pending, out: &mut Emitter<'_>) -> Result<(), Failure> {
+    pub(super) fn reload(&mut self, p: &Pending, out: &mut Reporter<'_>) -> Result<(), Failure> {
         // The pass this change interrupted is gone; the next one must run.
         self.cancel.store(false, Ordering::SeqCst);
         let scene = self.options.scene.clone();
