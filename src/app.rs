@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{SystemCondition, common_conditions::resource_changed};
 
+use crate::ecs::frame_log::FrameLog;
 use crate::ecs::resources::{
     Accumulation, ActiveCamera, ActiveSky, ChangeSummary, Counters, MaterialTable, Output,
     OwnerMaterials, PackedGeometry, PassPlan, PendingScene, Preview, RenderControl, RenderSettings,
@@ -68,6 +69,27 @@ pub struct LoadInfo {
     pub settings: SettingsDesc,
     /// What the load skipped or approximated ([`LoadedScene::warnings`]).
     pub warnings: Vec<String>,
+    /// What the load read and decoded (unchanged files come from the cache).
+    pub assets: AssetWork,
+}
+
+/// What one [`Renderer::load`] did with asset files.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AssetWork {
+    /// Image textures decoded.
+    pub textures_decoded: u64,
+    /// Environment maps decoded and given their distribution.
+    pub environments_built: u64,
+    /// Bytes of asset files (textures, meshes, maps, glTF files and buffers) read.
+    pub bytes_read: u64,
+}
+
+impl std::ops::AddAssign for AssetWork {
+    fn add_assign(&mut self, other: Self) {
+        self.textures_decoded += other.textures_decoded;
+        self.environments_built += other.environments_built;
+        self.bytes_read += other.bytes_read;
+    }
 }
 
 /// The renderer: owns the world, the schedule, the texture cache and the thread pool.
@@ -107,6 +129,7 @@ impl Renderer {
         world.init_resource::<ChangeSummary>();
         world.init_resource::<Counters>();
         world.init_resource::<Timings>();
+        world.init_resource::<FrameLog>();
         world.init_resource::<Accumulation>();
         world.init_resource::<Output>();
         world.insert_resource(RenderControl {
@@ -240,6 +263,12 @@ impl Renderer {
     /// it for the next frame. Returns what was loaded.
     pub fn load(&mut self, path: &Path) -> Result<LoadInfo, SceneError> {
         self.assets.begin_load();
+        // The cache counts from its creation; the load's own work is what it adds.
+        let (decodes, environments, bytes) = (
+            self.assets.decodes(),
+            self.assets.environment_builds(),
+            self.assets.bytes_read(),
+        );
         let mut scene = load_scene(path, &mut self.assets)?;
         self.overrides
             .apply(&mut scene.settings)
@@ -248,6 +277,14 @@ impl Renderer {
             dependencies: scene.dependencies.clone(),
             settings: scene.settings.clone(),
             warnings: scene.warnings.clone(),
+            assets: AssetWork {
+                textures_decoded: self.assets.decodes().saturating_sub(decodes),
+                environments_built: self
+                    .assets
+                    .environment_builds()
+                    .saturating_sub(environments),
+                bytes_read: self.assets.bytes_read().saturating_sub(bytes),
+            },
         };
         self.submit(scene);
         Ok(info)
@@ -282,15 +319,17 @@ impl Renderer {
     }
 
     /// Runs the schedule once: applies a pending scene, rebuilds what changed, renders one pass
-    /// and writes the image if due.
-    pub fn run_once(&mut self) {
+    /// and writes the image if due. Returns what the systems did.
+    pub fn run_once(&mut self) -> FrameLog {
         let Self {
             world,
             schedule,
             pool,
             ..
         } = self;
+        *world.resource_mut::<FrameLog>() = FrameLog::default();
         pool.install(|| schedule.run(world));
+        world.resource::<FrameLog>().clone()
     }
 
     /// Runs frames until the film holds every sample. Returns the wall time of the render.

@@ -16,7 +16,6 @@ pub mod ecs;
 pub mod farm;
 pub mod film;
 pub mod geometry;
-pub mod layers;
 pub mod lights;
 pub mod metrics;
 pub mod model;

@@ -45,7 +45,7 @@ enum Command {
         /// Write these feature buffers (albedo, normal; comma-separated) as layers of the .exr
         /// output, beside the colour.
         #[arg(long, value_name = "LIST", value_delimiter = ',')]
-        aov: Vec<rondo::layers::Aov>,
+        aov: Vec<rondo::film::Aov>,
         #[command(flatten)]
         options: RenderArgs,
     },

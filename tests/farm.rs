@@ -12,7 +12,9 @@ use rondo::farm::partial::{
     PartialMeta, Sums, merge, plan_merge, read_meta, read_partial, write_output,
 };
 use rondo::farm::{Samples, prepare, task_range};
-use rondo::film::{Features, Pixel, write_atomically};
+use rondo::film::Features;
+use rondo::film::Pixel;
+use rondo::output_file::write_atomically;
 use rondo::scene::format::{MAX_SPP, Method};
 use rondo::shading::sampler::SamplerKind;
 use rondo::{Overrides, PassPlan, Renderer};

@@ -1,6 +1,5 @@
-//! Output files: a planted symlink never redirects a write (issue 25, item 11), a signal in the
-//! middle of a write leaves no temporary behind (item 12), and the tests' temporary directories
-//! remove themselves (item 18).
+//! Output files: a planted symlink never redirects a write, a signal in the middle of a write
+//! leaves no temporary behind, and the tests' temporary directories remove themselves.
 
 mod common;
 

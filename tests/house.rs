@@ -565,3 +565,25 @@ fn folders_that_import_each_other_are_found() {
         BTreeSet::from([("ecs".to_string(), "scene".to_string())])
     );
 }
+
+/// Every rendered image and layer is encoded by the output sink alone (`film/output.rs`): a
+/// render's, each pass of a watch, a denoised image, the viewer's, a merge's. The other encoders
+/// write other things: the partial format's exact sums, and `rondo diff`'s pictures.
+#[test]
+fn images_are_encoded_by_the_output_sink_alone() {
+    const ENCODERS: [&str; 3] = ["film/output.rs", "partial/write.rs", "metrics.rs"];
+    let wrong: Vec<String> = files(&src())
+        .iter()
+        .filter(|f| {
+            f.tokens
+                .iter()
+                .any(|t| matches!(t, Token::Ident(w) if w == "write_to" || w == "to_buffered"))
+        })
+        .map(|f| f.path.display().to_string())
+        .filter(|p| !ENCODERS.contains(&p.as_str()))
+        .collect();
+    assert!(
+        wrong.is_empty(),
+        "images encoded outside the sink: {wrong:?}"
+    );
+}

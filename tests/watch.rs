@@ -179,13 +179,28 @@ fn delete_and_recreate_rerenders_and_keeps_the_image_meanwhile() {
 fn broken_saves_report_line_and_column_and_keep_the_image() {
     let (f, _) = Fixture::start("broken", &simple(RED), &[]);
     let before = std::fs::read(&f.out).expect("image");
+    // (what, scene, line, the text the column points at, the field at fault if the parser knows)
     let cases = [
-        ("syntax error", simple("Constant((1.0, 0.0 0.0))"), 5),
-        ("invalid value", simple("Constant((-1.0, 0.0, 0.0))"), 5),
+        (
+            "syntax error",
+            simple("Constant((1.0, 0.0 0.0))"),
+            5,
+            "0.0))",
+            Some("materials.wall.emit"),
+        ),
+        (
+            "invalid value",
+            simple("Constant((-1.0, 0.0, 0.0))"),
+            5,
+            "-1.0",
+            Some("materials.wall.emit[0]"),
+        ),
         (
             "missing texture",
             simple(r#"Image(path: "missing.png")"#),
             5,
+            "",
+            None,
         ),
         (
             "unknown material",
@@ -194,32 +209,48 @@ fn broken_saves_report_line_and_column_and_keep_the_image() {
                 r#"Entity(name: "wall", material: "nope""#,
             ),
             9,
+            "",
+            None,
         ),
     ];
-    for (what, text, line) in cases {
+    for (what, text, line, at, field) in cases {
         f.write_scene(&text);
-        let Report::Failed {
-            message,
-            source_line,
-        } = f.wait(what, |r| {
+        let Report::Failed(error) = f.wait(what, |r| {
             assert!(
                 !matches!(r, Report::Wrote { .. } | Report::Rendered(_)),
                 "{what}: rendered a broken scene: {r:?}"
             );
             matches!(r, Report::Failed { .. })
-        })
-        else {
+        }) else {
             unreachable!()
         };
-        let located = format!("scene.ron:{line}:");
+        // The place is in fields of its own; the text shows it too.
+        assert_eq!(error.path, f.scene, "{what}: the file");
+        let location = error.location.expect("a location");
+        assert_eq!(location.line, line, "{what}: the line");
+        let source = text.lines().nth(line - 1).expect("the line");
+        let from_column: String = source.chars().skip(location.col - 1).collect();
         assert!(
-            message.contains(&located),
+            from_column.starts_with(at),
+            "{what}: column {} points at `{from_column}`, not `{at}`",
+            location.col
+        );
+        assert_eq!(error.field.as_deref(), field, "{what}: the field");
+        assert!(
+            !error.message.contains("scene.ron"),
+            "{what}: the message holds no place: {}",
+            error.message
+        );
+        let located = format!("scene.ron:{line}:{}: {}", location.col, error.message);
+        let message = error.to_string();
+        assert!(
+            message.ends_with(&located),
             "{what}: `{message}` lacks {located}"
         );
         // The report quotes the line of the scene (all of it: these lines are short).
         assert_eq!(
-            source_line.as_deref(),
-            text.lines().nth(line - 1),
+            error.source_line.as_deref(),
+            Some(source),
             "{what}: the quoted line"
         );
         assert_eq!(
@@ -234,7 +265,7 @@ fn broken_saves_report_line_and_column_and_keep_the_image() {
     assert_eq!(f.centre(), [0, 0, 255]);
 }
 
-/// Issue 25, item 16: a writer that pauses mid-save (here 400 ms, far beyond the debounce
+/// A writer that pauses mid-save (here 400 ms, far beyond the debounce
 /// window and the error's wait) is waited for until it closes the file: the half-written save
 /// is never loaded, let alone reported, and the image comes from the complete file.
 #[test]
@@ -305,11 +336,10 @@ fn a_bad_save_during_a_render_resumes_the_old_scene_without_worse_images() {
 #[test]
 fn a_scene_broken_from_the_start_is_reported_then_rendered_once_fixed() {
     let f = Fixture::open("broken-start", &simple("Constant((1.0, 0.0 0.0))"), &[]);
-    let Report::Failed { message, .. } =
-        f.wait("the error", |r| matches!(r, Report::Failed { .. }))
-    else {
+    let Report::Failed(error) = f.wait("the error", |r| matches!(r, Report::Failed { .. })) else {
         unreachable!()
     };
+    let message = error.to_string();
     assert!(message.contains("scene.ron:5:"), "{message}");
     assert!(!f.out.exists(), "no image from a broken scene");
     f.write_scene(&simple(BLUE));
@@ -496,8 +526,8 @@ fn stop_returns_promptly_during_a_long_render() {
 }
 
 // ------------------------------------------------------------------------------------------------
-// The stale states of issue 14, one test each: after the last edit, watch shows what a fresh
-// render of the files on disk shows.
+// Stale states, one test each: after the last edit, watch shows what a fresh render of the
+// files on disk shows.
 
 /// A fresh batch render of `scene`, as the 8-bit image `rondo render` writes.
 fn fresh_render(scene: &Path) -> image::RgbImage {
@@ -541,13 +571,13 @@ fn placed_wall(prefab: &str) -> String {
 
 fn failed(f: &Fixture, what: &str) -> String {
     match f.wait(what, |r| matches!(r, Report::Failed { .. })) {
-        Report::Failed { message, .. } => message,
+        Report::Failed(error) => error.to_string(),
         _ => unreachable!(),
     }
 }
 
 #[test]
-fn issue14_case1_spp_one_leaves_the_real_pass_on_disk_not_the_preview() {
+fn spp_one_leaves_the_real_pass_on_disk_not_the_preview() {
     // Noisy at 1 spp (a diffuse ball lit by the wall): the real pass differs from its 2×2-block
     // preview in almost every block.
     let (f, first) = Fixture::start("spp-one", &scene(RED, GREY, 0.0, 1), &[]);
@@ -574,7 +604,7 @@ fn issue14_case1_spp_one_leaves_the_real_pass_on_disk_not_the_preview() {
 }
 
 #[test]
-fn issue14_case2_a_texture_in_a_directory_created_later_is_picked_up() {
+fn a_texture_in_a_directory_created_later_is_picked_up() {
     let (f, _) = Fixture::start("late-dir", &simple(RED), &[]);
     f.write_scene(&simple(r#"Image(path: "newtex/wood.png")"#));
     failed(&f, "the missing texture error");
@@ -589,7 +619,7 @@ fn issue14_case2_a_texture_in_a_directory_created_later_is_picked_up() {
 }
 
 #[test]
-fn issue14_case2_a_prefab_in_a_new_subdirectory_fixing_a_cycle_is_picked_up() {
+fn a_prefab_in_a_new_subdirectory_fixing_a_cycle_is_picked_up() {
     let f = Fixture::open("late-prefab", &placed_wall("wall.ron"), &[]);
     // wall.ron places itself: a cycle.
     std::fs::write(
@@ -614,7 +644,7 @@ fn issue14_case2_a_prefab_in_a_new_subdirectory_fixing_a_cycle_is_picked_up() {
 }
 
 #[test]
-fn issue14_case3_a_deleted_then_restored_directory_is_watched_again() {
+fn a_deleted_then_restored_directory_is_watched_again() {
     let f = Fixture::open("restored-dir", &placed_wall("prefabs/wall.ron"), &[]);
     std::fs::create_dir(f.dir.join("prefabs")).expect("mkdir");
     std::fs::write(f.dir.join("prefabs/wall.ron"), wall_prefab(RED)).expect("write prefab");
@@ -632,7 +662,7 @@ fn issue14_case3_a_deleted_then_restored_directory_is_watched_again() {
     assert_eq!(f.centre(), [0, 0, 255]);
 }
 
-/// The race behind the flaky `issue14_case3_a_deleted_then_restored_directory_is_watched_again`
+/// The race behind the flaky `a_deleted_then_restored_directory_is_watched_again`
 /// (BLUE expected, RED seen), made deterministic: a file written into a directory just
 /// (re)created, whose writer is still at it when the loop arms the directory. Were the creation
 /// of a directory a complete change, the loop would read at once (the data is there), render
@@ -641,7 +671,7 @@ fn issue14_case3_a_deleted_then_restored_directory_is_watched_again() {
 /// after its next save takes the second, still red, for it. A directory's files follow it, so
 /// it is read once they are quiet: once, after the close.
 #[test]
-fn issue14_case3_a_file_written_into_a_recreated_directory_is_loaded_once() {
+fn a_file_written_into_a_recreated_directory_is_loaded_once() {
     use std::io::Write;
     let f = Fixture::open("restored-once", &placed_wall("prefabs/wall.ron"), &[]);
     std::fs::create_dir(f.dir.join("prefabs")).expect("mkdir");
@@ -670,7 +700,7 @@ fn issue14_case3_a_file_written_into_a_recreated_directory_is_loaded_once() {
 }
 
 #[test]
-fn issue14_case3_a_directory_moved_away_and_copied_back_is_watched_again() {
+fn a_directory_moved_away_and_copied_back_is_watched_again() {
     let f = Fixture::open("replaced-dir", &placed_wall("prefabs/wall.ron"), &[]);
     std::fs::create_dir(f.dir.join("prefabs")).expect("mkdir");
     std::fs::write(f.dir.join("prefabs/wall.ron"), wall_prefab(RED)).expect("write prefab");
@@ -691,7 +721,7 @@ fn issue14_case3_a_directory_moved_away_and_copied_back_is_watched_again() {
 }
 
 #[test]
-fn issue14_case4_a_mesh_replaced_with_the_same_size_and_mtime_is_reloaded() {
+fn a_mesh_replaced_with_the_same_size_and_mtime_is_reloaded() {
     // A light triangle in front of the wall covers the centre pixel, or (same byte count) not.
     let covering = "v -2 -2 0\nv 2 -2 0\nv 0 3 0\nf 1 2 3\n";
     let aside = "v -2 -2 0\nv 2 -2 0\nv 9 3 0\nf 1 2 3\n";
@@ -720,7 +750,7 @@ fn issue14_case4_a_mesh_replaced_with_the_same_size_and_mtime_is_reloaded() {
 }
 
 #[test]
-fn issue14_case5_editing_the_target_of_a_symlinked_texture_rerenders() {
+fn editing_the_target_of_a_symlinked_texture_rerenders() {
     let f = Fixture::open("symlink", &simple(RED), &[]);
     f.rendered();
     std::fs::create_dir(f.dir.join("elsewhere")).expect("mkdir");
@@ -736,7 +766,7 @@ fn issue14_case5_editing_the_target_of_a_symlinked_texture_rerenders() {
 }
 
 #[test]
-fn issue14_log_a_reorder_says_so_and_an_unchanged_save_keeps_the_image() {
+fn a_reorder_says_so_and_an_unchanged_save_keeps_the_image() {
     let a = r#"Entity(name: "wall", material: "wall", shape: Quad(a: (-10, -10, 5), b: (10, -10, 5), c: (10, 10, 5), d: (-10, 10, 5)))"#;
     let b = r#"Entity(name: "ball", material: "ball", shape: Sphere(center: (0.0, 1.4, 0), radius: 0.3))"#;
     let materials = format!(
@@ -769,7 +799,7 @@ fn issue14_log_a_reorder_says_so_and_an_unchanged_save_keeps_the_image() {
 }
 
 // ------------------------------------------------------------------------------------------------
-// Environment maps (issue 22).
+// Environment maps.
 
 /// Writes a 16 × 8 OpenEXR map whose texel (x, y) has radiance `f(x, y)`.
 fn write_map(path: &Path, f: impl Fn(u32, u32) -> [f32; 3]) {
@@ -852,7 +882,7 @@ fn editing_only_the_environment_map_rerenders_and_rebuilds_only_the_map() {
     assert!(brighter == fresh_render(&f.scene), "not the fresh render");
 }
 
-/// Issue 24, goal 1: a reload reads only the asset files an event named (counted in bytes, the
+/// A reload reads only the asset files an event named (counted in bytes, the
 /// sizes taken from the file system).
 #[test]
 fn a_scene_edit_reads_no_asset_and_an_asset_edit_reads_only_that_asset() {
@@ -902,7 +932,7 @@ fn a_scene_edit_reads_no_asset_and_an_asset_edit_reads_only_that_asset() {
     );
 }
 
-/// Issue 24, goal 1 (c): a mesh rewritten with the same size and mtime is read again because
+/// A mesh rewritten with the same size and mtime is read again because
 /// its event names it.
 #[test]
 fn a_same_size_same_mtime_rewrite_with_an_event_is_read_again() {
@@ -929,4 +959,56 @@ fn a_same_size_same_mtime_rewrite_with_an_event_is_read_again() {
     let r = f.rendered();
     assert_eq!(r.asset_bytes_read, aside.len() as u64, "{r:?}");
     assert_eq!(f.centre(), [255, 0, 0]);
+}
+
+/// Each run of the schedule says what its systems did: the first frame of a load applies the
+/// scene, builds the BVH over every primitive and assigns materials; a frame of an unchanged
+/// scene only renders; a material edit assigns materials without touching the BVH; a move in
+/// a progressive render refits for the preview and builds before the first real pass.
+#[test]
+fn each_frame_reports_what_its_systems_did() {
+    use rondo::PassPlan;
+    use rondo::ecs::frame_log::BvhWork;
+
+    let dir = common::temp_dir("frame-log");
+    let path = dir.join("scene.ron");
+    std::fs::write(&path, simple(RED)).expect("write scene");
+    let mut r =
+        rondo::Renderer::new(Some(1), PassPlan::Progressive { first: 1 }).expect("renderer");
+    r.load(&path).expect("loads");
+    let frame = r.run_once();
+    let changes = frame.applied.expect("the scene is applied");
+    assert_eq!(changes.added, 2, "the wall and the ball");
+    let geometry = frame.geometry.expect("geometry built");
+    assert_eq!(geometry.bvh, BvhWork::Built);
+    // A quad is two triangles, the ball one sphere.
+    assert_eq!(geometry.primitives, 3);
+    assert!(frame.materials);
+    let pass = frame.pass.expect("the preview pass");
+    assert!(pass.preview && pass.samples == 1, "{pass:?}");
+
+    let frame = r.run_once();
+    assert_eq!(frame.applied, None);
+    assert_eq!(frame.geometry, None);
+    assert!(!frame.materials);
+    let pass = frame.pass.expect("the first real pass");
+    assert!(!pass.preview && pass.samples == 1, "{pass:?}");
+
+    std::fs::write(&path, simple(BLUE)).expect("write scene");
+    r.load(&path).expect("loads");
+    let frame = r.run_once();
+    assert!(frame.applied.expect("applied").materials);
+    assert_eq!(frame.geometry, None, "a material edit builds no BVH");
+    assert!(frame.materials);
+
+    std::fs::write(&path, scene(BLUE, GREY, 0.5, 4)).expect("write scene");
+    r.load(&path).expect("loads");
+    let frame = r.run_once();
+    assert_eq!(frame.applied.expect("applied").changed, 1, "the ball moved");
+    let geometry = frame.geometry.expect("geometry refitted");
+    assert_eq!(geometry.bvh, BvhWork::Refitted);
+    assert!(frame.pass.expect("the preview").preview);
+    let frame = r.run_once();
+    assert_eq!(frame.geometry.map(|g| g.bvh), Some(BvhWork::Built));
+    assert!(!frame.pass.expect("a real pass").preview);
 }

@@ -12,7 +12,7 @@ use std::time::Duration;
 use common::{denoiser, exr_channels, temp_dir, write_scene};
 use rondo::denoise::Quality;
 use rondo::denoised::FilmImages;
-use rondo::layers::{Layer, write_layers};
+use rondo::film::{Durability, Layer, OutputImage, write_output};
 use rondo::watch::{Report, WatchOptions, WatchSession};
 use rondo::{PassPlan, Renderer};
 
@@ -54,7 +54,8 @@ fn fresh_denoised(scene: &Path, out: &Path) {
         name: "raw",
         pixels: &images.colour,
     }];
-    write_layers(out, images.width, images.height, &denoised, &raw, true).expect("written");
+    let image = OutputImage::of_linear(images.width, images.height, &denoised, &raw);
+    write_output(out, &image, Durability::Synced).expect("written");
 }
 
 /// Waits for the denoised image of the full render of reload `reload`.

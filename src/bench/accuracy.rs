@@ -48,7 +48,7 @@ use super::accuracy_rows::{AccuracyError, AccuracyReport, AccuracyRow, Metric, f
 pub use super::accuracy_summary::{Crossover, crossover, raw_line, summary_markdown};
 use crate::denoise::{Denoiser, Quality};
 use crate::denoised::FilmImages;
-use crate::layers::{Layer, write_layers};
+use crate::film::{Durability, Layer, OutputImage, write_output};
 use crate::metrics::{Image, MetricsError, compare, lamp_out_rmse};
 use crate::scene::format::Method;
 use crate::shading::sampler::SamplerKind;
@@ -253,8 +253,8 @@ fn keep_image(path: &Path, image: &Image, raw: Option<&[Vec3]>) -> Result<(), Ac
         })
         .into_iter()
         .collect();
-    write_layers(path, image.width, image.height, &colour, &layers, false)
-        .map_err(write_error(path))
+    let image = OutputImage::of_linear(image.width, image.height, &colour, &layers);
+    write_output(path, &image, Durability::Live).map_err(write_error(path))
 }
 
 fn write_error(path: &Path) -> impl Fn(std::io::Error) -> AccuracyError + '_ {

@@ -122,7 +122,7 @@ pub fn time_edits(
                 })?;
             interrupt.check()?;
             match report {
-                Report::Failed { message, .. } => return Err(message),
+                Report::Failed(error) => return Err(error.to_string()),
                 Report::Wrote { reload, at, .. }
                     if wrote.is_none() && after.is_none_or(|a| reload > a) =>
                 {

@@ -10,8 +10,7 @@ use rondo::Film;
 use rondo::cli::check_output_file;
 use rondo::denoise::{Denoiser, Quality};
 use rondo::denoised::FilmImages;
-use rondo::film::OutputKind;
-use rondo::layers::write_layers;
+use rondo::film::{Durability, OutputImage, OutputKind, write_output};
 
 /// `rondo merge`: checks the partials, reports missing samples, merges and writes (denoised,
 /// with `denoise`, to a `.png`).
@@ -64,7 +63,8 @@ pub fn run(
             };
             let images = FilmImages::of(&film);
             let image = images.denoise(d, Quality::High, &AtomicBool::new(false))?;
-            write_layers(output, film.width, film.height, &image, &[], true)
+            let image = OutputImage::of_linear(film.width, film.height, &image, &[]);
+            write_output(output, &image, Durability::Synced)
         }
         None => rondo::farm::partial::write_output(
             output,

@@ -12,8 +12,7 @@ use rondo::Renderer;
 use rondo::cli::check_output_file;
 use rondo::denoise::{Denoiser, Quality};
 use rondo::denoised::FilmImages;
-use rondo::film::OutputKind;
-use rondo::layers::{Aov, Layer, write_layers};
+use rondo::film::{Aov, Durability, Layer, OutputImage, OutputKind, write_output};
 
 pub fn run(
     scene: &Path,
@@ -141,7 +140,8 @@ fn write_layered(
         });
     }
     let colour = denoised.as_deref().unwrap_or(&images.colour);
-    write_layers(output, images.width, images.height, colour, &layers, true)
+    let image = OutputImage::of_linear(images.width, images.height, colour, &layers);
+    write_output(output, &image, Durability::Synced)
         .with_context(|| format!("{}: cannot write image", output.display()))
 }
 

@@ -38,13 +38,18 @@ pub const MAX_MESSAGE: usize = 4096;
 /// Most characters of a quoted source line (escapes and `…` markers included).
 pub const MAX_SOURCE_LINE: usize = 200;
 
-/// Why a scene could not be loaded.
-#[derive(Debug, thiserror::Error)]
+/// Why a scene could not be loaded. Where it is (file, line and column, field) is kept in fields
+/// of its own, so that a reader (the live viewer) never parses it back out of the text.
+#[derive(Clone, Debug, thiserror::Error)]
 pub struct SceneError {
     /// The file at fault.
     pub path: PathBuf,
     /// Where in it, if known.
     pub location: Option<Location>,
+    /// The field whose value is at fault, as its path in the file (`materials.red.albedo`,
+    /// `entities[2].shape.radius`), when the parser knows it: at most [`MAX_MESSAGE`] bytes,
+    /// control characters escaped.
+    pub field: Option<String>,
     /// What is wrong: at most [`MAX_MESSAGE`] bytes, control characters escaped.
     pub message: String,
     /// The line at [`SceneError::location`], when it is in a scene or prefab file: at most
@@ -64,6 +69,7 @@ impl SceneError {
             path: path.into(),
             location,
             message: printable(&message.into(), MAX_MESSAGE).into_owned(),
+            field: None,
             source_line: None,
         }
     }
@@ -98,7 +104,28 @@ impl SceneError {
             }),
             describe(&error.code, at, source),
         )
+        .in_field(at)
         .quoting(source)
+    }
+
+    /// The same error naming the field at `at` (outermost first), if `at` names one.
+    fn in_field(mut self, at: &[Segment]) -> Self {
+        let mut path = String::new();
+        for segment in at {
+            match segment {
+                Segment::Map { key } if path.is_empty() => path.push_str(key),
+                Segment::Map { key } => {
+                    path.push('.');
+                    path.push_str(key);
+                }
+                Segment::Seq { index } => path.push_str(&format!("[{index}]")),
+                Segment::Enum { .. } | Segment::Unknown => {}
+            }
+        }
+        if !path.is_empty() {
+            self.field = Some(printable(&path, MAX_MESSAGE).into_owned());
+        }
+        self
     }
 }
 

@@ -9,8 +9,8 @@
 //! {"kind":"progress","reload":3,"rows":128,"height":512}
 //! {"kind":"done","reload":3,"spp":64,"full_ms":812.0,"line":"reload 3: materials | …"}
 //! {"kind":"denoised","reload":3,"spp":16,"quality":"balanced","took_ms":210.4,"since_save_ms":380.2}
-//! {"kind":"error","message":"scene.ron:6:40: …","file":"scene.ron","line":6,"col":40,
-//!  "source_line":"        \"red\": Diffuse(albedo: …","reload":2}
+//! {"kind":"error","file":"scene.ron","line":6,"column":40,"field":"materials.red.albedo",
+//!  "message":"material \"red\": …","source_line":"        \"red\": Diffuse(albedo: …","reload":2}
 //! ```
 //!
 //! `reload` starts a render of a good save (and clears an error), `pass` says a new image is
@@ -22,7 +22,9 @@
 //! `reload` is the number of the render still shown). A new client first gets the latest
 //! `reload`, `pass`, `denoised`, `done` and `error` that still apply.
 //!
-//! An error's `message` is at most [`MAX_MESSAGE`] bytes and its `source_line` (the report's,
+//! An error's place is its own fields, as the loader found it: `file`, and `line`, `column` and
+//! `field` where known (`null` otherwise); `message` says what is wrong, without the place. Its
+//! `message` is at most [`MAX_MESSAGE`] bytes and its `source_line` (the report's,
 //! from a scene or prefab file only) at most [`MAX_SOURCE_LINE`] characters, each ending in
 //! [`CUT`] when cut, whatever the watch loop sends; events are kept and replayed, so they must
 //! stay small. JSON escapes every control character, so an event is always one `data:` line.
@@ -34,12 +36,11 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock, PoisonError};
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
-use image::ImageFormat;
 use indicatif::ProgressBar;
 use serde_json::{Value, json};
 
 use crate::ecs::resources::ChangeSummary;
-use crate::film::Film;
+use crate::film::{Film, OutputKind, encode_output};
 use crate::watch::{DenoiseSink, DenoisedFrame, Observer, Report};
 
 /// The first 8 bytes of `/image.f32`. Then four little-endian `u32`: width, height, reload
@@ -121,17 +122,17 @@ impl Frame {
         }
     }
 
-    /// PNG, encoded as [`Film::write`] encodes a `.png`.
+    /// PNG: the bytes of the `.png` file the output sink writes of this film.
     pub fn png(&self) -> Result<&[u8], &str> {
         encoded(&self.png, |out| {
-            self.film.to_srgb8().write_to(out, ImageFormat::Png)
+            encode_output(&self.film.image(), OutputKind::Png, out)
         })
     }
 
-    /// OpenEXR, encoded as [`Film::write`] encodes an `.exr`.
+    /// OpenEXR: the bytes of the `.exr` file the output sink writes of this film.
     pub fn exr(&self) -> Result<&[u8], &str> {
         encoded(&self.exr, |out| {
-            self.film.to_linear().write_to(out, ImageFormat::OpenExr)
+            encode_output(&self.film.image(), OutputKind::Exr, out)
         })
     }
 }
@@ -232,7 +233,7 @@ impl DenoisedImages {
 /// The encoding in `cell`, made by `write` on first use.
 fn encoded(
     cell: &OnceLock<Result<Vec<u8>, String>>,
-    write: impl FnOnce(&mut Cursor<Vec<u8>>) -> image::ImageResult<()>,
+    write: impl FnOnce(&mut Cursor<Vec<u8>>) -> std::io::Result<()>,
 ) -> Result<&[u8], &str> {
     cell.get_or_init(|| {
         let mut out = Cursor::new(Vec::new());
@@ -574,33 +575,20 @@ impl Feed {
                 "full_ms": r.full.map(ms),
                 "line": r.to_string(),
             }),
-            (
-                Report::Failed {
-                    message,
-                    source_line,
-                },
-                _,
-            ) => {
-                let (file, line, col) = match error_location(message) {
-                    Some((f, l, c)) => (Some(f.display().to_string()), Some(l), Some(c)),
-                    None => (None, None, None),
-                };
-                json!({
-                    "kind": "error",
-                    "message": bounded(message, MAX_MESSAGE),
-                    "file": file.map(|f| bounded(&f, MAX_MESSAGE)),
-                    "line": line,
-                    "col": col,
-                    "source_line": source_line.as_deref().map(|l| bounded_chars(l, MAX_SOURCE_LINE)),
-                    "reload": shown,
-                })
-            }
+            (Report::Failed(error), _) => json!({
+                "kind": "error",
+                "file": bounded(&error.path.display().to_string(), MAX_MESSAGE),
+                "line": error.location.map(|l| l.line),
+                "column": error.location.map(|l| l.col),
+                "field": error.field.as_deref().map(|f| bounded(f, MAX_MESSAGE)),
+                "message": bounded(&error.message, MAX_MESSAGE),
+                "source_line": error.source_line.as_deref().map(|l| bounded_chars(l, MAX_SOURCE_LINE)),
+                "reload": shown,
+            }),
             (Report::SceneMissing { path }, _) => json!({
                 "kind": "error",
-                "message": bounded(
-                    &format!("{}: deleted; waiting for it to come back", path.display()),
-                    MAX_MESSAGE,
-                ),
+                "file": bounded(&path.display().to_string(), MAX_MESSAGE),
+                "message": "deleted; waiting for it to come back",
                 "reload": shown,
             }),
             _ => return,
@@ -666,17 +654,6 @@ pub fn changed_text(c: &ChangeSummary) -> String {
     }
 }
 
-/// Where an error message points: `(file, line, col)` from its `file:line:col: ` prefix.
-pub fn error_location(message: &str) -> Option<(PathBuf, usize, usize)> {
-    message.match_indices(": ").find_map(|(at, _)| {
-        let mut parts = message[..at].rsplitn(3, ':');
-        let col = parts.next()?.parse().ok()?;
-        let line = parts.next()?.parse().ok()?;
-        let file = parts.next().filter(|f| !f.is_empty())?;
-        Some((PathBuf::from(file), line, col))
-    })
-}
-
 /// `text` if it has at most `max` bytes, else its longest start of at most `max` bytes that
 /// ends on a character boundary, followed by [`CUT`].
 fn bounded(text: &str, max: usize) -> String {
@@ -702,18 +679,24 @@ fn bounded_chars(text: &str, max: usize) -> String {
 mod tests {
     use super::*;
 
+    /// The viewer's `/image.png` and `/image.exr` are the files the output sink writes, byte
+    /// for byte (one encoder for files and the viewer).
     #[test]
-    fn error_locations_come_from_the_prefix() {
-        assert_eq!(
-            error_location("dir/scene.ron:6:40: entity \"ball\": unknown material \"whit\""),
-            Some((PathBuf::from("dir/scene.ron"), 6, 40))
-        );
-        assert_eq!(
-            error_location("C:\\x:y\\s.ron:12:3: bad: worse"),
-            Some((PathBuf::from("C:\\x:y\\s.ron"), 12, 3))
-        );
-        assert_eq!(error_location("scene.ron: cannot read: gone"), None);
-        assert_eq!(error_location("no location at all"), None);
+    fn the_viewers_images_are_the_files_written() {
+        let mut film = Film::new(3, 2);
+        let fixed = film.fixed();
+        for (i, p) in film.sum.iter_mut().enumerate() {
+            p.add(Vec3::new(i as f32 * 0.7, 2.5, -0.25), fixed);
+        }
+        film.samples = 1;
+        let dir = tempfile::tempdir().expect("temporary directory");
+        let frame = Frame::new(0, film.clone());
+        for (name, bytes) in [("x.png", frame.png()), ("x.exr", frame.exr())] {
+            let path = dir.path().join(name);
+            film.write(&path).expect("written");
+            let file = std::fs::read(&path).expect("read back");
+            assert_eq!(bytes.ok(), Some(file.as_slice()), "{name}");
+        }
     }
 
     #[test]

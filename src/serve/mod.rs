@@ -47,7 +47,7 @@ use std::time::Duration;
 
 pub use feed::{
     CUT, Client, DenoisedImages, DenoisedLayer, Encoding, Feed, Frame, MAX_MESSAGE,
-    MAX_SOURCE_LINE, RAW_MAGIC, changed_text, error_location,
+    MAX_SOURCE_LINE, RAW_MAGIC, changed_text,
 };
 
 /// The page, compiled into the binary.

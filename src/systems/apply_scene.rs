@@ -5,6 +5,7 @@ use std::collections::HashMap;
 use bevy_ecs::prelude::*;
 
 use crate::ecs::components::{EntityName, MaterialRef, SceneOrder, Shape, Transform};
+use crate::ecs::frame_log::FrameLog;
 use crate::ecs::resources::{
     ActiveCamera, ActiveSky, ChangeSummary, MaterialTable, PendingScene, RenderSettings,
     SceneVersion,
@@ -49,6 +50,7 @@ pub fn apply_scene(
     mut sky: ResMut<ActiveSky>,
     mut version: ResMut<SceneVersion>,
     mut summary: ResMut<ChangeSummary>,
+    mut log: ResMut<FrameLog>,
 ) {
     let Some(scene) = pending.0.take() else {
         return;
@@ -116,6 +118,7 @@ pub fn apply_scene(
     if version.0 == 0 || !report.is_empty() {
         version.0 += 1;
     }
+    log.applied = Some(report.clone());
     *summary = report;
 }
 

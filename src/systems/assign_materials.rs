@@ -3,6 +3,7 @@
 use bevy_ecs::prelude::*;
 
 use crate::ecs::components::MaterialRef;
+use crate::ecs::frame_log::FrameLog;
 use crate::ecs::resources::{ActiveSky, Counters, MaterialTable, OwnerMaterials, PackedGeometry};
 use crate::lights::LightSet;
 
@@ -20,6 +21,7 @@ pub fn assign_materials(
     sky: Res<ActiveSky>,
     mut out: ResMut<OwnerMaterials>,
     mut counters: ResMut<Counters>,
+    mut log: ResMut<FrameLog>,
 ) {
     let names: Vec<&String> = table.0.keys().collect();
     let owner_material: Vec<u32> = packed
@@ -40,4 +42,5 @@ pub fn assign_materials(
         lights,
     });
     counters.material_syncs += 1;
+    log.materials = true;
 }

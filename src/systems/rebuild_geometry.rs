@@ -6,6 +6,7 @@ use bevy_ecs::prelude::*;
 
 use super::render_frame::preview_block;
 use crate::ecs::components::{SceneOrder, Shape, Transform};
+use crate::ecs::frame_log::{BvhWork, FrameLog, GeometryWork};
 use crate::ecs::resources::{
     Accumulation, Counters, PackedGeometry, PassPlan, Preview, RenderControl, RenderSettings,
     Timings,
@@ -37,7 +38,7 @@ pub fn geometry_changed(
 /// before any real sample, so images never depend on the history of edits.
 #[expect(
     clippy::too_many_arguments,
-    reason = "the entities, the packed geometry, and what decides refit or build"
+    reason = "the entities, the packed geometry, what decides refit or build, and what it did"
 )]
 pub fn rebuild_geometry(
     entities: Query<(Entity, &SceneOrder, &Shape, &Transform)>,
@@ -48,6 +49,7 @@ pub fn rebuild_geometry(
     mut packed: ResMut<PackedGeometry>,
     mut counters: ResMut<Counters>,
     mut timings: ResMut<Timings>,
+    mut log: ResMut<FrameLog>,
 ) {
     let start = Instant::now();
     let edited = removed.read().count() > 0 || !changed.is_empty();
@@ -85,15 +87,22 @@ pub fn rebuild_geometry(
     };
     let same_owners = packed.owners.len() == sorted.len()
         && packed.owners.iter().zip(&sorted).all(|(a, b)| *a == b.0);
-    if edited && preview_next && same_owners && packed.geometry.refit(&primitives) {
+    let bvh = if edited && preview_next && same_owners && packed.geometry.refit(&primitives) {
         packed.provisional = true;
         counters.bvh_refits += 1;
+        BvhWork::Refitted
     } else {
         packed.geometry = Geometry::build(&primitives);
         packed.owners = sorted.iter().map(|e| e.0).collect();
         packed.provisional = false;
         counters.bvh_builds += 1;
-    }
+        BvhWork::Built
+    };
     counters.mesh_bvh_builds = packed.blas_cache.builds();
     timings.bvh = start.elapsed();
+    log.geometry = Some(GeometryWork {
+        bvh,
+        primitives: packed.geometry.primitive_count(),
+        took: timings.bvh,
+    });
 }

@@ -7,6 +7,7 @@ use bevy_ecs::prelude::*;
 
 use glam::Vec3;
 
+use crate::ecs::frame_log::{FrameLog, PassWork};
 use crate::ecs::resources::{
     Accumulation, ActiveCamera, Counters, OwnerMaterials, PackedGeometry, PassPlan, Preview,
     RenderControl, RenderSettings, SceneVersion, Timings,
@@ -80,6 +81,7 @@ pub fn render_frame(
     mut counters: ResMut<Counters>,
     mut timings: ResMut<Timings>,
     mut relaid: Local<LayoutCache>,
+    mut log: ResMut<FrameLog>,
 ) {
     let s = &settings.0;
     if version.is_changed() || acc.film.width != s.width || acc.film.height != s.height {
@@ -187,12 +189,22 @@ pub fn render_frame(
             timings.render += elapsed;
             acc.preview = Preview::InFilm;
             counters.passes += 1;
+            log.pass = Some(PassWork {
+                samples: acc.film.samples,
+                preview: true,
+                took: elapsed,
+            });
         }
         Ok(stats) => {
             timings.render += elapsed;
             acc.stats = acc.stats + stats;
             acc.complete = end == s.spp;
             counters.passes += 1;
+            log.pass = Some(PassWork {
+                samples: acc.film.samples,
+                preview: false,
+                took: elapsed,
+            });
         }
         Err(_) => {
             // Restart cleanly: the partial pass added samples to some rows only.

@@ -1,4 +1,4 @@
-//! Writes the film to the output file.
+//! Writes the film to the output file, through the output sink ([`crate::film::write_output`]).
 
 use bevy_ecs::prelude::*;
 

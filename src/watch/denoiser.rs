@@ -19,7 +19,7 @@ use glam::Vec3;
 
 use crate::denoise::{DenoiseError, Denoiser, Quality};
 use crate::denoised::FilmImages;
-use crate::layers::{Layer, write_layers};
+use crate::film::{Durability, Layer, OutputImage, write_output};
 
 /// Passes of fewer samples than this (but the last) are denoised at OIDN's fast quality, the
 /// rest at its high quality. On the Cornell box at 512², beside a running pass, a fast denoise
@@ -223,7 +223,8 @@ fn work(
                 pixels: &frame.images.colour,
             }];
             let (w, h) = (frame.images.width, frame.images.height);
-            match write_layers(path, w, h, &frame.denoised, &raw, false) {
+            let image = OutputImage::of_linear(w, h, &frame.denoised, &raw);
+            match write_output(path, &image, Durability::Live) {
                 Ok(()) => wrote = Some(path.clone()),
                 Err(e) => {
                     let message = format!("{}: cannot write image: {e}", path.display());

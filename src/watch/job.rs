@@ -8,8 +8,9 @@ use std::time::{Duration, Instant};
 
 use super::denoiser::{self, DenoiseWorker, Denoising, HIGH_QUALITY_FROM_SPP};
 use super::report::{ReloadReport, Report};
-use super::{Emitter, Watch};
-use crate::ecs::resources::Counters;
+use super::{Reporter, Watch};
+use crate::ecs::frame_log::BvhWork;
+use crate::film::{Durability, write_output};
 
 /// The samples of the image on disk for the current scene. After a cancelled pass the film
 /// restarts from zero; images are written again only once they are better than this (passes are
@@ -28,8 +29,6 @@ pub(super) struct Job {
     pub(super) report: ReloadReport,
     /// When the save happened.
     pub(super) saved: Instant,
-    /// Counters before the load, to tell what the first frame rebuilt.
-    pub(super) before: Counters,
 }
 
 impl Watch {
@@ -63,60 +62,64 @@ impl Watch {
 
     /// Runs one frame of the current job: applies the scene if new, renders a pass, writes the
     /// image if it improved, and finishes the job when the film is complete.
-    pub(super) fn step(&mut self, out: &mut Emitter<'_>) {
+    pub(super) fn step(&mut self, out: &mut Reporter<'_>) {
         let Some(job) = self.job.as_mut() else {
             return;
         };
-        let passes = self.renderer.counters().passes;
         let start = Instant::now();
-        self.renderer.run_once();
+        let frame = self.renderer.run_once();
         let wall = start.elapsed();
-        let counters = self.renderer.counters();
-        let timings = self.renderer.timings();
         let r = &mut job.report;
-        if !r.applied {
+        let first_frame = frame.applied.is_some();
+        if let Some(changes) = frame.applied {
             r.applied = true;
-            r.changes = self.renderer.change_summary();
-            r.bvh_rebuilt = counters.bvh_builds > job.before.bvh_builds;
-            r.bvh_refit = counters.bvh_refits > job.before.bvh_refits;
-            r.bvh = if r.bvh_rebuilt || r.bvh_refit {
-                timings.bvh
-            } else {
-                Duration::ZERO
-            };
-            r.materials_synced = counters.material_syncs > job.before.material_syncs;
-            r.primitives = self.renderer.primitive_count();
-            r.ecs = wall.saturating_sub(timings.pass + r.bvh);
+            r.changes = changes;
             if !r.changes.is_empty() || r.number == 0 {
                 // A new image; the one on disk is of another scene.
                 self.on_disk = OnDisk::default();
             }
         }
-        r.counters = counters;
-        // A refitted preview is followed by the build before real samples.
-        r.bvh_rebuilt |= counters.bvh_builds > job.before.bvh_builds;
+        if let Some(g) = frame.geometry {
+            match g.bvh {
+                BvhWork::Built => r.bvh_rebuilt = true,
+                BvhWork::Refitted => r.bvh_refit = true,
+            }
+            r.primitives = g.primitives;
+            // The build that follows a refitted preview is not the reload's cost.
+            if first_frame {
+                r.bvh = g.took;
+            }
+        }
+        r.materials_synced |= frame.materials;
+        if first_frame {
+            let pass = frame.pass.map_or(Duration::ZERO, |p| p.took);
+            r.ecs = wall.saturating_sub(pass + r.bvh);
+        }
+        r.counters = self.renderer.counters();
         let complete = self.renderer.is_complete();
-        if counters.passes == passes && !complete {
+        if frame.pass.is_none() && !complete {
             // Cancelled: a change is on its way (or we are stopping). The film starts over.
             r.restarts += 1;
             return;
         }
         let mut denoise = None;
-        if counters.passes > passes {
+        if let Some(pass) = frame.pass {
             let film = self.renderer.film();
             let now = OnDisk {
-                samples: film.samples,
-                real: !self.renderer.film_is_preview(),
+                samples: pass.samples,
+                real: !pass.preview,
             };
             if r.first_pass.is_none() {
-                r.first_pass = Some((now.samples, timings.pass));
-                r.preview = !now.real;
+                r.first_pass = Some((now.samples, pass.took));
+                r.preview = pass.preview;
             }
             if now > self.on_disk {
                 // No output file with `--serve` alone: the observer shows the image. A
                 // denoised output is written by the denoise thread.
                 let written = match self.options.output.as_deref() {
-                    Some(o) if self.denoising != Denoising::Output => film.write_live(o),
+                    Some(o) if self.denoising != Denoising::Output => {
+                        write_output(o, &film.image(), Durability::Live)
+                    }
                     _ => Ok(()),
                 };
                 match written {
@@ -197,11 +200,11 @@ mod tests {
         let mut w = Watch::new(WatchOptions::new(&scene, dir.join("out.png"))).expect("watch");
         let mut reports = Vec::new();
         let mut sink = |r: Report| reports.push(r);
-        let mut out = Emitter {
+        let mut out = Reporter {
             observer: None,
             report: &mut sink,
         };
-        let render = |w: &mut Watch, out: &mut Emitter<'_>| {
+        let render = |w: &mut Watch, out: &mut Reporter<'_>| {
             assert!(w.reload(&Pending::initial(), out).is_ok(), "loads");
             while w.job.is_some() {
                 w.step(out);

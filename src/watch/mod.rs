@@ -53,7 +53,7 @@
 //!
 //! # The event point
 //!
-//! Everything the loop does goes out through one function, `Emitter::emit`, as a [`Report`]:
+//! Everything the loop does goes out through one function, `Reporter::emit`, as a [`Report`]:
 //! [`Report::Started`] when a reload has loaded and its render begins, [`Report::Wrote`] after
 //! each pass that improved the image (with the [`Film`] it came from), [`Report::Failed`] with a
 //! `file:line:col` message, [`Report::Rendered`] when the render is done (complete or
@@ -112,12 +112,12 @@ pub use session::WatchSession;
 // The loop: events → Renderer.
 
 /// The one point through which the loop reports (see the module docs, "The event point").
-struct Emitter<'a> {
+struct Reporter<'a> {
     observer: Option<Observer>,
     report: &'a mut dyn FnMut(Report),
 }
 
-impl Emitter<'_> {
+impl Reporter<'_> {
     fn emit(&mut self, report: Report, film: Option<&Film>) {
         if let Some(observer) = &mut self.observer {
             observer(&report, film);
@@ -274,7 +274,7 @@ impl Watch {
     /// Loads and renders the scene, then re-renders on every relevant save until stopped.
     /// Everything that happens is passed to `report` (after the observer, if any).
     pub fn run(mut self, mut report: impl FnMut(Report)) {
-        let mut out = Emitter {
+        let mut out = Reporter {
             observer: self.observer.take(),
             report: &mut report,
         };
@@ -324,7 +324,7 @@ impl Watch {
     }
 
     /// Reports what the denoise thread finished.
-    fn denoiser_news(&mut self, out: &mut Emitter<'_>) {
+    fn denoiser_news(&mut self, out: &mut Reporter<'_>) {
         let Some(worker) = &self.denoiser else {
             return;
         };
@@ -342,7 +342,7 @@ impl Watch {
     }
 
     /// Folds one event into the pending changes.
-    fn absorb(event: FileEvent, pending: &mut Option<Pending>, out: &mut Emitter<'_>) {
+    fn absorb(event: FileEvent, pending: &mut Option<Pending>, out: &mut Reporter<'_>) {
         match event {
             FileEvent::Changed(change) => match pending {
                 Some(p) => p.add(change),

@@ -5,14 +5,16 @@ use std::collections::HashSet;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+use crate::scene::error::SceneError;
+
 use super::files::{Change, Effect, OPEN_WRITER_PATIENCE, REPORTS_CLOSE};
 
 /// Why a load did not give a scene.
 pub(super) enum Failure {
     /// The scene file does not exist.
     Missing,
-    /// The scene (or a file it reads) is bad: the error and the line it quotes.
-    Error(String, Option<String>),
+    /// The scene (or a file it reads) is bad.
+    Error(Box<SceneError>),
 }
 
 /// The changes gathered since the last reload, until they are loaded.

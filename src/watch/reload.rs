@@ -12,12 +12,13 @@ use super::files::watch_key;
 use super::job::Job;
 use super::pending::{Failure, Pending};
 use super::report::{ReloadReport, Report};
-use super::{Emitter, Watch};
+use super::{Reporter, Watch};
+use crate::app::AssetWork;
 
 impl Watch {
     /// Acts on due changes: reports a failure that stood, or loads. A failed load is kept
     /// pending, to be reported three windows later unless another event comes first.
-    pub(super) fn act(&mut self, mut p: Pending, out: &mut Emitter<'_>) -> Option<Pending> {
+    pub(super) fn act(&mut self, mut p: Pending, out: &mut Reporter<'_>) -> Option<Pending> {
         if let Some((failure, _)) = p.failed.take() {
             match failure {
                 Failure::Missing => {
@@ -26,15 +27,9 @@ impl Watch {
                         out.emit(Report::SceneMissing { path }, None);
                     }
                 }
-                Failure::Error(message, source_line) => {
-                    self.last_error = Some(message.clone());
-                    out.emit(
-                        Report::Failed {
-                            message,
-                            source_line,
-                        },
-                        None,
-                    );
+                Failure::Error(error) => {
+                    self.last_error = Some(error.to_string());
+                    out.emit(Report::Failed(error), None);
                 }
             }
             return None;
@@ -44,7 +39,7 @@ impl Watch {
             Err(failure) => {
                 let message = match &failure {
                     Failure::Missing => format!("{}: missing", self.options.scene.display()),
-                    Failure::Error(m, _) => m.clone(),
+                    Failure::Error(e) => e.to_string(),
                 };
                 out.emit(Report::Deferred { message }, None);
                 p.failed = Some((failure, Instant::now() + 3 * self.options.debounce));
@@ -54,7 +49,7 @@ impl Watch {
     }
 
     /// Watches `files`; returns whether anything new is watched (see [`FileWatcher::set_files`]).
-    fn watch_files(&mut self, files: &[PathBuf], out: &mut Emitter<'_>) -> bool {
+    fn watch_files(&mut self, files: &[PathBuf], out: &mut Reporter<'_>) -> bool {
         let (dirs, count) = (self.watcher.directories(), self.watcher.file_count());
         let (added, warnings) = self.watcher.set_files(files);
         for message in warnings {
@@ -67,7 +62,7 @@ impl Watch {
     }
 
     /// The dependencies of a load to watch: all but the output image (which we write).
-    fn dependencies(&mut self, dependencies: Vec<PathBuf>, out: &mut Emitter<'_>) -> Vec<PathBuf> {
+    fn dependencies(&mut self, dependencies: Vec<PathBuf>, out: &mut Reporter<'_>) -> Vec<PathBuf> {
         let mut files = Vec::with_capacity(dependencies.len());
         for dep in dependencies {
             let is_output = self.output_key.is_some()
@@ -88,14 +83,10 @@ impl Watch {
     /// Loads the scene after a change. On success the new scene is queued and a new job starts;
     /// on failure the old scene keeps rendering (if it was not finished), the image on disk is
     /// left alone, and the files the failed load asked for are watched too.
-    pub(super) fn reload(&mut self, p: &Pending, out: &mut Emitter<'_>) -> Result<(), Failure> {
+    pub(super) fn reload(&mut self, p: &Pending, out: &mut Reporter<'_>) -> Result<(), Failure> {
         // The pass this change interrupted is gone; the next one must run.
         self.cancel.store(false, Ordering::SeqCst);
         let scene = self.options.scene.clone();
-        let decodes = self.renderer.texture_decodes();
-        let environments = self.renderer.environment_builds();
-        let before = self.renderer.counters();
-        let bytes_read = self.renderer.asset_bytes_read();
         // The cache reads again only the files named by events (all of them if events were lost)
         // or whose metadata changed.
         if p.overflow {
@@ -107,6 +98,8 @@ impl Watch {
         // last load did not read): a change to it between the read and the watch would go
         // unnoticed, as its events were dropped until then.
         let mut retried = false;
+        // What every load of this reload read, the one retried included.
+        let mut assets = AssetWork::default();
         let (info, parse) = loop {
             if matches!(std::fs::metadata(&scene), Err(e) if e.kind() == std::io::ErrorKind::NotFound)
             {
@@ -117,7 +110,10 @@ impl Watch {
             let result = self.renderer.load(&scene);
             let parse = start.elapsed();
             let info = match result {
-                Ok(info) => info,
+                Ok(info) => {
+                    assets += info.assets;
+                    info
+                }
                 Err(e) => {
                     let mut files = self.good_files.clone();
                     files.extend(self.renderer.requested());
@@ -127,7 +123,7 @@ impl Watch {
                         self.renderer.invalidate_all();
                         continue;
                     }
-                    return Err(Failure::Error(e.to_string(), e.source_line));
+                    return Err(Failure::Error(Box::new(e)));
                 }
             };
             let files = self.dependencies(info.dependencies.clone(), out);
@@ -173,18 +169,14 @@ impl Watch {
         );
         self.job = Some(Job {
             report: ReloadReport {
-                textures_decoded: self.renderer.texture_decodes().saturating_sub(decodes),
-                environments_built: self
-                    .renderer
-                    .environment_builds()
-                    .saturating_sub(environments),
-                asset_bytes_read: self.renderer.asset_bytes_read().saturating_sub(bytes_read),
+                textures_decoded: assets.textures_decoded,
+                environments_built: assets.environments_built,
+                asset_bytes_read: assets.bytes_read,
                 parse,
-                counters: before,
+                counters: self.renderer.counters(),
                 ..ReloadReport::started(number, p.paths.clone(), info.settings.spp)
             },
             saved: p.last,
-            before,
         });
         Ok(())
     }

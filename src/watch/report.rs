@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 
 use crate::ecs::resources::{ChangeSummary, Counters};
 use crate::film::Film;
-use crate::scene::error::{MAX_MESSAGE, escape_controls, printable};
+use crate::scene::error::{MAX_MESSAGE, SceneError, escape_controls, printable};
 
 /// What one (re)load changed, rebuilt and cost: the line printed per reload.
 #[derive(Clone, Debug, PartialEq)]
@@ -262,16 +262,11 @@ pub enum Report {
     },
     /// A render finished, or was superseded by a newer save.
     Rendered(ReloadReport),
-    /// A save could not be loaded; the previous scene and image are kept.
-    Failed {
-        /// The error, starting with `file:line:col` where known: at most
-        /// [`MAX_MESSAGE`] bytes, control characters escaped.
-        message: String,
-        /// The line of the scene or prefab file at that `line:col`, if the error is located in
-        /// one ([`SceneError::source_line`](crate::SceneError::source_line): bounded, escaped;
-        /// never a line of a mesh, an image or another file).
-        source_line: Option<String>,
-    },
+    /// A save could not be loaded; the previous scene and image are kept. The error's file,
+    /// line, column and field are its own fields; its message is at most [`MAX_MESSAGE`] bytes,
+    /// control characters escaped, and the line it quotes comes from a scene or prefab file
+    /// only ([`SceneError::source_line`]).
+    Failed(Box<SceneError>),
     /// A load failed but the save may not be over: the error is reported only if no further
     /// event comes within three windows. Not printed.
     Deferred {
@@ -316,8 +311,8 @@ impl Report {
             }
             Self::Started { .. } | Self::Wrote { .. } | Self::Deferred { .. } => return None,
             Self::Rendered(r) => r.to_string(),
-            Self::Failed { message, .. } => {
-                format!("error: {message} (keeping the last good image; fix and save again)")
+            Self::Failed(error) => {
+                format!("error: {error} (keeping the last good image; fix and save again)")
             }
             Self::SceneMissing { path } => {
                 format!("{}: deleted; waiting for it to come back", path.display())

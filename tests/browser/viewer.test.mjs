@@ -192,9 +192,17 @@ async function behaviour(context) {
     const broken = scene("(0.0, 0.0, 1.0)").replace("intensity: 1.0", "intensity: 1.0 1.0");
     save(file, broken);
     await page.waitForSelector("#error", { state: "visible", timeout: WAIT });
+    const where = await page.textContent("#error .where");
     const message = await page.textContent("#error .message");
     const source = await page.textContent("#error .source");
-    check("a broken save shows file:line:col", /scene\.ron:5:\d+: /.test(message), message);
+    // The place comes from the event's fields (file, line, column, field), not from the message:
+    // the column is that of the stray value, counted here from the text saved.
+    const line5 = broken.split("\n")[4];
+    const column = line5.indexOf("1.0 1.0") + "1.0 ".length + 1;
+    check("a broken save shows file:line:column and the field", where.startsWith(`${file}:5:${column} (materials.wall`), where);
+    check("... and what is wrong, without the place", message.length > 0 && !message.includes("scene.ron"), message);
+    const caret = source.split("\n")[1] ?? "";
+    check("... with a caret under the column", caret.indexOf("^") - "     | ".length === column - 1, JSON.stringify(source));
     check("... and the offending source line", source.includes('"wall": Light(emit: Constant((0.0, 0.0, 1.0)), intensity: 1.0 1.0'), source);
     check("... over the last good image", String(await pixelAt(page, 32, 32)) === "0,0,255");
 

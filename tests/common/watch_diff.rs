@@ -200,7 +200,7 @@ impl Watcher {
                 self.shown = Shown::Image;
                 self.reloads.push(r);
             }
-            Report::Failed { message, .. } => self.shown = Shown::Error(message),
+            Report::Failed(error) => self.shown = Shown::Error(error.to_string()),
             Report::SceneMissing { .. } => self.shown = Shown::Missing,
             _ => {}
         }

@@ -3,9 +3,8 @@
 use std::path::Path;
 
 use super::{LAYERS, MAX_SCENE_NAME, PartialMeta, SUM_CHANNELS, format_ranges};
-use crate::film::{
-    Features, FixedPoint, NORMAL_SHIFT, OutputKind, Pixel, write_atomically, write_image,
-};
+use crate::film::{Durability, Features, FixedPoint, NORMAL_SHIFT, OutputImage, OutputKind, Pixel};
+use crate::output_file::write_atomically;
 
 /// Writes a partial atomically: per layer the means (`R`, `G`, `B`, so any EXR viewer shows
 /// the image) and the exact sums, and the metadata. With `features` (which `meta.features` must
@@ -140,7 +139,8 @@ pub fn write_output(
         Some(OutputKind::Exr) => write_partial(path, meta, colour, features),
         _ => {
             let fixed = FixedPoint::new(meta.shift);
-            write_image(path, meta.width, meta.height, colour, meta.count(), fixed)
+            let image = OutputImage::of_sums(meta.width, meta.height, colour, meta.count(), fixed);
+            crate::film::write_output(path, &image, Durability::Synced)
         }
     }
 }
