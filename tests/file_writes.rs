@@ -8,6 +8,7 @@ use std::process::{Command, Stdio};
 use std::time::Duration;
 
 use common::{temp_dir, wait_or_kill, write_scene};
+use rondo::farm::partial::read_partial;
 use rondo::watch::{Report, WatchOptions, WatchSession};
 use rondo::{PassPlan, Renderer};
 
@@ -221,4 +222,54 @@ fn item18_a_test_directory_is_removed_on_drop_and_kept_when_the_test_fails() {
         kept.display()
     );
     std::fs::remove_dir_all(&*kept).expect("remove the kept directory");
+}
+
+/// Every EXR rondo writes (an image, one with feature layers, a partial) stores its tiles in
+/// increasing order, so the same image is the same bytes: with the order left unspecified the
+/// tiles went out as the compression threads finished them, and a loaded machine gave different
+/// files for one render. (A partial's bytes may still differ: the exr crate writes a layer's
+/// own attributes in its hash map's order, so its sums are compared instead.)
+#[test]
+fn exr_files_store_their_tiles_in_order_and_are_the_same_bytes_for_any_thread_count() {
+    let dir = temp_dir("exr-order");
+    // Wider than one 64-pixel tile, so that there is an order to keep.
+    std::fs::write(dir.join("s.ron"), scene(200, 130, 2)).expect("scene");
+    let outputs = [
+        ("plain", vec![]),
+        ("layers", vec!["--aov", "albedo,normal"]),
+        ("partial", vec!["--samples", "0..2"]),
+    ];
+    for (name, extra) in outputs {
+        let mut bytes = Vec::new();
+        for threads in ["1", "2"] {
+            let out = dir.join(format!("{name}-{threads}.exr"));
+            let status = Command::new(env!("CARGO_BIN_EXE_rondo"))
+                .args(["render", "--threads", threads, "-o"])
+                .arg(&out)
+                .args(&extra)
+                .arg(dir.join("s.ron"))
+                .stderr(Stdio::null())
+                .status()
+                .expect("run rondo");
+            assert!(status.success(), "{name}");
+            let meta = exr::meta::MetaData::read_from_file(&out, false).expect("read header");
+            for header in &meta.headers {
+                assert_eq!(
+                    header.line_order,
+                    exr::meta::attribute::LineOrder::Increasing,
+                    "{name}"
+                );
+            }
+            bytes.push(std::fs::read(&out).expect("read"));
+        }
+        if name == "partial" {
+            let read = |t: &str| read_partial(&dir.join(format!("partial-{t}.exr"))).expect("read");
+            assert!(read("1") == read("2"), "the sums depend on the threads");
+        } else {
+            assert!(
+                bytes[0] == bytes[1],
+                "{name}: the bytes depend on the threads"
+            );
+        }
+    }
 }

@@ -571,7 +571,7 @@ fn folders_that_import_each_other_are_found() {
 /// write other things: the partial format's exact sums, and `rondo diff`'s pictures.
 #[test]
 fn images_are_encoded_by_the_output_sink_alone() {
-    const ENCODERS: [&str; 3] = ["film/output.rs", "partial/write.rs", "metrics.rs"];
+    const ENCODERS: [&str; 3] = ["film/output.rs", "farm/partial/write.rs", "metrics.rs"];
     let wrong: Vec<String> = files(&src())
         .iter()
         .filter(|f| {

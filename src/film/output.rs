@@ -15,6 +15,14 @@ use image::{ImageFormat, RgbImage};
 
 use super::fixed::{FixedPoint, Pixel};
 
+/// How every EXR rondo writes is encoded: run-length compressed 64×64 tiles (the exr crate's
+/// fast lossless default), written in increasing order. The default order, "unspecified", lets
+/// the tiles go out in whichever order the compression threads finish them, so the same image
+/// gave different bytes from run to run on a loaded machine.
+pub const EXR_ENCODING: exr::image::Encoding = exr::image::Encoding {
+    line_order: exr::meta::attribute::LineOrder::Increasing,
+    ..exr::image::Encoding::FAST_LOSSLESS
+};
 /// The sRGB opto-electronic transfer function: linear in `[0, 1]` → encoded.
 #[inline]
 pub fn linear_to_srgb(c: f32) -> f32 {
@@ -229,7 +237,13 @@ pub fn encode_output<W: Write + Seek>(
                 let m = image.colour.at(p.y() * w + p.x());
                 (m.x, m.y, m.z)
             });
-            Image::from_channels((w, height as usize), channels)
+            let layer = exr::image::Layer::new(
+                (w, height as usize),
+                LayerAttributes::default(),
+                EXR_ENCODING,
+                channels,
+            );
+            Image::from_layer(layer)
                 .write()
                 .to_buffered(out)
                 .map_err(std::io::Error::other)
@@ -253,7 +267,7 @@ pub fn encode_output<W: Write + Seek>(
             let layer = exr::image::Layer::new(
                 (width as usize, height as usize),
                 LayerAttributes::default(),
-                Encoding::FAST_LOSSLESS,
+                EXR_ENCODING,
                 AnyChannels::sort(list),
             );
             Image::from_layer(layer)

@@ -3,7 +3,9 @@
 use std::path::Path;
 
 use super::{LAYERS, MAX_SCENE_NAME, PartialMeta, SUM_CHANNELS, format_ranges};
-use crate::film::{Durability, Features, FixedPoint, NORMAL_SHIFT, OutputImage, OutputKind, Pixel};
+use crate::film::{
+    Durability, EXR_ENCODING, Features, FixedPoint, NORMAL_SHIFT, OutputImage, OutputKind, Pixel,
+};
 use crate::output_file::write_atomically;
 
 /// Writes a partial atomically: per layer the means (`R`, `G`, `B`, so any EXR viewer shows
@@ -112,7 +114,7 @@ pub fn write_partial(
                     let [b0, b1, b2] = s.words(2);
                     (m.x, m.y, m.z, r0, r1, r2, g0, g1, g2, b0, b1, b2)
                 });
-            Layer::new((w, h), attributes, Encoding::FAST_LOSSLESS, channels)
+            Layer::new((w, h), attributes, EXR_ENCODING, channels)
         })
         .collect();
     let image = Image::from_layers(
