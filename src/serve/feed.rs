@@ -39,9 +39,10 @@ use glam::Vec3;
 use indicatif::ProgressBar;
 use serde_json::{Value, json};
 
+use crate::denoise::{DenoiseSink, DenoisedFrame};
 use crate::ecs::resources::ChangeSummary;
 use crate::film::{Film, OutputKind, encode_output};
-use crate::watch::{DenoiseSink, DenoisedFrame, Observer, Report};
+use crate::watch::{Observer, Report};
 
 /// The first 8 bytes of `/image.f32`. Then four little-endian `u32`: width, height, reload
 /// number (low 32 bits) and samples per pixel; then `width × height` pixels of three
@@ -770,7 +771,7 @@ mod tests {
         DenoisedFrame {
             reload,
             samples,
-            images: crate::denoised::FilmImages {
+            images: crate::denoise::FilmImages {
                 width: 2,
                 height: 1,
                 colour: vec![Vec3::ZERO; 2],
