@@ -11,7 +11,6 @@ pub mod bench;
 pub mod cli;
 pub mod cpu;
 pub mod denoise;
-pub mod denoised;
 pub mod ecs;
 pub mod farm;
 pub mod film;

@@ -10,8 +10,8 @@ use std::sync::atomic::AtomicBool;
 
 use common::{denoiser, temp_dir, write_scene};
 use glam::Vec3;
+use rondo::denoise::FilmImages;
 use rondo::denoise::Quality;
-use rondo::denoised::FilmImages;
 use rondo::{Overrides, PassPlan, Renderer};
 
 /// Renders `scene` at `size`² and `spp` with `seed`, collecting the features.

@@ -865,10 +865,10 @@ fn the_newest_denoised_pass_is_served_with_its_albedo_and_normal() {
     events.wait("the pass", |e| e["kind"] == "pass");
 
     let sink = feed.denoise_sink();
-    sink(&rondo::watch::DenoisedFrame {
+    sink(&rondo::denoise::DenoisedFrame {
         reload: 4,
         samples: 8,
-        images: rondo::denoised::FilmImages {
+        images: rondo::denoise::FilmImages {
             width: 2,
             height: 1,
             colour: vec![Vec3::new(9.0, 9.0, 9.0); 2],

@@ -10,8 +10,8 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use common::{denoiser, exr_channels, temp_dir, write_scene};
+use rondo::denoise::FilmImages;
 use rondo::denoise::Quality;
-use rondo::denoised::FilmImages;
 use rondo::film::{Durability, Layer, OutputImage, write_output};
 use rondo::watch::{Report, WatchOptions, WatchSession};
 use rondo::{PassPlan, Renderer};

@@ -8,8 +8,8 @@ use anyhow::{Context, Result, bail};
 
 use rondo::Film;
 use rondo::cli::check_output_file;
+use rondo::denoise::FilmImages;
 use rondo::denoise::{Denoiser, Quality};
-use rondo::denoised::FilmImages;
 use rondo::film::{Durability, OutputImage, OutputKind, write_output};
 
 /// `rondo merge`: checks the partials, reports missing samples, merges and writes (denoised,

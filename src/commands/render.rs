@@ -10,8 +10,8 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use super::args::RenderArgs;
 use rondo::Renderer;
 use rondo::cli::check_output_file;
+use rondo::denoise::FilmImages;
 use rondo::denoise::{Denoiser, Quality};
-use rondo::denoised::FilmImages;
 use rondo::film::{Aov, Durability, Layer, OutputImage, OutputKind, write_output};
 
 pub fn run(

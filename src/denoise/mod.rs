@@ -14,9 +14,14 @@
 //!
 //! On one machine the same input gives the same output bits (`tests/denoise.rs` checks it);
 //! other CPUs may run other kernels (AVX2, AVX-512) and differ in the last bits.
+//!
+//! A film's means become the denoiser's input in `input.rs` ([`FilmImages`]); the thread that
+//! denoises passes beside a watch loop is in `worker.rs` ([`DenoiseWorker`]).
 
+mod input;
 mod location;
 mod oidn;
+mod worker;
 
 use std::fmt;
 use std::path::Path;
@@ -24,6 +29,12 @@ use std::sync::atomic::AtomicBool;
 use std::sync::{Mutex, OnceLock};
 
 use crate::scene::format::MAX_PIXELS;
+
+pub use input::FilmImages;
+pub use worker::{
+    DenoiseJob, DenoiseSink, DenoiseWorker, Denoised, DenoisedFrame, HIGH_QUALITY_FROM_SPP,
+    WorkerNews,
+};
 
 /// The environment variable naming a directory that holds `libOpenImageDenoise.so.2`.
 pub const DIR_VARIABLE: &str = "RONDO_OIDN_DIR";

@@ -26,224 +26,26 @@
 //! `field` where known (`null` otherwise); `message` says what is wrong, without the place. Its
 //! `message` is at most [`MAX_MESSAGE`] bytes and its `source_line` (the report's,
 //! from a scene or prefab file only) at most [`MAX_SOURCE_LINE`] characters, each ending in
-//! [`CUT`] when cut, whatever the watch loop sends; events are kept and replayed, so they must
+//! [`CUT`](super::CUT) when cut, whatever the watch loop sends; events are kept and replayed, so they must
 //! stay small. JSON escapes every control character, so an event is always one `data:` line.
 
 use std::collections::VecDeque;
-use std::io::Cursor;
-use std::path::PathBuf;
-use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock, PoisonError};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
 
-use glam::Vec3;
 use indicatif::ProgressBar;
 use serde_json::{Value, json};
 
-use crate::ecs::resources::ChangeSummary;
-use crate::film::{Film, OutputKind, encode_output};
-use crate::watch::{DenoiseSink, DenoisedFrame, Observer, Report};
-
-/// The first 8 bytes of `/image.f32`. Then four little-endian `u32`: width, height, reload
-/// number (low 32 bits) and samples per pixel; then `width × height` pixels of three
-/// little-endian `f32` (linear RGB, unclamped), rows from the top. 24 bytes of header keep the
-/// floats 4-byte aligned for a `Float32Array` view.
-pub const RAW_MAGIC: &[u8; 8] = b"RONDOF32";
+use super::event_text::{
+    MAX_MESSAGE, MAX_SOURCE_LINE, bounded, bounded_chars, changed_text, ms, names,
+};
+use super::images::{DenoisedImages, Frame};
+use crate::denoise::{DenoiseSink, DenoisedFrame};
+use crate::film::Film;
+use crate::watch::{Observer, Report};
 
 /// Events a stalled client may have queued; older ones are dropped.
 const QUEUE: usize = 32;
-
-/// The longest error message (and file name) an event carries, in bytes.
-pub const MAX_MESSAGE: usize = 4096;
-
-/// The longest source line an error event quotes, in characters.
-pub const MAX_SOURCE_LINE: usize = 512;
-
-/// What ends a message or source line that was cut.
-pub const CUT: &str = " …[cut]";
-
-/// The encodings of a [`Frame`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Encoding {
-    /// 8-bit sRGB PNG.
-    Png,
-    /// Linear float OpenEXR.
-    Exr,
-    /// Raw linear floats (see [`RAW_MAGIC`]).
-    Raw,
-}
-
-/// One image the server hands out; the encodings are made on first request.
-pub struct Frame {
-    reload: u64,
-    film: Film,
-    raw: OnceLock<Vec<u8>>,
-    png: OnceLock<Result<Vec<u8>, String>>,
-    exr: OnceLock<Result<Vec<u8>, String>>,
-}
-
-impl Frame {
-    fn new(reload: u64, film: Film) -> Self {
-        Self {
-            reload,
-            film,
-            raw: OnceLock::new(),
-            png: OnceLock::new(),
-            exr: OnceLock::new(),
-        }
-    }
-
-    /// The reload whose render made it.
-    pub fn reload(&self) -> u64 {
-        self.reload
-    }
-
-    /// Samples per pixel in it.
-    pub fn samples(&self) -> u32 {
-        self.film.samples
-    }
-
-    /// The raw float encoding (see [`RAW_MAGIC`]).
-    pub fn raw(&self) -> &[u8] {
-        self.raw.get_or_init(|| {
-            let f = &self.film;
-            // As `Film::mean`, without its intermediate vector.
-            let (count, fixed) = (f.count(), f.fixed());
-            let means = f.sum.iter().map(|s| fixed.mean(s, count));
-            encode_raw(f.width, f.height, self.reload, f.samples, means)
-        })
-    }
-
-    /// The bytes of one encoding (made now if it was not yet).
-    pub fn bytes(&self, encoding: Encoding) -> Result<&[u8], &str> {
-        match encoding {
-            Encoding::Png => self.png(),
-            Encoding::Exr => self.exr(),
-            Encoding::Raw => Ok(self.raw()),
-        }
-    }
-
-    /// PNG: the bytes of the `.png` file the output sink writes of this film.
-    pub fn png(&self) -> Result<&[u8], &str> {
-        encoded(&self.png, |out| {
-            encode_output(&self.film.image(), OutputKind::Png, out)
-        })
-    }
-
-    /// OpenEXR: the bytes of the `.exr` file the output sink writes of this film.
-    pub fn exr(&self) -> Result<&[u8], &str> {
-        encoded(&self.exr, |out| {
-            encode_output(&self.film.image(), OutputKind::Exr, out)
-        })
-    }
-}
-
-/// The raw float encoding (see [`RAW_MAGIC`]) of `pixels`, `width × height` of them.
-fn encode_raw(
-    width: u32,
-    height: u32,
-    reload: u64,
-    samples: u32,
-    pixels: impl ExactSizeIterator<Item = Vec3>,
-) -> Vec<u8> {
-    let mut out = Vec::with_capacity(24 + pixels.len() * 12);
-    out.extend_from_slice(RAW_MAGIC);
-    // The reload's low 32 bits, as documented.
-    for v in [width, height, reload as u32, samples] {
-        out.extend_from_slice(&v.to_le_bytes());
-    }
-    for p in pixels {
-        for v in p.to_array() {
-            out.extend_from_slice(&v.to_le_bytes());
-        }
-    }
-    out
-}
-
-/// The images of a pass of the denoise thread (see [`Feed::denoise_sink`]), each already in the
-/// raw float encoding of [`RAW_MAGIC`]: the newest denoised pass is the only one kept.
-#[derive(Debug)]
-pub struct DenoisedImages {
-    reload: u64,
-    samples: u32,
-    denoised: Vec<u8>,
-    albedo: Option<Vec<u8>>,
-    normal: Option<Vec<u8>>,
-}
-
-/// The images of a denoised pass the server hands out.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum DenoisedLayer {
-    /// The denoised colour.
-    Denoised,
-    /// The pass's mean albedo (what guided the denoiser).
-    Albedo,
-    /// The pass's mean shading normal, components in [-1, 1].
-    Normal,
-}
-
-impl DenoisedImages {
-    /// The encodings of `frame`'s denoised colour, albedo and normal. `None` if the denoised
-    /// colour does not have one value per pixel (no such frame comes from the denoise thread);
-    /// an albedo or normal of the wrong size is left out.
-    fn of(frame: &DenoisedFrame) -> Option<Self> {
-        let images = &frame.images;
-        let (width, height) = (images.width, images.height);
-        let pixels = usize::try_from(u64::from(width) * u64::from(height)).ok()?;
-        let encode = |values: &[Vec3]| {
-            (values.len() == pixels).then(|| {
-                encode_raw(
-                    width,
-                    height,
-                    frame.reload,
-                    frame.samples,
-                    values.iter().copied(),
-                )
-            })
-        };
-        Some(Self {
-            reload: frame.reload,
-            samples: frame.samples,
-            denoised: encode(&frame.denoised)?,
-            albedo: images.albedo.as_deref().and_then(encode),
-            normal: images.normal.as_deref().and_then(encode),
-        })
-    }
-
-    /// The reload whose render made them.
-    pub fn reload(&self) -> u64 {
-        self.reload
-    }
-
-    /// Samples per pixel of the pass.
-    pub fn samples(&self) -> u32 {
-        self.samples
-    }
-
-    /// The raw float encoding of one image, if the pass has it (albedo and normal exist when the
-    /// film collected features).
-    pub fn raw(&self, layer: DenoisedLayer) -> Option<&[u8]> {
-        match layer {
-            DenoisedLayer::Denoised => Some(&self.denoised),
-            DenoisedLayer::Albedo => self.albedo.as_deref(),
-            DenoisedLayer::Normal => self.normal.as_deref(),
-        }
-    }
-}
-
-/// The encoding in `cell`, made by `write` on first use.
-fn encoded(
-    cell: &OnceLock<Result<Vec<u8>, String>>,
-    write: impl FnOnce(&mut Cursor<Vec<u8>>) -> std::io::Result<()>,
-) -> Result<&[u8], &str> {
-    cell.get_or_init(|| {
-        let mut out = Cursor::new(Vec::new());
-        write(&mut out).map_err(|e| e.to_string())?;
-        Ok(out.into_inner())
-    })
-    .as_ref()
-    .map(Vec::as_slice)
-    .map_err(String::as_str)
-}
 
 /// An event-stream client: its queue, filled by the render loop, drained by its own thread.
 pub struct Client {
@@ -476,11 +278,11 @@ impl Feed {
 
     /// Whether `frame` is newer than what the feed shows and keeps.
     fn wanted(state: &State, frame: &DenoisedFrame) -> bool {
-        let shown = state.current.as_ref().map_or(0, |c| c.reload);
+        let shown = state.current.as_ref().map_or(0, |c| c.reload());
         let kept = state
             .denoised
             .as_ref()
-            .map_or((0, 0), |d| (d.reload, d.samples));
+            .map_or((0, 0), |d| (d.reload(), d.samples()));
         frame.reload >= shown && (frame.reload, frame.samples) >= kept
     }
 
@@ -489,7 +291,7 @@ impl Feed {
     /// encodings are made on request.
     pub fn observe(&self, report: &Report, film: Option<&Film>) {
         let mut state = self.state();
-        let shown = state.current.as_ref().map(|c| c.reload);
+        let shown = state.current.as_ref().map(|c| c.reload());
         let event = match (report, film) {
             (
                 Report::Started {
@@ -536,7 +338,11 @@ impl Feed {
                 }
                 state.current = Some(Arc::new(Frame::new(*reload, film.clone())));
                 // The denoised images of an older reload are not of this image.
-                if state.denoised.as_ref().is_some_and(|d| d.reload < *reload) {
+                if state
+                    .denoised
+                    .as_ref()
+                    .is_some_and(|d| d.reload() < *reload)
+                {
                     state.denoised = None;
                     state.sticky.denoised = None;
                 }
@@ -612,103 +418,13 @@ impl Feed {
     }
 }
 
-fn ms(d: Duration) -> f64 {
-    (d.as_secs_f64() * 1e6).round() / 1e3
-}
-
-fn names(paths: &[PathBuf]) -> Vec<String> {
-    paths
-        .iter()
-        .map(|p| {
-            p.file_name()
-                .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into())
-        })
-        .collect()
-}
-
-/// What a reload changed, in words: `materials`, `2 entities changed, camera`, `nothing`.
-pub fn changed_text(c: &ChangeSummary) -> String {
-    let counts = [
-        (c.added, "added"),
-        (c.changed, "changed"),
-        (c.removed, "removed"),
-    ]
-    .into_iter()
-    .filter(|(n, _)| *n > 0)
-    .map(|(n, what)| format!("{n} {} {what}", if n == 1 { "entity" } else { "entities" }));
-    let flags = [
-        (c.materials, "materials"),
-        (c.camera, "camera"),
-        (c.settings, "settings"),
-        (c.sky, "sky"),
-        (c.reordered, "order"),
-    ]
-    .into_iter()
-    .filter(|(on, _)| *on)
-    .map(|(_, what)| what.to_string());
-    let parts: Vec<String> = counts.chain(flags).collect();
-    if parts.is_empty() {
-        "nothing".into()
-    } else {
-        parts.join(", ")
-    }
-}
-
-/// `text` if it has at most `max` bytes, else its longest start of at most `max` bytes that
-/// ends on a character boundary, followed by [`CUT`].
-fn bounded(text: &str, max: usize) -> String {
-    if text.len() <= max {
-        return text.to_string();
-    }
-    let end = (0..=max)
-        .rev()
-        .find(|&i| text.is_char_boundary(i))
-        .unwrap_or(0);
-    format!("{}{CUT}", &text[..end])
-}
-
-/// `text` if it has at most `max` characters, else its first `max` followed by [`CUT`].
-fn bounded_chars(text: &str, max: usize) -> String {
-    match text.char_indices().nth(max) {
-        Some((end, _)) => format!("{}{CUT}", &text[..end]),
-        None => text.to_string(),
-    }
-}
-
 #[cfg(test)]
 mod tests {
+    use glam::Vec3;
+
     use super::*;
-
-    /// The viewer's `/image.png` and `/image.exr` are the files the output sink writes, byte
-    /// for byte (one encoder for files and the viewer).
-    #[test]
-    fn the_viewers_images_are_the_files_written() {
-        let mut film = Film::new(3, 2);
-        let fixed = film.fixed();
-        for (i, p) in film.sum.iter_mut().enumerate() {
-            p.add(Vec3::new(i as f32 * 0.7, 2.5, -0.25), fixed);
-        }
-        film.samples = 1;
-        let dir = tempfile::tempdir().expect("temporary directory");
-        let frame = Frame::new(0, film.clone());
-        for (name, bytes) in [("x.png", frame.png()), ("x.exr", frame.exr())] {
-            let path = dir.path().join(name);
-            film.write(&path).expect("written");
-            let file = std::fs::read(&path).expect("read back");
-            assert_eq!(bytes.ok(), Some(file.as_slice()), "{name}");
-        }
-    }
-
-    #[test]
-    fn long_texts_are_cut_on_a_character_boundary() {
-        assert_eq!(bounded("short", 5), "short");
-        assert_eq!(bounded("ééé", 3), format!("é{CUT}"));
-        assert_eq!(bounded("ééé", 1), CUT);
-        let long = "x".repeat(10 * MAX_MESSAGE);
-        assert_eq!(bounded(&long, MAX_MESSAGE).len(), MAX_MESSAGE + CUT.len());
-        assert_eq!(bounded_chars("ééé", 3), "ééé");
-        assert_eq!(bounded_chars("éééé", 3), format!("ééé{CUT}"));
-    }
+    use crate::ecs::resources::ChangeSummary;
+    use crate::serve::images::{DenoisedLayer, RAW_MAGIC};
 
     #[test]
     fn a_stalled_client_keeps_only_the_newest_events() {
@@ -749,7 +465,7 @@ mod tests {
         wrote(&feed, 0, true, &film);
         wrote(&feed, 1, true, &film);
         wrote(&feed, 3, true, &film);
-        let before = |feed: &Feed| feed.previous().map(|f| f.reload);
+        let before = |feed: &Feed| feed.previous().map(|f| f.reload());
         assert_eq!(
             before(&feed),
             Some(1),
@@ -770,7 +486,7 @@ mod tests {
         DenoisedFrame {
             reload,
             samples,
-            images: crate::denoised::FilmImages {
+            images: crate::denoise::FilmImages {
                 width: 2,
                 height: 1,
                 colour: vec![Vec3::ZERO; 2],
@@ -914,24 +630,5 @@ mod tests {
         assert_eq!(replayed(&feed), r#""reload" "denoised""#);
         wrote(&feed, 1, true, &Film::new(2, 1));
         assert_eq!(replayed(&feed), r#""reload" "pass""#);
-    }
-
-    #[test]
-    fn raw_frames_carry_size_reload_samples_and_linear_means() {
-        let mut film = Film::new(2, 1);
-        let fixed = film.fixed();
-        film.sum[0].add(glam::Vec3::new(4.0, 0.5, -1.0), fixed);
-        film.sum[1].add(glam::Vec3::new(0.0, 2.0, 0.0), fixed);
-        film.samples = 2;
-        let frame = Frame::new(7, film);
-        let raw = frame.raw();
-        assert_eq!(&raw[..8], RAW_MAGIC);
-        let u = |i: usize| u32::from_le_bytes(raw[8 + 4 * i..12 + 4 * i].try_into().unwrap());
-        assert_eq!([u(0), u(1), u(2), u(3)], [2, 1, 7, 2]);
-        let floats: Vec<f32> = raw[24..]
-            .chunks(4)
-            .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
-            .collect();
-        assert_eq!(floats, [2.0, 0.25, -0.5, 0.0, 1.0, 0.0]);
     }
 }

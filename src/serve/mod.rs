@@ -28,6 +28,9 @@
 //! The server is `http.rs`: std sockets, one thread and one request per connection, every
 //! resource bounded by [`Limits`] (head size, time to send it, stalled writes, open
 //! connections, event streams); a connection over the limit gets `503` and is closed at once.
+//! The render loop's side is [`Feed`] (`feed.rs`: the latest images, the clients and their
+//! events); the images and their encodings are in `images.rs`, the events' text in
+//! `event_text.rs`.
 //!
 //! The render loop talks to the server only through the watch loop's event point
 //! ([`crate::watch::Observer`], made by [`Feed::observer`]): each report copies what it needs
@@ -35,8 +38,10 @@
 //! queue: a client that stalls loses its oldest queued events, never blocks the render; a
 //! closed client is dropped at its next write.
 
+mod event_text;
 mod feed;
 mod http;
+mod images;
 
 use std::io::Write;
 use std::net::{IpAddr, Ipv4Addr, Ipv6Addr, SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
@@ -45,10 +50,9 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-pub use feed::{
-    CUT, Client, DenoisedImages, DenoisedLayer, Encoding, Feed, Frame, MAX_MESSAGE,
-    MAX_SOURCE_LINE, RAW_MAGIC, changed_text,
-};
+pub use event_text::{CUT, MAX_MESSAGE, MAX_SOURCE_LINE, changed_text};
+pub use feed::{Client, Feed};
+pub use images::{DenoisedImages, DenoisedLayer, Encoding, Frame, RAW_MAGIC};
 
 /// The page, compiled into the binary.
 pub const PAGE: &str = include_str!("page.html");

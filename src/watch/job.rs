@@ -6,9 +6,10 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use super::denoiser::{self, DenoiseWorker, Denoising, HIGH_QUALITY_FROM_SPP};
+use super::options::Denoising;
 use super::report::{ReloadReport, Report};
 use super::{Reporter, Watch};
+use crate::denoise::{DenoiseJob, DenoiseWorker, FilmImages, HIGH_QUALITY_FROM_SPP};
 use crate::ecs::frame_log::BvhWork;
 use crate::film::{Durability, write_output};
 
@@ -43,10 +44,10 @@ impl Watch {
         } else {
             crate::denoise::Quality::High
         };
-        let job = denoiser::Job {
+        let job = DenoiseJob {
             reload,
             samples: film.samples,
-            images: crate::denoised::FilmImages::of(film),
+            images: FilmImages::of(film),
             quality,
             write: match self.denoising {
                 Denoising::Output => self.options.output.clone(),

@@ -11,8 +11,8 @@
 //!
 //! One file per concept: the loop in `mod.rs`; file events and the watched set in `files.rs`;
 //! the changes waiting to be loaded in `pending.rs`; loading them in `reload.rs`; the render of
-//! each pass in `job.rs`; [`Report`]s in `report.rs`; the denoise thread in `denoiser.rs`; the
-//! thread harness in `session.rs`.
+//! each pass in `job.rs`; [`Report`]s in `report.rs`; the thread harness in `session.rs`.
+//! The denoise thread beside the loop is [`crate::denoise::DenoiseWorker`].
 //!
 //! # What is watched
 //!
@@ -84,10 +84,10 @@ use std::sync::mpsc::{self, Receiver, Sender};
 use std::time::Instant;
 
 use crate::app::Renderer;
+use crate::denoise::{DenoiseSink, DenoiseWorker, WorkerNews};
 use crate::ecs::resources::PassPlan;
 use crate::film::{Film, OutputKind};
 
-mod denoiser;
 mod error;
 mod files;
 mod job;
@@ -97,12 +97,11 @@ mod reload;
 mod report;
 mod session;
 
-pub use denoiser::{DenoiseSink, Denoised, DenoisedFrame, HIGH_QUALITY_FROM_SPP};
-use denoiser::{DenoiseWorker, Denoising, WorkerNews};
 pub use error::WatchError;
 use files::IDLE_POLL;
 pub use files::*;
 use job::{Job, OnDisk};
+use options::Denoising;
 pub use options::WatchOptions;
 use pending::Pending;
 pub use report::*;

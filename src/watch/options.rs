@@ -48,3 +48,14 @@ impl WatchOptions {
         }
     }
 }
+
+/// What a watch denoises, from `--denoise` / `--no-denoise` or the scene's `denoise`: the
+/// library is loaded only when asked for, so a viewer alone never loads it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) enum Denoising {
+    /// Nothing.
+    #[default]
+    Off,
+    /// The viewer's passes and the output file.
+    Output,
+}

@@ -7,9 +7,9 @@ use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-use super::denoiser::Denoising;
 use super::files::watch_key;
 use super::job::Job;
+use super::options::Denoising;
 use super::pending::{Failure, Pending};
 use super::report::{ReloadReport, Report};
 use super::{Reporter, Watch};

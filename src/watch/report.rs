@@ -286,7 +286,7 @@ pub enum Report {
     },
     /// A pass was denoised (see [`super::Watch::set_denoise_sink`]): shown in the viewer, and
     /// written if the output is denoised.
-    Denoised(super::denoiser::Denoised),
+    Denoised(crate::denoise::Denoised),
 }
 
 impl Report {

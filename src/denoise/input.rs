@@ -6,7 +6,7 @@ use std::sync::atomic::AtomicBool;
 
 use glam::Vec3;
 
-use crate::denoise::{DenoiseError, DenoiseInput, Denoiser, Quality};
+use super::{DenoiseError, DenoiseInput, Denoiser, Quality};
 use crate::film::Film;
 
 /// The per-pixel means of a film, as the denoiser and the layered outputs take them.

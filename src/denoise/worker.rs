@@ -1,4 +1,4 @@
-//! Denoising beside the watch loop: a worker thread denoises the newest pass while the loop
+//! Denoising beside a watch loop: a worker thread denoises the newest pass while the loop
 //! renders the next one. Once a denoise ends, the newest pass waiting is taken and older waiting
 //! ones are dropped. A new reload cancels the denoise in flight and every pass waiting (they show
 //! a scene that is gone); a newer pass of the same render does not cancel the one in flight, as
@@ -17,8 +17,7 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
-use crate::denoise::{DenoiseError, Denoiser, Quality};
-use crate::denoised::FilmImages;
+use super::{DenoiseError, Denoiser, FilmImages, Quality};
 use crate::film::{Durability, Layer, OutputImage, write_output};
 
 /// Passes of fewer samples than this (but the last) are denoised at OIDN's fast quality, the
@@ -27,17 +26,6 @@ use crate::film::{Durability, Layer, OutputImage, write_output};
 /// second of the save; from 8 spp on a pass takes longer than a high-quality denoise, and the
 /// high quality's error is lower (0.0043 against 0.0050 at 8 spp; BENCHMARKS.md).
 pub const HIGH_QUALITY_FROM_SPP: u32 = 8;
-
-/// What a watch denoises, from `--denoise` / `--no-denoise` or the scene's `denoise`: the
-/// library is loaded only when asked for, so a viewer alone never loads it.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(super) enum Denoising {
-    /// Nothing.
-    #[default]
-    Off,
-    /// The viewer's passes and the output file.
-    Output,
-}
 
 /// A denoised pass, as the viewer gets it.
 #[derive(Clone, Debug)]
@@ -89,7 +77,7 @@ pub struct Denoised {
 }
 
 /// One pass to denoise.
-pub struct Job {
+pub struct DenoiseJob {
     /// The reload.
     pub reload: u64,
     /// Samples per pixel.
@@ -106,7 +94,7 @@ pub struct Job {
 
 /// The worker thread and its queue.
 pub struct DenoiseWorker {
-    jobs: Option<Sender<(Job, Arc<AtomicBool>)>>,
+    jobs: Option<Sender<(DenoiseJob, Arc<AtomicBool>)>>,
     news: Receiver<WorkerNews>,
     /// The cancel flag shared by the jobs of the current render.
     current: Arc<Mutex<Arc<AtomicBool>>>,
@@ -116,7 +104,7 @@ pub struct DenoiseWorker {
 impl DenoiseWorker {
     /// Starts the worker; denoised frames also go to `sink`, if any.
     pub fn start(sink: Option<DenoiseSink>) -> Self {
-        let (jobs, inbox) = mpsc::channel::<(Job, Arc<AtomicBool>)>();
+        let (jobs, inbox) = mpsc::channel::<(DenoiseJob, Arc<AtomicBool>)>();
         let (tell, news) = mpsc::channel();
         let thread = std::thread::Builder::new()
             .name("rondo-denoise".into())
@@ -132,7 +120,7 @@ impl DenoiseWorker {
 
     /// Hands a pass over: denoised once the denoise in flight (if any) ends, unless a newer
     /// pass comes first or [`DenoiseWorker::cancel`] is called.
-    pub fn submit(&self, job: Job) {
+    pub fn submit(&self, job: DenoiseJob) {
         let cancel = self
             .current
             .lock()
@@ -171,7 +159,7 @@ impl Drop for DenoiseWorker {
 
 /// The worker's loop: the newest job waiting, denoised unless cancelled.
 fn work(
-    inbox: &Receiver<(Job, Arc<AtomicBool>)>,
+    inbox: &Receiver<(DenoiseJob, Arc<AtomicBool>)>,
     tell: &Sender<WorkerNews>,
     sink: Option<&DenoiseSink>,
 ) {
