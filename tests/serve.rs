@@ -420,6 +420,11 @@ fn a_save_streams_a_pass_and_a_broken_save_an_error_while_the_image_stays() {
     );
     assert_eq!(error["line"], 5);
     let col = error["column"].as_u64().expect("a column") as usize;
+    assert_eq!(
+        error["col"].as_u64(),
+        Some(col as u64),
+        "older scripts read `col`"
+    );
     let line5 = broken.lines().nth(4).expect("line 5");
     // The watch loop may quote a window of a long line, starting with "…".
     let quoted = error["source_line"].as_str().expect("a source line");

@@ -386,6 +386,9 @@ impl Feed {
                 "file": bounded(&error.path.display().to_string(), MAX_MESSAGE),
                 "line": error.location.map(|l| l.line),
                 "column": error.location.map(|l| l.col),
+                // The column under the name events gave it before `column`, so that scripts
+                // reading an error's place keep working.
+                "col": error.location.map(|l| l.col),
                 "field": error.field.as_deref().map(|f| bounded(f, MAX_MESSAGE)),
                 "message": bounded(&error.message, MAX_MESSAGE),
                 "source_line": error.source_line.as_deref().map(|l| bounded_chars(l, MAX_SOURCE_LINE)),
