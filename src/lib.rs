@@ -14,6 +14,7 @@ pub mod cpu;
 pub mod denoise;
 pub mod denoised;
 pub mod ecs;
+pub mod export;
 pub mod farm;
 pub mod film;
 pub mod geometry;
