@@ -331,9 +331,10 @@ class Builder:
             coord = tree.nodes.new("ShaderNodeTexCoord")
             mapping = tree.nodes.new("ShaderNodeMapping")
             mapping.vector_type = "VECTOR"
-            # Blender reads u = atan2(y, -x) / 2pi + 1/2, v up, z up; rondo u = atan2(x, -z) / 2pi,
-            # y up: the direction (-z, -x, y) of rondo's map space reads the same texel.
-            r = Matrix(((0, 0, -1), (-1, 0, 0), (0, 1, 0)))
+            # Blender reads u = 1/2 - atan2(y, x) / 2pi, v = 1/2 - acos(z) / pi (z up); rondo
+            # u = atan2(x, -z) / 2pi, v = acos(y) / pi: the direction (z, x, y) of rondo's map
+            # space reads the same texel.
+            r = Matrix(((0, 0, 1), (1, 0, 0), (0, 1, 0)))
             world_from_map = Matrix(env["world_from_map"])
             mapping.inputs["Rotation"].default_value = (r @ world_from_map.inverted()).to_euler("XYZ")
             tree.links.new(coord.outputs["Generated"], mapping.inputs["Vector"])
