@@ -32,7 +32,7 @@ pub const MAX_TRIANGLES: u64 = 1 << 25;
 /// Half-size of the square written for an infinite plane, in units of the scene's extent (the
 /// largest distance of the camera or of any other shape's vertex from the plane's point, at
 /// least 1): far enough that its edge lies near the horizon.
-pub const PLANE_PROXY_SCALE: f32 = 1000.0;
+pub const PLANE_PROXY_SCALE: f32 = 100.0;
 
 /// Why a scene could not be exported.
 #[derive(Debug, thiserror::Error)]
