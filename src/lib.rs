@@ -12,6 +12,7 @@ pub mod cli;
 pub mod cpu;
 pub mod denoise;
 pub mod ecs;
+pub mod export;
 pub mod farm;
 pub mod film;
 pub mod geometry;

@@ -12,7 +12,7 @@ mod commands;
 
 use commands::args::{RenderArgs, at_least_one_u32, at_most_u32, image_path, png_path};
 use commands::bench_command::BenchCommand;
-use commands::{bench_command, check, diff, farm, merge, render, watch};
+use commands::{bench_command, check, diff, export, farm, merge, render, watch};
 
 #[derive(Parser)]
 #[command(
@@ -116,6 +116,20 @@ enum Command {
         /// Scene file (.ron).
         scene: PathBuf,
     },
+    /// Write a scene for other renderers: DIR/scene.json (camera, settings, sky, materials as
+    /// rondo reads them, spheres, planes) and world-space triangles as binary PLY files, one per
+    /// material, every mesh placement flattened (benches/suite/).
+    Export {
+        /// Scene file (.ron).
+        scene: PathBuf,
+        /// Output directory (created if missing; not a symlink).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Refuse scenes of more triangles than this, instances flattened.
+        #[arg(long, default_value_t = rondo::export::MAX_TRIANGLES,
+              value_parser = clap::value_parser!(u64).range(1..=rondo::export::MAX_TRIANGLES))]
+        max_triangles: u64,
+    },
     /// Measure rendering speed.
     Bench {
         #[command(subcommand)]
@@ -166,6 +180,11 @@ fn main() {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Check { scene } => check::run(&scene),
+        Command::Export {
+            scene,
+            output,
+            max_triangles,
+        } => export::run(&scene, &output, max_triangles),
         Command::Bench { what } => bench_command::run(what),
         Command::Render {
             scene,

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod bench_command;
 pub mod check;
 pub mod diff;
+pub mod export;
 pub mod farm;
 pub mod merge;
 pub mod render;
