@@ -86,7 +86,8 @@ pub struct TraceStats {
     /// Samples with a channel beyond the film's range (2^[`crate::film::HEADROOM_BITS`] times
     /// the scene's brightest radiance); they are clamped to it.
     pub clamped: u64,
-    /// Passes traced in each layout, in the order of [`LayoutKind::ALL`]: which monomorphised
+    /// Passes traced in each layout, in the order of
+    /// [`LayoutKind::ALL`](crate::geometry::layout::LayoutKind::ALL): which monomorphised
     /// code really ran.
     pub layout_passes: [u64; 4],
 }

@@ -35,7 +35,7 @@ pub struct GltfScene {
     pub images: Vec<GltfImage>,
     /// What was skipped or ignored, one sentence each.
     pub warnings: Vec<String>,
-    /// Bytes held by the file's buffers (each source once), at most [`MAX_BUFFER_BYTES`].
+    /// Bytes held by the file's buffers (each source once), at most [`MAX_BUFFER_BYTES`](super::MAX_BUFFER_BYTES).
     pub held_bytes: u64,
 }
 
@@ -112,7 +112,7 @@ pub struct GltfTexture {
 #[derive(Debug, Clone, PartialEq)]
 pub enum GltfImage {
     /// A file, as a path relative to the glTF file's directory (percent-decoded; checked by
-    /// [`relative_uri`]).
+    /// [`relative_uri`](super::relative_uri)).
     File(String),
     /// Image bytes held in the file (a buffer view or a data URI), with their MIME type.
     Bytes {

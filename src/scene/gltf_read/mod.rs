@@ -1,4 +1,4 @@
-//! glTF 2.0 files (`.gltf` and `.glb`) read into plain data: one [`MeshData`] per primitive, the
+//! glTF 2.0 files (`.gltf` and `.glb`) read into plain data: one [`MeshData`](crate::model::MeshData) per primitive, the
 //! default scene's nodes with composed transforms, and the metallic–roughness materials. Nothing
 //! here knows the ECS or the scene format; the scene loader places the result.
 //!
@@ -10,7 +10,7 @@
 //! buffers and images name it, and all of them together are bounded by [`MAX_BUFFER_BYTES`].
 //!
 //! Supported: triangles (indexed or not; strips and fans converted), `POSITION`, `NORMAL` (flat
-//! shading when absent: [`MeshData::normals`] is `None`), `TEXCOORD_0` (float or normalised
+//! shading when absent: [`MeshData::normals`](crate::model::MeshData::normals) is `None`), `TEXCOORD_0` (float or normalised
 //! integers; stored as `(u, 1 − v)`, rondo's v pointing up the image), sparse accessors,
 //! accessors without a buffer view (zeros), TRS and matrix node transforms, the
 //! metallic–roughness material with its textures, `KHR_materials_emissive_strength`,
