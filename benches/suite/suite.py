@@ -10,9 +10,9 @@ to [0, 1], pixels whose reference exceeds 1 left out.
 
 import argparse
 import json
-import math
 import os
 import re
+import shlex
 import subprocess
 import sys
 import time
@@ -44,6 +44,21 @@ def scene_path(name, out):
         subprocess.run([sys.executable, os.path.join(HERE, "make_bunnies.py"), gen], check=True)
         return os.path.join(gen, "bunnies1000.ron")
     return os.path.join(ROOT, "scenes", name + ".ron")
+
+
+def check_bunnies(scene, j):
+    """The export of the generated bunnies holds every placement: its triangles are the
+    placements times the triangles of bunny.obj (counted from the files here) and the lamp's
+    quad (2)."""
+    gen = os.path.dirname(scene)
+    with open(os.path.join(gen, "bunny.obj")) as f:
+        per_bunny = sum(len(line.split()) - 3 for line in f if line.startswith("f "))
+    with open(scene) as f:
+        placements = f.read().count('Mesh(path: "bunny.obj")')
+    want = placements * per_bunny + 2
+    if placements != 1000 or j["counts"]["triangles"] != want:
+        sys.exit("%s: the export holds %d triangles, %d placements x %d + 2 = %d expected" % (
+            scene, j["counts"]["triangles"], placements, per_bunny, want))
 
 
 def read_exr(mi, path):
@@ -162,6 +177,8 @@ def main():
         scene = scene_path(name, args.out)
         subprocess.run([args.rondo, "export", scene, "--output", export], check=True)
         j = json.load(open(os.path.join(export, "scene.json")))
+        if name == "bunnies":
+            check_bunnies(scene, j)
         w, h = j["camera"]["width"], j["camera"]["height"]
         f = min(1.0, 96 / w) if args.quick else args.scale
         size = (max(8, round(w * f)), max(8, round(h * f)))
@@ -326,11 +343,13 @@ def table(rows, args):
     if "--cycles-python" in argv:
         k = argv.index("--cycles-python")
         argv = argv[:k] + argv[k + 2:]
-    lines = ["```sh", "benches/suite/run.sh " + " ".join(argv), "```", "",
+    lines = ["```sh", "benches/suite/run.sh " + shlex.join(argv), "```", "",
              "Reference: Mitsuba 3 `%s`, %d spp. E = t_peer err_peer^2 / (t_rondo err_rondo^2) "
              "at rondo's largest spp (peers at equal time); err = clamped RMSE; mean = relative "
              "difference of the image mean from the reference's, clamped to [0, 1] (raw in "
-             "brackets)." % (args.reference_sampler, args.reference_spp), "",
+             "brackets). Times: rondo's render without its BVH build, Mitsuba's `mi.render` (its BVH "
+             "is built at load), Cycles' own `render_time` (no scene synchronisation; see "
+             "benches/suite/README.md)." % (args.reference_sampler, args.reference_spp), "",
              "| scene | size | rondo spp, s, err | rondo M samples/s, M rays/s | "
              + " | ".join("E vs %s" % p for p in peers) + " | "
              + " | ".join("%s M samples/s" % p for p in peers) + " | mean: rondo | "
