@@ -386,7 +386,8 @@ def exr_render_seconds(path):
     seconds = 0.0
     for part in found.split(":"):
         seconds = 60 * seconds + float(part)
-    return seconds
+    # Rounded to 10 ms: a render read as 0.00 s took under 5 ms.
+    return max(seconds, 0.005)
 
 
 def main():
