@@ -25,8 +25,8 @@ pub const MAX_COORDINATE: f32 = 1e9;
 /// Light-transport method.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize)]
 pub enum Method {
-    /// The plain path tracer of Ray Tracing in One Weekend (the seed's thesis): BSDF sampling only;
-    /// light counts when a path hits an emitter.
+    /// The plain path tracer of Ray Tracing in One Weekend, as the 2020 thesis in
+    /// `../shared/seed/` traces: BSDF sampling only; light counts when a path hits an emitter.
     #[serde(alias = "naive")]
     Naive,
     /// Next-event estimation: a shadow ray to a sampled point on an emitter at every diffuse
