@@ -16,11 +16,12 @@ use crate::ecs::resources::{
 };
 use crate::ecs::sets::RenderSystems;
 use crate::film::Film;
-use crate::geometry::packed::LayoutKind;
+use crate::geometry::layout::LayoutKind;
 use crate::render::TraceStats;
+use crate::scene::assets::AssetCache;
 use crate::scene::error::SceneError;
 use crate::scene::format::{CameraDesc, Method, SettingsDesc};
-use crate::scene::load::{AssetCache, LoadedScene, load_scene};
+use crate::scene::load::{LoadedScene, load_scene};
 use crate::shading::sampler::SamplerKind;
 use crate::systems::{
     apply_scene, assign_materials, geometry_changed, material_refs_changed, rebuild_geometry,

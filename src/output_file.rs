@@ -178,7 +178,7 @@ mod tests {
 
     #[cfg(unix)]
     #[test]
-    fn a_symlink_at_the_old_temporary_name_or_the_output_is_not_written_through() {
+    fn a_symlink_at_a_guessable_temporary_name_or_the_output_is_not_written_through() {
         let outside = tempfile::Builder::new()
             .prefix("rondo-victim-")
             .tempdir()
@@ -189,11 +189,12 @@ mod tests {
             .expect("temp dir");
         let victim = outside.path().join("victim");
         std::fs::write(&victim, b"precious").expect("write victim");
-        // The name every write used to create with O_TRUNC, and a link at the output itself.
-        let old_name = dir
+        // A link at the name a writer that derives its temporary from the process id would open
+        // with O_TRUNC, and a link at the output itself.
+        let guessed = dir
             .path()
             .join(format!(".out.txt.{}.tmp", std::process::id()));
-        std::os::unix::fs::symlink(&victim, &old_name).expect("symlink");
+        std::os::unix::fs::symlink(&victim, &guessed).expect("symlink");
         let out = dir.path().join("out.txt");
         std::os::unix::fs::symlink(&victim, &out).expect("symlink");
         write_bytes(&out, b"new").expect("write");

@@ -6,7 +6,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use rondo::scene::load::AssetCache;
+use rondo::scene::assets::AssetCache;
 
 /// A one-triangle OBJ whose first vertex has x = `x` (one digit: the same size for every `x`).
 fn triangle(x: u8) -> String {

@@ -13,9 +13,10 @@ use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use common::temp_dir;
+use rondo::scene::assets::AssetCache;
 use rondo::scene::check::check_scene;
 use rondo::scene::format::MAX_PIXELS;
-use rondo::scene::load::{AssetCache, LoadedScene, load_scene};
+use rondo::scene::load::{LoadedScene, load_scene};
 use rondo::shading::rng::Rng;
 use rondo::{Overrides, PassPlan, Renderer};
 

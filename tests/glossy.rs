@@ -281,7 +281,7 @@ fn the_scene_format_reads_glossy_and_clamps_its_roughness() {
     },
 )"#,
     );
-    let mut cache = rondo::scene::load::AssetCache::default();
+    let mut cache = rondo::scene::assets::AssetCache::default();
     let scene = rondo::scene::load::load_scene(&path, &mut cache).unwrap_or_else(|e| panic!("{e}"));
     let roughness = |name: &str| match scene.materials.get(name) {
         Some(Material::Glossy { roughness, .. }) => *roughness,

@@ -12,7 +12,8 @@ use std::sync::{Mutex, MutexGuard};
 
 use common::gltf_doc::{Bin, glb};
 use common::{temp_dir, write_scene};
-use rondo::scene::load::{AssetCache, load_scene};
+use rondo::scene::assets::AssetCache;
+use rondo::scene::load::load_scene;
 use serde_json::json;
 
 /// The system allocator, counting the bytes held and the most held at once.

@@ -356,7 +356,7 @@ fn a_normal_map_is_a_dependency_of_the_scene() {
                 shape: Quad(a: (-1, -1, 0), b: (1, -1, 0), c: (1, 1, 0), d: (-1, 1, 0)))],
         )"#,
     );
-    let mut assets = rondo::scene::load::AssetCache::default();
+    let mut assets = rondo::scene::assets::AssetCache::default();
     let scene =
         rondo::scene::load::load_scene(&path, &mut assets).unwrap_or_else(|e| panic!("{e}"));
     assert!(

@@ -11,8 +11,9 @@ use std::path::{Path, PathBuf};
 use common::{
     assert_methods_agree, point_camera, point_estimate, render, temp_dir, with, within, write_scene,
 };
+use rondo::scene::assets::AssetCache;
 use rondo::scene::format::Method;
-use rondo::scene::load::{AssetCache, load_scene};
+use rondo::scene::load::load_scene;
 
 /// Writes a 16 × 8 OpenEXR map of constant grey radiance 1.
 fn write_white_map(dir: &Path) -> PathBuf {

@@ -6,7 +6,8 @@ use common::{render, scenes_dir, temp_dir, write_scene};
 use glam::Vec3;
 use rondo::Overrides;
 use rondo::geometry::packed::Primitive;
-use rondo::scene::load::{AssetCache, LoadedScene, load_scene};
+use rondo::scene::assets::AssetCache;
+use rondo::scene::load::{LoadedScene, load_scene};
 use rondo::systems::world_primitives;
 
 const CAMERA: &str = "camera: Camera(position: (0, 0, -10), look_at: (0, 0, 0)),";

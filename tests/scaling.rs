@@ -6,8 +6,9 @@ mod common;
 
 use common::{temp_dir, write_scene};
 use rondo::bench::load::generate;
+use rondo::scene::assets::AssetCache;
 use rondo::scene::check::check_counted;
-use rondo::scene::load::{AssetCache, LoadedScene, load_scene};
+use rondo::scene::load::{LoadedScene, load_scene};
 
 const SIZES: [usize; 3] = [1_000, 10_000, 100_000];
 

@@ -3,7 +3,8 @@
 mod common;
 
 use common::{temp_dir, write_scene};
-use rondo::scene::load::{AssetCache, load_scene};
+use rondo::scene::assets::AssetCache;
+use rondo::scene::load::load_scene;
 
 const HEADER: &str = r#"Scene(
     camera: Camera(position: (0, 1, -5), look_at: (0, 1, 0)),

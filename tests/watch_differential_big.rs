@@ -22,7 +22,8 @@ use std::time::{Duration, Instant};
 
 use common::watch_diff::{Rng, Save, Watcher, env_number, fresh};
 use rondo::ecs::resources::ChangeSummary;
-use rondo::scene::load::{AssetCache, load_scene};
+use rondo::scene::assets::AssetCache;
+use rondo::scene::load::load_scene;
 
 /// Entities of the generated scene.
 const ENTITIES: usize = 10_000;

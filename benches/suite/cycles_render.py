@@ -1,11 +1,14 @@
-"""scene.json (from `rondo export`) rendered by Blender Cycles (PyPI `bpy`, CPU, no denoiser),
-at equal time with given targets. Run by suite.py with the Cycles virtual environment's Python;
-never by the tests. The mapping is in README.md beside this file.
+"""scene.json (from `rondo export`) rendered by Blender Cycles (PyPI `bpy`, CPU), at equal time
+with given targets, raw and with its Open Image Denoise denoiser. Run by suite.py with the Cycles
+virtual environment's Python; never by the tests. The mapping is in README.md beside this file.
 
-    cycles_render.py EXPORT_DIR OUT_DIR --size W H --targets 1.5,6 [--spp-list 4,16]
+    cycles_render.py EXPORT_DIR OUT_DIR --size W H --targets 1.5,6 [--denoise-targets 1,10]
+                     [--spp-list 4,16]
 
-Prints one JSON line per render: {"spp", "seconds", "file"} (seconds: bpy.ops.render.render
-alone, scene building excluded)."""
+Prints one JSON line per render: {"spp", "seconds", "wall", "file", "denoised"}. seconds is
+Cycles' own render time from the EXR's metadata (path tracing, and denoising when on; no scene
+synchronisation: the scene is synchronised once and kept, `use_persistent_data`); wall is
+bpy.ops.render.render's whole call."""
 
 import argparse
 import json
@@ -360,12 +363,41 @@ class Builder:
             lo.rotation_euler = d.to_track_quat("Z", "Y").to_euler()
 
 
+def exr_render_seconds(path):
+    """Cycles' own render time, from the metadata it stamps into the EXR header
+    (`cycles.<view layer>.render_time`, "[HH:]MM:SS.cc", 10 ms resolution): path tracing and
+    denoising, without the scene's synchronisation (`synchronization_time`)."""
+    with open(path, "rb") as f:
+        data = f.read(1 << 16)
+    if data[:4] != b"\x76\x2f\x31\x01":
+        raise SystemExit("%s: not an OpenEXR file" % path)
+    i, found = 8, None
+    while i < len(data) and data[i] != 0:
+        n = data.index(b"\0", i)
+        name = data[i:n].decode(errors="replace")
+        n2 = data.index(b"\0", n + 1)
+        size = int.from_bytes(data[n2 + 1:n2 + 5], "little")
+        value = data[n2 + 5:n2 + 5 + size]
+        i = n2 + 5 + size
+        if name.startswith("cycles.") and name.endswith(".render_time"):
+            found = value.decode()
+    if found is None:
+        raise SystemExit("%s: no cycles.*.render_time in the header" % path)
+    seconds = 0.0
+    for part in found.split(":"):
+        seconds = 60 * seconds + float(part)
+    # Rounded to 10 ms: a render read as 0.00 s took under 5 ms.
+    return max(seconds, 0.005)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("export")
     ap.add_argument("out")
     ap.add_argument("--size", nargs=2, type=int, required=True)
     ap.add_argument("--targets", default="", help="seconds to match (equal time)")
+    ap.add_argument("--denoise-targets", default="",
+                    help="seconds to match with the OIDN denoiser on (render + denoise)")
     ap.add_argument("--spp-list", default="", help="fixed spp renders")
     ap.add_argument("--threads", type=int, default=0)
     args = ap.parse_args()
@@ -374,31 +406,50 @@ def main():
     if args.threads:
         scene.render.threads_mode = "FIXED"
         scene.render.threads = args.threads
+    # The synchronised scene (BVH, images, the environment's importance map) is kept between
+    # renders: only the first one pays for it.
+    scene.render.use_persistent_data = True
+    c = scene.cycles
+    c.denoiser = "OPENIMAGEDENOISE"
+    c.denoising_use_gpu = False
+    c.denoising_input_passes = "RGB_ALBEDO_NORMAL"
+    c.denoising_prefilter = "ACCURATE"
+    c.denoising_quality = "HIGH"
     print(json.dumps({"notes": sorted(b.notes)}), flush=True)
     os.makedirs(args.out, exist_ok=True)
 
-    def render(spp, seed, name):
-        scene.cycles.samples = spp
-        scene.cycles.seed = seed
+    def render(spp, seed, name, denoise=False):
+        c.samples = spp
+        c.seed = seed
+        c.use_denoising = denoise
         scene.render.filepath = os.path.join(args.out, name)
         t = time.perf_counter()
         bpy.ops.render.render(write_still=True)
-        return time.perf_counter() - t, scene.render.filepath
+        wall = time.perf_counter() - t
+        return exr_render_seconds(scene.render.filepath), wall, scene.render.filepath
 
+    def equal_time(targets, denoise, seed, prefix):
+        t4, _, _ = render(4, 1, "probe.exr", denoise)
+        rate = max(t4, 0.01) / 4
+        for k, target in enumerate(float(x) for x in targets.split(",") if x):
+            spp = max(1, round(target / rate))
+            for _attempt in range(3):
+                t, wall, f = render(spp, seed + k, "%s%d.exr" % (prefix, k), denoise)
+                if abs(t - target) <= 0.15 * target:
+                    break
+                spp = max(1, round(spp * target / max(t, 0.01)))
+            print(json.dumps({"spp": spp, "seconds": t, "wall": wall, "file": f,
+                              "target": target, "denoised": denoise}), flush=True)
+
+    # Untimed: the first render synchronises the scene; the first denoised one loads OIDN.
     render(1, 0, "warmup.exr")
-    t4, _ = render(4, 1, "probe.exr")
-    rate = t4 / 4
     for s in [int(x) for x in args.spp_list.split(",") if x]:
-        t, f = render(s, 100 + s, "cycles_n%d.exr" % s)
-        print(json.dumps({"spp": s, "seconds": t, "file": f}), flush=True)
-    for k, target in enumerate(float(x) for x in args.targets.split(",") if x):
-        spp = max(1, round(target / rate))
-        for _attempt in range(2):
-            t, f = render(spp, 200 + k, "cycles_t%d.exr" % k)
-            if abs(t - target) <= 0.15 * target:
-                break
-            spp = max(1, round(spp * target / t))
-        print(json.dumps({"spp": spp, "seconds": t, "file": f, "target": target}), flush=True)
+        t, wall, f = render(s, 100 + s, "cycles_n%d.exr" % s)
+        print(json.dumps({"spp": s, "seconds": t, "wall": wall, "file": f}), flush=True)
+    equal_time(args.targets, False, 200, "cycles_t")
+    if args.denoise_targets:
+        render(1, 0, "warmup.exr", True)
+        equal_time(args.denoise_targets, True, 300, "cycles_denoised_t")
 
 
 if __name__ == "__main__":

@@ -3,10 +3,11 @@
 # Mitsuba 3 and Blender Cycles virtual environments, then runs suite.py.
 #
 #   benches/suite/run.sh [--scenes cornell,envmap] [--quick] [--scale 0.5] [--spp-list 4,16,64]
-#                        [--reference-spp 1024] [--threads N] [--no-cycles] [--out bench/suite]
+#                        [--reference-spp 1024] [--denoise-times 1,10] [--threads N] [--no-cycles]
+#                        [--out bench/suite]
 #
 # Environment: MITSUBA_VENV, CYCLES_VENV, CYCLES_PYTHON, BPY_VERSION (see benches/mitsuba/venv.sh
-# and benches/cycles/run.sh, whose defaults these share).
+# and benches/cycles/run.sh, whose defaults these share), RONDO_OIDN_DIR (src/denoise/).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 cargo build --release --quiet
@@ -33,6 +34,11 @@ if [ ! -x "$CYCLES/bin/python" ]; then
   "$PY" -m venv "$CYCLES"
 fi
 "$CYCLES/bin/pip" install --quiet "bpy==${BPY_VERSION:-5.2.3}" numpy
+# rondo's denoiser (the suite's denoised columns): Open Image Denoise in .oidn/lib, unless
+# RONDO_OIDN_DIR names another folder.
+if [ -z "${RONDO_OIDN_DIR:-}" ]; then
+  scripts/fetch-oidn.sh
+fi
 lscpu | grep -E 'Model name' || true
 if grep -qw avx512f /proc/cpuinfo; then echo "AVX-512: yes"; else echo "AVX-512: no"; fi
 exec "$VENV/bin/python" benches/suite/suite.py --cycles-python "$CYCLES/bin/python" "$@"

@@ -10,9 +10,9 @@ to [0, 1], pixels whose reference exceeds 1 left out.
 
 import argparse
 import json
-import math
 import os
 import re
+import shlex
 import subprocess
 import sys
 import time
@@ -31,19 +31,45 @@ BEST = {name: "multijitter" for name in ALL}
 
 
 def scene_path(name, out):
+    gen = os.path.join(out, "generated")
     if name == "bigmesh":
-        gen = os.path.join(out, "generated")
         path = os.path.join(gen, "bigmesh.ron")
         if not os.path.isfile(path):
             subprocess.run([sys.executable, os.path.join(HERE, "make_bigmesh.py"), gen],
                            check=True)
         return path
+    if name == "bunnies":
+        # 1,000 placements of the bunny (scenes/bunnies.ron places 5); written on every run,
+        # the same bytes each time (a seeded generator).
+        subprocess.run([sys.executable, os.path.join(HERE, "make_bunnies.py"), gen], check=True)
+        return os.path.join(gen, "bunnies1000.ron")
     return os.path.join(ROOT, "scenes", name + ".ron")
 
 
+def check_bunnies(scene, j):
+    """The export of the generated bunnies holds every placement: its triangles are the
+    placements times the triangles of bunny.obj (counted from the files here) and the lamp's
+    quad (2)."""
+    gen = os.path.dirname(scene)
+    with open(os.path.join(gen, "bunny.obj")) as f:
+        per_bunny = sum(len(line.split()) - 3 for line in f if line.startswith("f "))
+    with open(scene) as f:
+        placements = f.read().count('Mesh(path: "bunny.obj")')
+    want = placements * per_bunny + 2
+    if placements != 1000 or j["counts"]["triangles"] != want:
+        sys.exit("%s: the export holds %d triangles, %d placements x %d + 2 = %d expected" % (
+            scene, j["counts"]["triangles"], placements, per_bunny, want))
+
+
 def read_exr(mi, path):
-    return np.array(mi.Bitmap(path).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32,
-                                            srgb_gamma=False))
+    """The colour of an EXR as H x W x 3: its R, G, B channels (a denoised rondo image also
+    holds the raw colour as the layer `raw`, whose channels are `raw.R`, ...)."""
+    bmp = mi.Bitmap(path)
+    names = [bmp.struct_()[i].name for i in range(bmp.channel_count())]
+    arr = np.asarray(bmp)
+    if names[:3] != ["R", "G", "B"]:
+        sys.exit("%s: channels %s, not R, G, B first" % (path, names))
+    return np.array(arr[..., :3], dtype=np.float32)
 
 
 def err(img, ref):
@@ -57,27 +83,72 @@ def means(img, ref):
     return float(raw), float(clamped)
 
 
-def rondo_render(rondo, scene, spp, size, seed, out, threads):
+def rondo_render(rondo, scene, spp, size, seed, out, threads, denoise=False):
+    """Renders and reads rondo's log: t is the render time without the BVH build (Mitsuba
+    builds its BVH when the scene loads, Cycles when it synchronises it: neither is timed),
+    samples/s and rays/s over that time, the BVH build and the denoiser's time."""
     cmd = [rondo, "render", scene, "-o", out, "--spp", str(spp), "--seed", str(seed),
            "--width", str(size[0]), "--height", str(size[1])]
     if threads:
         cmd += ["--threads", str(threads)]
+    if denoise:
+        cmd += ["--denoise"]
     p = subprocess.run(cmd, capture_output=True, text=True)
     if p.returncode != 0:
         sys.exit("rondo failed: %s\n%s" % (" ".join(cmd), p.stderr))
-    m = re.search(r"spp, ([0-9.]+) s, ([0-9.]+) M samples/s, ([0-9.]+) M rays/s", p.stderr)
+    m = re.search(r"spp, ([0-9.]+) s, ([0-9.]+) M samples/s, ([0-9.]+) M rays/s, "
+                  r"BVH ([0-9.]+) ms", p.stderr)
     if not m:
         sys.exit("cannot read rondo's time from: %s" % p.stderr)
-    return float(m.group(1)), float(m.group(2)), float(m.group(3))
+    wall, bvh = float(m.group(1)), float(m.group(4)) / 1000
+    # The log gives 2 decimals: keep at least 5 ms of sampling.
+    t = max(wall - bvh, 0.005)
+    mrays = float(m.group(3)) * wall
+    d = re.search(r"denoised in ([0-9.]+) s", p.stderr)
+    if denoise and not d:
+        sys.exit("cannot read rondo's denoising time from: %s" % p.stderr)
+    return {"t": t, "wall": wall, "bvh": bvh, "msps": spp * size[0] * size[1] / t / 1e6,
+            "mrps": mrays / t, "denoise": float(d.group(1)) if d else 0.0}
+
+
+def rondo_denoised(args, scene, size, budgets, raw, ref, mi, out_img):
+    """rondo with its OIDN denoiser at each time budget (render + denoise): spp from the
+    samples/s of the raw renders, then scaled again while the time is off by more than 15 %
+    (at most twice)."""
+    rate = raw["t"] / raw["spp"]
+    t_denoise = 0.0
+    pts = []
+    for k, budget in enumerate(budgets):
+        spp = max(1, round((budget - t_denoise) / rate))
+        for attempt in range(3):
+            r = rondo_render(args.rondo, scene, spp, size, 500 + k, out_img, args.threads,
+                             denoise=True)
+            t = r["t"] + r["denoise"]
+            rate, t_denoise = r["t"] / spp, r["denoise"]
+            if abs(t - budget) <= 0.15 * budget or attempt == 2:
+                break
+            new = max(1, round((budget - t_denoise) / rate))
+            if new == spp:
+                break
+            spp = new
+        img = read_exr(mi, out_img)
+        pts.append({"budget": budget, "spp": spp, "t": t, "t_denoise": r["denoise"],
+                    "err": err(img, ref), "mean": means(img, ref)})
+        print("  rondo+OIDN  %5d spp %8.3f s (denoise %.3f s) err %.4e" % (
+            spp, t, r["denoise"], pts[-1]["err"]), flush=True)
+    return pts
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scenes", default=",".join(ALL))
     ap.add_argument("--quick", action="store_true",
-                    help="smoke test: images at most 96 wide, 2 and 8 spp, 64-spp reference")
+                    help="smoke test: images at most 96 wide, 2 and 8 spp, 64-spp reference, "
+                    "denoised at 0.2 and 1 s")
     ap.add_argument("--scale", type=float, default=1.0, help="image size factor")
     ap.add_argument("--spp-list", default="4,16,64")
+    ap.add_argument("--denoise-times", default="1,10",
+                    help="time budgets (s) of the denoised renders, rondo's and Cycles'")
     ap.add_argument("--reference-spp", type=int, default=1024)
     ap.add_argument("--reference-sampler", default="ldsampler")
     ap.add_argument("--rondo", default=os.path.join(ROOT, "target", "release", "rondo"))
@@ -87,7 +158,7 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "bench", "suite"))
     args = ap.parse_args()
     if args.quick:
-        args.spp_list, args.reference_spp = "2,8", 64
+        args.spp_list, args.reference_spp, args.denoise_times = "2,8", 64, "0.2,1"
 
     import drjit as dr
     import mitsuba as mi
@@ -95,6 +166,7 @@ def main():
     import mitsuba_scene
 
     spps = [int(s) for s in args.spp_list.split(",")]
+    budgets = [float(s) for s in args.denoise_times.split(",") if s]
     rows = []
     for name in args.scenes.split(","):
         if name not in ALL:
@@ -105,6 +177,8 @@ def main():
         scene = scene_path(name, args.out)
         subprocess.run([args.rondo, "export", scene, "--output", export], check=True)
         j = json.load(open(os.path.join(export, "scene.json")))
+        if name == "bunnies":
+            check_bunnies(scene, j)
         w, h = j["camera"]["width"], j["camera"]["height"]
         f = min(1.0, 96 / w) if args.quick else args.scale
         size = (max(8, round(w * f)), max(8, round(h * f)))
@@ -132,14 +206,18 @@ def main():
         out_img = os.path.join(work, "rondo.exr")
         rondo_pts = []
         for k, spp in enumerate(spps):
-            t, msps, mrps = rondo_render(args.rondo, scene, spp, size, 300 + k, out_img,
-                                         args.threads)
+            r = rondo_render(args.rondo, scene, spp, size, 300 + k, out_img, args.threads)
             img = read_exr(mi, out_img)
-            rondo_pts.append({"spp": spp, "t": t, "err": err(img, ref), "msps": msps,
-                              "mrps": mrps, "mean": means(img, ref)})
-            print("  rondo   %5d spp %8.3f s err %.4e  %.2f M samples/s %.2f M rays/s" % (
-                spp, t, rondo_pts[-1]["err"], msps, mrps), flush=True)
+            rondo_pts.append({"spp": spp, "t": r["t"], "bvh": r["bvh"], "err": err(img, ref),
+                              "msps": r["msps"], "mrps": r["mrps"], "mean": means(img, ref)})
+            print("  rondo   %5d spp %8.3f s err %.4e  %.2f M samples/s %.2f M rays/s"
+                  "  (BVH %.3f s, not timed)" % (spp, r["t"], rondo_pts[-1]["err"], r["msps"],
+                                                 r["mrps"], r["bvh"]), flush=True)
         curves["rondo"] = rondo_pts
+        denoised = {}
+        if budgets:
+            denoised["rondo"] = rondo_denoised(args, scene, size, budgets, rondo_pts[-1], ref,
+                                               mi, os.path.join(work, "rondo_denoised.exr"))
 
         for sampler in dict.fromkeys(["independent", BEST[name]]):
             sc, notes = mitsuba_scene.load(mi, export, sampler, work, size)
@@ -176,13 +254,14 @@ def main():
             cy_out = os.path.join(work, "cycles")
             cmd = [args.cycles_python, os.path.join(HERE, "cycles_render.py"), export, cy_out,
                    "--size", str(size[0]), str(size[1]),
-                   "--targets", ",".join("%.4f" % p["t"] for p in rondo_pts)]
+                   "--targets", ",".join("%.4f" % p["t"] for p in rondo_pts),
+                   "--denoise-targets", ",".join("%g" % b for b in budgets)]
             if args.threads:
                 cmd += ["--threads", str(args.threads)]
             p = subprocess.run(cmd, capture_output=True, text=True)
             if p.returncode != 0:
                 sys.exit("cycles failed:\n%s" % p.stderr[-3000:])
-            pts, notes = [], []
+            pts, dpts, notes = [], [], []
             for line in p.stdout.splitlines():
                 if not line.startswith("{"):
                     continue
@@ -192,27 +271,35 @@ def main():
                     continue
                 img = read_exr(mi, d["file"])
                 pix = img.shape[0] * img.shape[1]
-                pts.append({"spp": d["spp"], "t": d["seconds"], "err": err(img, ref),
-                            "msps": d["spp"] * pix / d["seconds"] / 1e6,
-                            "mean": means(img, ref)})
-                print("  cycles  %5d spp %8.3f s err %.4e" % (d["spp"], d["seconds"],
-                                                             pts[-1]["err"]), flush=True)
+                pt = {"spp": d["spp"], "t": d["seconds"], "wall": d["wall"],
+                      "err": err(img, ref), "msps": d["spp"] * pix / d["seconds"] / 1e6,
+                      "mean": means(img, ref)}
+                if d.get("denoised"):
+                    pt["budget"] = d["target"]
+                    dpts.append(pt)
+                else:
+                    pts.append(pt)
+                print("  cycles%s %5d spp %8.3f s (call %.3f s) err %.4e" % (
+                    "+OIDN" if d.get("denoised") else "     ", d["spp"], d["seconds"],
+                    d["wall"], pt["err"]), flush=True)
             curves["cycles"] = pts
+            if budgets:
+                denoised["cycles"] = dpts
             curves["cycles notes"] = notes
 
-        row = summarise(name, size, args, curves)
+        row = summarise(name, size, args, curves, denoised)
         rows.append(row)
-        json.dump({"size": size, "curves": curves, "row": row},
+        json.dump({"size": size, "curves": curves, "denoised": denoised, "row": row},
                   open(os.path.join(work, "result.json"), "w"), indent=1)
-        chart(os.path.join(work, "%s.svg" % name), name, size, curves)
+        chart(os.path.join(work, "%s.svg" % name), name, size, curves, denoised)
     table(rows, args)
 
 
-def summarise(name, size, args, curves):
+def summarise(name, size, args, curves, denoised):
     r = curves["rondo"][-1]
     row = {"scene": name, "size": "%dx%d" % size, "rondo_spp": r["spp"], "rondo_t": r["t"],
            "rondo_err": r["err"], "msps": r["msps"], "mrps": r["mrps"],
-           "means": {"rondo": r["mean"]}, "E": {}, "peer_msps": {}}
+           "means": {"rondo": r["mean"]}, "E": {}, "peer_msps": {}, "denoised": denoised}
     for peer in [k for k in curves if k != "rondo" and not k.endswith("notes")]:
         p = curves[peer][-1]
         row["E"][peer] = p["t"] * p["err"] ** 2 / (r["t"] * r["err"] ** 2)
@@ -221,7 +308,7 @@ def summarise(name, size, args, curves):
     return row
 
 
-def chart(path, name, size, curves):
+def chart(path, name, size, curves, denoised):
     import matplotlib
     matplotlib.use("svg")
     import matplotlib.pyplot as plt
@@ -230,6 +317,10 @@ def chart(path, name, size, curves):
         if who.endswith("notes") or not pts:
             continue
         ax.plot([p["t"] for p in pts], [p["err"] for p in pts], "o-", label=who)
+    for who, pts in denoised.items():
+        if pts:
+            ax.plot([p["t"] for p in pts], [p["err"] for p in pts], "s--", mfc="none",
+                    label=who + " + OIDN")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("render time (s)")
@@ -252,11 +343,13 @@ def table(rows, args):
     if "--cycles-python" in argv:
         k = argv.index("--cycles-python")
         argv = argv[:k] + argv[k + 2:]
-    lines = ["```sh", "benches/suite/run.sh " + " ".join(argv), "```", "",
+    lines = ["```sh", "benches/suite/run.sh " + shlex.join(argv), "```", "",
              "Reference: Mitsuba 3 `%s`, %d spp. E = t_peer err_peer^2 / (t_rondo err_rondo^2) "
              "at rondo's largest spp (peers at equal time); err = clamped RMSE; mean = relative "
              "difference of the image mean from the reference's, clamped to [0, 1] (raw in "
-             "brackets)." % (args.reference_sampler, args.reference_spp), "",
+             "brackets). Times: rondo's render without its BVH build, Mitsuba's `mi.render` (its BVH "
+             "is built at load), Cycles' own `render_time` (no scene synchronisation; see "
+             "benches/suite/README.md)." % (args.reference_sampler, args.reference_spp), "",
              "| scene | size | rondo spp, s, err | rondo M samples/s, M rays/s | "
              + " | ".join("E vs %s" % p for p in peers) + " | "
              + " | ".join("%s M samples/s" % p for p in peers) + " | mean: rondo | "
@@ -271,10 +364,39 @@ def table(rows, args):
             r["mrps"], " | ".join("%.2f" % r["E"][p] if p in r["E"] else "" for p in peers),
             " | ".join("%.2f" % r["peer_msps"][p] if p in r["peer_msps"] else "" for p in peers),
             m("rondo"), " | ".join(m(p) for p in peers)))
+    lines += denoised_table(rows)
     text = "\n".join(lines) + "\n"
     print()
     print(text)
     open(os.path.join(args.out, "summary.md"), "w").write(text)
+
+
+def denoised_table(rows):
+    """Denoised error at each time budget, rondo's beside Cycles + OIDN's."""
+    budgets = []
+    for r in rows:
+        for pts in r["denoised"].values():
+            for p in pts:
+                if p["budget"] not in budgets:
+                    budgets.append(p["budget"])
+    if not budgets:
+        return []
+    who = ["rondo", "cycles"]
+    lines = ["", "Denoised (Open Image Denoise, albedo and normal guides, quality high): clamped "
+             "RMSE against the same reference at each time budget (render + denoise; Cycles' "
+             "own render time, its denoiser included), spp and measured time in brackets.", "",
+             "| scene | size | " + " | ".join("%s + OIDN, %g s" % (w, b) for b in budgets
+                                               for w in who) + " |",
+             "|" + "---|" * (2 + len(budgets) * len(who))]
+    for r in rows:
+        cells = []
+        for b in budgets:
+            for w in who:
+                p = [q for q in r["denoised"].get(w, []) if q["budget"] == b]
+                cells.append("%.4f (%d spp, %.2f s)" % (p[0]["err"], p[0]["spp"], p[0]["t"])
+                             if p else "")
+        lines.append("| %s | %s | %s |" % (r["scene"], r["size"], " | ".join(cells)))
+    return lines
 
 
 if __name__ == "__main__":

@@ -22,7 +22,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use crate::scene::load::AssetCache;
+use crate::scene::assets::AssetCache;
 use crate::sky::EnvironmentMap;
 
 /// The map's formats, as file extensions.

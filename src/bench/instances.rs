@@ -83,7 +83,7 @@ pub fn measure(mesh_path: &Path, count: usize, instancing: bool) -> Result<Insta
     let load_ms = start.elapsed().as_secs_f64() * 1e3;
     let render = r.render_to_completion();
     let build_ms = r.timings().bvh.as_secs_f64() * 1e3;
-    let triangles = crate::scene::load::AssetCache::default()
+    let triangles = crate::scene::assets::AssetCache::default()
         .mesh(&mesh)
         .map(|m| m.triangles.len() as u64)
         .unwrap_or(0);

@@ -24,8 +24,9 @@ use std::time::{Duration, Instant};
 
 use cpu_time::ProcessTime;
 
+use crate::scene::assets::AssetCache;
 use crate::scene::check::check_counted;
-use crate::scene::load::{AssetCache, load_scene, parse_scene};
+use crate::scene::load::{load_scene, parse_scene};
 use crate::{Overrides, PassPlan, Renderer};
 
 /// The scene kinds, with what grows in each.

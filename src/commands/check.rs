@@ -7,7 +7,7 @@ use anyhow::Result;
 /// `rondo check`: one line per warning on stdout, then a count; load errors go to `main`.
 pub fn run(scene: &Path) -> Result<()> {
     let loaded =
-        rondo::scene::load::load_scene(scene, &mut rondo::scene::load::AssetCache::default())?;
+        rondo::scene::load::load_scene(scene, &mut rondo::scene::assets::AssetCache::default())?;
     let warnings = rondo::scene::check::check_scene(&loaded);
     for w in &loaded.warnings {
         println!("warning: {w}");

@@ -19,7 +19,7 @@ pub fn slurm(
         bail!("--threads: each task renders with --cpus-per-task threads");
     }
     let loaded =
-        rondo::scene::load::load_scene(scene, &mut rondo::scene::load::AssetCache::default())?;
+        rondo::scene::load::load_scene(scene, &mut rondo::scene::assets::AssetCache::default())?;
     let mut settings = loaded.settings;
     options
         .overrides()

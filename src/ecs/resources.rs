@@ -12,7 +12,8 @@ use bevy_ecs::resource::Resource;
 
 use crate::film::Film;
 use crate::geometry::instance::BlasCache;
-use crate::geometry::packed::{Geometry, LayoutKind};
+use crate::geometry::layout::LayoutKind;
+use crate::geometry::packed::Geometry;
 use crate::lights::LightSet;
 use crate::render::TraceStats;
 use crate::scene::format::{CameraDesc, SettingsDesc};

@@ -23,7 +23,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use crate::model::Shape;
-use crate::scene::load::{AssetCache, load_scene};
+use crate::scene::assets::AssetCache;
+use crate::scene::load::load_scene;
 
 /// Most triangles `rondo export` writes by default (and at most): 2²⁵ ≈ 33.5 M, about 3.2 GB
 /// of PLY with normals and texture coordinates.

@@ -13,8 +13,9 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 
 use super::ExportError;
+use crate::scene::assets::AssetCache;
 use crate::scene::gltf_read::GltfImage;
-use crate::scene::load::{AssetCache, LoadedScene};
+use crate::scene::load::LoadedScene;
 use crate::shading::material::Material;
 use crate::shading::texture::{ImageTexture, Texture, srgb_to_linear};
 

@@ -17,7 +17,7 @@ use self::partial::{
 };
 use crate::app::{Overrides, Renderer};
 use crate::film::{ALBEDO_SHIFT, DEFAULT_SHIFT, OutputKind, Pixel};
-use crate::geometry::packed::LayoutKind;
+use crate::geometry::layout::LayoutKind;
 use crate::scene::error::SceneError;
 use crate::scene::format::SettingsDesc;
 

@@ -3,10 +3,10 @@
 //!
 //! A lane vector is glam's `Vec4` and a lane mask its `BVec4A`: one SSE register each on
 //! x86-64 (SSE2 is part of the baseline, so no runtime detection is needed; plain arrays on other
-//! targets). No `unsafe`, no target features, no nightly. (The first version used `[f32; 4]`
-//! arrays and `[bool; 4]` masks and left vectorising to the optimiser, which kept much of it
-//! scalar: the Cornell box took 541 M instructions with this layout against 441 M now; callgrind,
-//! 64×64, 8 spp, one thread.) The SoA/AoS benchmark (BENCHMARKS.md) measures what the lanes buy.
+//! targets). No `unsafe`, no target features, no nightly. Lanes are explicit vectors because
+//! `[f32; 4]` arrays and `[bool; 4]` masks, left to the optimiser to vectorise, stay largely
+//! scalar: the Cornell box takes 541 M instructions that way against 441 M with these (callgrind,
+//! 64×64, 8 spp, one thread). The SoA/AoS benchmark (BENCHMARKS.md) measures what the lanes buy.
 //! A leaf of `n` slots is loaded as whole lane vectors from `cx[first..first + LANES]` and so
 //! on; lanes past `n` (other primitives, or padding copied in at the end of the arrays) are
 //! masked off.

@@ -43,8 +43,8 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Opt
 /// its centre column facing +z, unmirrored seen from outside:
 /// `u = atan2(−x, −z) / 2π` wrapped into [0, 1), `v = 1 − acos(y) / π` (v = 1 is the image's top
 /// row). This is the environment maps' convention (`u = atan2(x, −z) / 2π`, for a direction seen
-/// from inside) with x mirrored, because a sphere is seen from outside (the RTIOW-style thesis in
-/// `../shared/seed` puts the pole on +z and shows the image mirrored).
+/// from inside) with x mirrored, because a sphere is seen from outside (the 2020 ray-tracing thesis
+/// in `../shared/seed/` puts the pole on +z and shows the image mirrored).
 #[inline]
 pub fn sphere_uv(unit: Vec3) -> Vec2 {
     let u = (-unit.x).atan2(-unit.z) / (2.0 * PI);

@@ -13,7 +13,7 @@ use super::{Cancelled, LENS_DIMENSION, SceneView, TraceStats};
 use crate::cpu::{Isa, Kernel, Lanes, Sse};
 use crate::film::{Film, FilmBand, FixedPoint, Pixel};
 use crate::geometry::layout::Layout;
-use crate::geometry::packed::LayoutKind;
+use crate::geometry::layout::LayoutKind;
 use crate::geometry::ray::Ray;
 use crate::shading::rng::Rng;
 use crate::shading::sampler::{IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};

@@ -298,7 +298,7 @@ pub fn vector(v: glam::Vec3) -> String {
     format!("[{x}, {y}, {z}]")
 }
 
-/// How the value validators of `format.rs` start their messages; replaced by the field's name
+/// How the validated numbers of `format/number.rs` start their messages; replaced by the field's name
 /// when the field is known ("the value must be > 0" becomes "radius must be > 0").
 pub(crate) const VALUE: &str = "the value";
 

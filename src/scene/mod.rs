@@ -19,7 +19,7 @@
 //!
 //! The full format is documented in `scenes/README.md`.
 
-mod assets;
+pub mod assets;
 pub mod check;
 pub mod error;
 pub mod format;

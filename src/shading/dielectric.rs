@@ -1,9 +1,9 @@
 //! Smooth glass: Fresnel (Schlick) reflection, Snell refraction, total internal reflection. No
 //! ECS here.
 //!
-//! The RTIOW-style thesis in `../shared/seed` gets three things wrong that are corrected here:
-//! Schlick's R0 is `((n1 − n2)/(n1 + n2))²` (the thesis uses n1/n2), the dielectric *reflects*
-//! with probability R (the thesis refracts), and diffuse directions are cosine-sampled in a frame
+//! The 2020 ray-tracing thesis rondo grows from (`../shared/seed/`, RTIOW-style) gets three
+//! things wrong that are corrected here: Schlick's R0 is `((n1 − n2)/(n1 + n2))²` (the thesis
+//! uses n1/n2), the dielectric *reflects* with probability R (the thesis refracts), and diffuse directions are cosine-sampled in a frame
 //! ([`super::diffuse`]), so they are never the zero vector.
 
 use glam::Vec3;

@@ -13,7 +13,8 @@ use crate::ecs::resources::{
     RenderControl, RenderSettings, SceneVersion, Timings,
 };
 use crate::film::shift_for;
-use crate::geometry::packed::{Aos, Hybrid, LayoutCache, LayoutKind, Soa, SoaSimd};
+use crate::geometry::layout::{Aos, Hybrid, LayoutKind, Soa, SoaSimd};
+use crate::geometry::packed::LayoutCache;
 use crate::render::camera::Camera;
 use crate::render::{Method, SceneView, has_masks, render_pass, render_preview};
 use crate::scene::format::{self, CameraDesc};

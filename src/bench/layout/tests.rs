@@ -1,6 +1,11 @@
-//! Tests of `bench/layout.rs`.
+//! Tests of `bench/layout/`.
 
-use super::*;
+use std::path::PathBuf;
+
+use super::options::Options;
+use super::scenes::{cube_side, generate};
+use crate::bench::layout_rows::Kind;
+use crate::ecs::components::Shape;
 
 #[test]
 fn generated_scenes_are_deterministic_and_fill_a_cube_of_constant_density() {

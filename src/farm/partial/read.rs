@@ -13,10 +13,12 @@ use exr::meta::attribute::{AttributeValue, ChannelList, LevelMode, SampleType, T
 use exr::meta::header::Header;
 use rayon::prelude::*;
 
-use super::{
+use super::identity::check_settings;
+use super::meta::{
     FORMAT, FORMAT_1, FORMAT_2, LAYERS, MAX_SCENE_NAME, PartialError, PartialMeta, SUM_CHANNELS,
-    Sums, check_settings, error, normalize, parse_range,
+    Sums, error,
 };
+use super::ranges::{normalize, parse_range};
 use crate::film::{ALBEDO_SHIFT, NORMAL_SHIFT, Pixel};
 use crate::scene::format::{MAX_SPP, SettingsDesc};
 

@@ -2,7 +2,8 @@
 
 use std::path::Path;
 
-use super::{LAYERS, MAX_SCENE_NAME, PartialMeta, SUM_CHANNELS, format_ranges};
+use super::meta::{LAYERS, MAX_SCENE_NAME, PartialMeta, SUM_CHANNELS};
+use super::ranges::format_ranges;
 use crate::film::{
     Durability, EXR_ENCODING, Features, FixedPoint, NORMAL_SHIFT, OutputImage, OutputKind, Pixel,
 };

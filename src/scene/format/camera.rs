@@ -3,7 +3,7 @@
 use glam::Vec3;
 use serde::Deserialize;
 
-use super::number::{NonNegative, Positive, Real, V3};
+use super::number::{NonNegative, Positive, Real, V3, or_default};
 use super::settings::MAX_COORDINATE;
 use crate::scene::error::{number, vector};
 
@@ -89,7 +89,7 @@ impl TryFrom<RawCamera> for CameraDesc {
                 number(fov)
             ));
         }
-        let aperture = raw.aperture.map_or(0.0, |a| a.0);
+        let aperture = or_default(raw.aperture, 0.0);
         // Depth along the view, in f64: coordinates up to 1e9 square without overflow.
         let depth = |p: Vec3| {
             (p - raw.position.0)

@@ -1,5 +1,6 @@
-//! Validated numbers: each refuses a bad value while it is parsed, so the RON parser reports it
-//! at its own line and column, and the error names the rule it broke.
+//! Validated numbers and vectors: each refuses a bad value while it is parsed, so the RON parser
+//! reports it at its own line and column, and the error names the rule it broke. A description's
+//! optional fields take their value with [`or_default`].
 
 use glam::Vec3;
 use serde::de::Error as _;
@@ -28,7 +29,50 @@ macro_rules! validated_number {
                 Ok(Self($value))
             }
         }
+
+        impl Checked for $name {
+            type Value = $t;
+            fn value(self) -> $t {
+                self.0
+            }
+        }
     };
+}
+
+/// A vector type written `(x, y, z)` whose components are each read as `$component` (and so
+/// checked by its rule).
+macro_rules! validated_vector {
+    ($(#[$meta:meta])* $name:ident of $component:ident) => {
+        $(#[$meta])*
+        pub struct $name(pub Vec3);
+
+        impl<'de> Deserialize<'de> for $name {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                let [x, y, z] = <[$component; 3]>::deserialize(d)?;
+                Ok(Self(Vec3::new(x.0, y.0, z.0)))
+            }
+        }
+
+        impl Checked for $name {
+            type Value = Vec3;
+            fn value(self) -> Vec3 {
+                self.0
+            }
+        }
+    };
+}
+
+/// A value checked while it was parsed, and the plain value it holds.
+pub trait Checked {
+    /// The plain value.
+    type Value;
+    /// The value, checked.
+    fn value(self) -> Self::Value;
+}
+
+/// The value of an optional field, or `default` where the file leaves the field out.
+pub fn or_default<C: Checked>(field: Option<C>, default: C::Value) -> C::Value {
+    field.map_or(default, C::value)
 }
 
 validated_number! {
@@ -64,24 +108,14 @@ validated_number! {
     "a whole number >= 1", keeps v as u32
 }
 
-/// A finite vector written `(x, y, z)`; integers are accepted.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct V3(pub Vec3);
-
-impl<'de> Deserialize<'de> for V3 {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let [x, y, z] = <[Real; 3]>::deserialize(d)?;
-        Ok(Self(Vec3::new(x.0, y.0, z.0)))
-    }
+validated_vector! {
+    /// A finite vector written `(x, y, z)`; integers are accepted.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    V3 of Real
 }
 
-/// A colour `(r, g, b)` with non-negative components.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Color(pub Vec3);
-
-impl<'de> Deserialize<'de> for Color {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let [r, g, b] = <[NonNegative; 3]>::deserialize(d)?;
-        Ok(Self(Vec3::new(r.0, g.0, b.0)))
-    }
+validated_vector! {
+    /// A colour `(r, g, b)` with non-negative components.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    Color of NonNegative
 }

@@ -3,7 +3,7 @@
 use glam::{Mat3, Vec3};
 use serde::Deserialize;
 
-use super::number::{Color, Count, NonNegative, Positive, V3};
+use super::number::{Color, Count, NonNegative, Positive, V3, or_default};
 use super::transform::TransformDesc;
 use crate::scene::error::{number, vector};
 use crate::shading::sampler::SamplerKind;
@@ -25,8 +25,8 @@ pub const MAX_COORDINATE: f32 = 1e9;
 /// Light-transport method.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize)]
 pub enum Method {
-    /// The plain path tracer of Ray Tracing in One Weekend (the seed's thesis): BSDF sampling only;
-    /// light counts when a path hits an emitter.
+    /// The plain path tracer of Ray Tracing in One Weekend, as the 2020 thesis in
+    /// `../shared/seed/` traces: BSDF sampling only; light counts when a path hits an emitter.
     #[serde(alias = "naive")]
     Naive,
     /// Next-event estimation: a shadow ray to a sampled point on an emitter at every diffuse
@@ -131,11 +131,11 @@ impl TryFrom<RawSettings> for SettingsDesc {
     fn try_from(raw: RawSettings) -> Result<Self, String> {
         let d = Self::default();
         let s = Self {
-            width: raw.width.map_or(d.width, |c| c.0),
-            height: raw.height.map_or(d.height, |c| c.0),
-            spp: raw.spp.map_or(d.spp, |c| c.0),
-            max_depth: raw.max_depth.map_or(d.max_depth, |c| c.0),
-            background: raw.background.map_or(d.background, |c| c.0),
+            width: or_default(raw.width, d.width),
+            height: or_default(raw.height, d.height),
+            spp: or_default(raw.spp, d.spp),
+            max_depth: or_default(raw.max_depth, d.max_depth),
+            background: or_default(raw.background, d.background),
             environment: raw.environment,
             sun: raw.sun,
             seed: raw.seed.unwrap_or(d.seed),
@@ -181,8 +181,8 @@ impl TryFrom<RawEnvironment> for EnvironmentDesc {
     fn try_from(raw: RawEnvironment) -> Result<Self, String> {
         Ok(Self {
             path: raw.path,
-            strength: raw.strength.map_or(1.0, |s| s.0),
-            rotate: raw.rotate.map_or(Vec3::ZERO, |r| r.0),
+            strength: or_default(raw.strength, 1.0),
+            rotate: or_default(raw.rotate, Vec3::ZERO),
         })
     }
 }
@@ -232,14 +232,14 @@ impl TryFrom<RawSun> for SunDesc {
                 vector(d)
             ));
         }
-        let diameter = raw.angular_diameter.map_or(0.53, |a| a.0);
+        let diameter = or_default(raw.angular_diameter, 0.53);
         if diameter > 90.0 {
             return Err(format!(
                 "sun: angular_diameter must be in (0, 90] degrees (got {})",
                 number(diameter)
             ));
         }
-        let colour = raw.colour.map_or(Vec3::ONE, |c| c.0);
+        let colour = or_default(raw.colour, Vec3::ONE);
         let radiance = match (raw.irradiance, raw.radiance) {
             (Some(e), None) => {
                 crate::sky::Sun::radiance_for_irradiance(colour * e.0, diameter.to_radians())

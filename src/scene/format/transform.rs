@@ -3,7 +3,7 @@
 use glam::{Affine3A, EulerRot, Mat3, Quat, Vec3};
 use serde::Deserialize;
 
-use super::number::V3;
+use super::number::{V3, or_default};
 use crate::scene::error::vector;
 
 /// `Transform(translate, rotate, scale)`: `world = T · R · S · object`, every part optional.
@@ -57,9 +57,9 @@ impl TryFrom<RawTransform> for TransformDesc {
     fn try_from(raw: RawTransform) -> Result<Self, String> {
         let d = Self::default();
         let t = Self {
-            translate: raw.translate.map_or(d.translate, |v| v.0),
-            rotate: raw.rotate.map_or(d.rotate, |v| v.0),
-            scale: raw.scale.map_or(d.scale, |v| v.0),
+            translate: or_default(raw.translate, d.translate),
+            rotate: or_default(raw.rotate, d.rotate),
+            scale: or_default(raw.scale, d.scale),
         };
         if t.scale.abs().min_element() < 1e-12 {
             return Err(format!(

@@ -27,7 +27,7 @@ mod prefab;
 mod reach;
 
 use self::reach::{corner_reach, world_reach};
-pub use super::assets::AssetCache;
+use super::assets::AssetCache;
 use super::error::{Location, SceneError};
 use super::format::{
     CameraDesc, EntityDesc, MAX_COORDINATE, PrefabDesc, SceneDesc, SettingsDesc, ShapeDesc,
