@@ -123,6 +123,11 @@ pub trait Lanes: Copy {
     fn le_mask(self, a: Self::F8, b: Self::F8) -> u32;
     /// The lanes as an array.
     fn to_array(self, a: Self::F8) -> [f32; 8];
+    /// `f(self)` in a function of its own that is compiled for this copy's instruction set:
+    /// for work too big to inline into the render loop (where each inlined copy grows the loop
+    /// and its compile time) that must still run with the copy's instructions. A plain
+    /// out-of-line function would be compiled for the baseline, where an `Avx` method is a call.
+    fn out_of_line<R>(self, f: impl FnOnce(Self) -> R) -> R;
 }
 
 /// Eight lanes as two of glam's `Vec4` (SSE2 on x86-64, scalar code elsewhere).
@@ -166,6 +171,16 @@ impl Lanes for Sse {
         let ([a, b, c, d], [e, f, g, h]) = (a0.to_array(), a1.to_array());
         [a, b, c, d, e, f, g, h]
     }
+    #[inline(always)]
+    fn out_of_line<R>(self, f: impl FnOnce(Self) -> R) -> R {
+        sse_out_of_line(self, f)
+    }
+}
+
+/// [`Lanes::out_of_line`] of [`Sse`].
+#[inline(never)]
+fn sse_out_of_line<R>(lanes: Sse, f: impl FnOnce(Sse) -> R) -> R {
+    f(lanes)
 }
 
 /// Eight lanes in one AVX register. Only [`Isa::run`] makes one, in the copy of the kernel it
@@ -219,6 +234,22 @@ impl Lanes for Avx {
         unsafe { std::arch::x86_64::_mm256_storeu_ps(out.as_mut_ptr(), a) };
         out
     }
+    #[inline(always)]
+    fn out_of_line<R>(self, f: impl FnOnce(Self) -> R) -> R {
+        // SAFETY: an `Avx` exists only on a CPU with every feature of `run_v3` (see the type).
+        unsafe { avx_out_of_line(self, f) }
+    }
+}
+
+/// [`Lanes::out_of_line`] of [`Avx`]: `f` compiled with the x86-64-v3 features, as `run_v3`.
+///
+/// # Safety
+/// The CPU must support every feature listed in the attribute.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,movbe,popcnt")]
+#[inline(never)]
+unsafe fn avx_out_of_line<R>(lanes: Avx, f: impl FnOnce(Avx) -> R) -> R {
+    f(lanes)
 }
 
 /// `kernel.run()` compiled with the x86-64-v3 features.

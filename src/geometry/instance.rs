@@ -6,6 +6,8 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
+use std::ops::Range;
+
 use glam::{Affine3A, Vec2, Vec3};
 
 use super::aabb::RayQuery;
@@ -13,6 +15,7 @@ use super::bvh::{Bounds, Bvh, EMPTY, triangle_bounds, union};
 use super::ray::{Ray, gamma};
 use super::surface::{Surface, Tangent, uv_derivatives};
 use super::triangle::intersect_triangle;
+use crate::cpu::Lanes;
 use crate::model::MeshData;
 
 /// A mesh's triangles in object space, in BVH order, with their BVH. Compared by identity: two
@@ -242,88 +245,123 @@ impl InstanceSet {
         (q, s)
     }
 
-    /// The closest instanced triangle hit before `t_max`.
+    /// The closest instanced triangle hit before `t_max`, with box tests as wide as `lanes`,
+    /// out of line but compiled for the instruction set of `lanes` ([`Lanes::out_of_line`]): a
+    /// scene without instances pays only for the emptiness test.
     #[inline(always)]
-    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<InstanceHit> {
+    pub fn intersect<W: Lanes>(&self, lanes: W, ray: &Ray, t_max: f32) -> Option<InstanceHit> {
         if self.instances.is_empty() {
             return None;
         }
-        self.intersect_instances(ray, t_max)
+        lanes.out_of_line(
+            #[inline(always)]
+            |lanes| self.intersect_instances(lanes, ray, t_max),
+        )
     }
 
-    /// [`InstanceSet::intersect`] for a non-empty set (out of line: scenes without instances
-    /// pay only for the emptiness test).
-    #[inline(never)]
-    fn intersect_instances(&self, ray: &Ray, t_max: f32) -> Option<InstanceHit> {
+    /// [`InstanceSet::intersect`] for a non-empty set.
+    #[inline(always)]
+    fn intersect_instances<W: Lanes>(
+        &self,
+        lanes: W,
+        ray: &Ray,
+        t_max: f32,
+    ) -> Option<InstanceHit> {
         let world = RayQuery::new(*ray);
         let mut best = None;
         let mut t_best = t_max;
-        self.tlas.traverse(&world, &mut t_best, |range, t_best| {
-            for i in range {
-                let inst = &self.instances[i];
-                let (q, s) = Self::object_query(inst, ray);
-                let mut t_object = *t_best * s;
-                inst.blas.bvh.traverse(&q, &mut t_object, |tris, t_object| {
-                    for k in tris {
-                        let [a, b, c] = inst.blas.triangles[k];
-                        if let Some(h) = intersect_triangle(&q, a, b, c, *t_object) {
-                            *t_object = h.t;
-                            let t = h.t / s;
-                            if t < *t_best {
-                                *t_best = t;
-                                best = Some(InstanceHit {
-                                    t,
-                                    instance: i as u32,
-                                    triangle: k as u32,
-                                    b1: h.b1,
-                                    b2: h.b2,
-                                });
+        self.tlas.traverse_leaves(
+            lanes,
+            &world,
+            &mut t_best,
+            #[inline(always)]
+            |range: Range<usize>, t_best: &mut f32| {
+                for i in range {
+                    let inst = &self.instances[i];
+                    let (q, s) = Self::object_query(inst, ray);
+                    let mut t_object = *t_best * s;
+                    inst.blas.bvh.traverse_leaves(
+                        lanes,
+                        &q,
+                        &mut t_object,
+                        #[inline(always)]
+                        |tris: Range<usize>, t_object: &mut f32| {
+                            for k in tris {
+                                let [a, b, c] = inst.blas.triangles[k];
+                                if let Some(h) = intersect_triangle(&q, a, b, c, *t_object) {
+                                    *t_object = h.t;
+                                    let t = h.t / s;
+                                    if t < *t_best {
+                                        *t_best = t;
+                                        best = Some(InstanceHit {
+                                            t,
+                                            instance: i as u32,
+                                            triangle: k as u32,
+                                            b1: h.b1,
+                                            b2: h.b2,
+                                        });
+                                    }
+                                }
                             }
-                        }
-                    }
-                    true
-                });
-            }
-            true
-        });
+                            true
+                        },
+                    );
+                }
+                true
+            },
+        );
         best
     }
 
-    /// Whether any instance blocks `ray` before `t_max`.
+    /// Whether any instance blocks `ray` before `t_max` (out of line, as
+    /// [`InstanceSet::intersect`]).
     #[inline(always)]
-    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+    pub fn occluded<W: Lanes>(&self, lanes: W, ray: &Ray, t_max: f32) -> bool {
         if self.instances.is_empty() {
             return false;
         }
-        self.occluded_instances(ray, t_max)
+        lanes.out_of_line(
+            #[inline(always)]
+            |lanes| self.occluded_instances(lanes, ray, t_max),
+        )
     }
 
-    /// [`InstanceSet::occluded`] for a non-empty set (out of line, as `intersect_instances`).
-    #[inline(never)]
-    fn occluded_instances(&self, ray: &Ray, t_max: f32) -> bool {
+    /// [`InstanceSet::occluded`] for a non-empty set.
+    #[inline(always)]
+    fn occluded_instances<W: Lanes>(&self, lanes: W, ray: &Ray, t_max: f32) -> bool {
         let world = RayQuery::new(*ray);
         let mut blocked = false;
         let mut t = t_max;
-        self.tlas.traverse_any(&world, &mut t, |range, t| {
-            for i in range {
-                let inst = &self.instances[i];
-                let (q, s) = Self::object_query(inst, ray);
-                let mut t_object = *t * s;
-                inst.blas
-                    .bvh
-                    .traverse_any(&q, &mut t_object, |tris, t_object| {
-                        blocked = tris.into_iter().any(|k| {
-                            let [a, b, c] = inst.blas.triangles[k];
-                            intersect_triangle(&q, a, b, c, *t_object).is_some()
-                        });
-                        !blocked
-                    });
-                if blocked {
-                    return false;
+        self.tlas.traverse_any_leaves(
+            lanes,
+            &world,
+            &mut t,
+            #[inline(always)]
+            |range: Range<usize>, t: &mut f32| {
+                for i in range {
+                    let inst = &self.instances[i];
+                    let (q, s) = Self::object_query(inst, ray);
+                    let mut t_object = *t * s;
+                    inst.blas.bvh.traverse_any_leaves(
+                        lanes,
+                        &q,
+                        &mut t_object,
+                        #[inline(always)]
+                        |tris: Range<usize>, t_object: &mut f32| {
+                            blocked = tris.into_iter().any(|k| {
+                                let [a, b, c] = inst.blas.triangles[k];
+                                intersect_triangle(&q, a, b, c, *t_object).is_some()
+                            });
+                            !blocked
+                        },
+                    );
+                    if blocked {
+                        return false;
+                    }
                 }
-            }
-            true
-        });
+                true
+            },
+        );
         blocked
     }
 
@@ -412,6 +450,7 @@ impl InstanceSet {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cpu::Sse;
     use crate::shading::rng::Rng;
 
     fn grid_mesh(n: usize) -> MeshData {
@@ -489,7 +528,7 @@ mod tests {
                     intersect_triangle(&q, *a, *b, *c, f32::INFINITY).map(|h| (h.t, *k))
                 })
                 .min_by(|x, y| x.0.total_cmp(&y.0));
-            let fast = set.intersect(&ray, f32::INFINITY);
+            let fast = set.intersect(Sse, &ray, f32::INFINITY);
             match (brute, fast) {
                 (None, None) => {}
                 (Some((t, owner)), Some(h)) => {
@@ -504,7 +543,7 @@ mod tests {
                             .max_element()
                             > 0.0
                     );
-                    assert!(set.occluded(&ray, f32::INFINITY));
+                    assert!(set.occluded(Sse, &ray, f32::INFINITY));
                 }
                 // A ray grazing an edge may round differently in object space; allow a few.
                 _ => mismatches += 1,

@@ -97,8 +97,9 @@ pub fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
 /// an `end`, towards it (so that the rounding of the new origin cannot carry the segment into
 /// the surface at its end); `ray` is left as the segment that found the returned hit. No
 /// sampler dimension is drawn, so a path is what it would be without the absent surfaces. After
-/// [`MAX_PASS_THROUGHS`] the next hit counts as present.
-#[inline]
+/// [`MAX_PASS_THROUGHS`] the next hit counts as present. Called through [`Lanes::out_of_line`]:
+/// the masked scenes' loop stays out of the render loop, compiled for the same instructions.
+#[inline(always)]
 fn first_present<L: Layout, W: Lanes>(
     lanes: W,
     view: &SceneView<L>,
@@ -188,7 +189,10 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     for depth in 0..view.max_depth {
         stats.rays += 1;
         let found = if view.masked {
-            first_present(lanes, view, &mut ray, None, stats)
+            lanes.out_of_line(
+                #[inline(always)]
+                |lanes| first_present(lanes, view, &mut ray, None, stats),
+            )
         } else {
             view.geometry.intersect_with(lanes, &ray, f32::INFINITY)
         };
@@ -383,7 +387,12 @@ fn direct_light<L: Layout, W: Lanes>(
     stats.rays += 1;
     let (mut shadow_ray, length, end) = shadow;
     let occluded = if view.masked {
-        first_present(lanes, view, &mut shadow_ray, end, stats).is_some()
+        lanes
+            .out_of_line(
+                #[inline(always)]
+                |lanes| first_present(lanes, view, &mut shadow_ray, end, stats),
+            )
+            .is_some()
     } else {
         view.geometry.occluded_with(lanes, &shadow_ray, length)
     };

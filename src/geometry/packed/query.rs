@@ -100,15 +100,16 @@ impl<L: Layout> Geometry<L> {
                 best = Some(Hit::triangle(i, h));
             }
         }
-        self.intersect_outside_bvhs(ray, t_best, best)
+        self.intersect_outside_bvhs(lanes, ray, t_best, best)
     }
 
     /// The part of every closest-hit query outside the sphere and triangle BVHs: infinite
     /// planes, tested linearly, then mesh instances, through their own BVHs. Returns the closest
     /// of those and `best` (found before `t_best`).
-    #[inline]
-    fn intersect_outside_bvhs(
+    #[inline(always)]
+    fn intersect_outside_bvhs<W: Lanes>(
         &self,
+        lanes: W,
         ray: &Ray,
         mut t_best: f32,
         mut best: Option<Hit>,
@@ -119,7 +120,7 @@ impl<L: Layout> Geometry<L> {
                 best = Some(Hit::at(HitKind::Plane, i, t));
             }
         }
-        if let Some(h) = self.instances.intersect(ray, t_best) {
+        if let Some(h) = self.instances.intersect(lanes, ray, t_best) {
             best = Some(Hit {
                 t: h.t,
                 kind: HitKind::Instance {
@@ -168,7 +169,7 @@ impl<L: Layout> Geometry<L> {
                 .planes
                 .iter()
                 .any(|pl| intersect_plane(ray, pl.point, pl.normal, t_max).is_some())
-            || self.instances.occluded(ray, t_max)
+            || self.instances.occluded(lanes, ray, t_max)
     }
 
     /// The closest hit by testing every primitive with the scalar reference kernels, without
@@ -191,7 +192,7 @@ impl<L: Layout> Geometry<L> {
                 best = Some(Hit::triangle(i, h));
             }
         }
-        self.intersect_outside_bvhs(ray, t_best, best)
+        self.intersect_outside_bvhs(Sse, ray, t_best, best)
     }
 
     /// The texture-space tangent frame at `hit` (see [`Tangent`]), for normal mapping: for
