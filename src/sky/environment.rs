@@ -50,8 +50,9 @@
 //! 16 bytes per texel, the distribution included: the radiance as three `f32` and the row's
 //! cumulative count through the texel (an integer ≤ 2²⁴, exact as an `f32`). Besides: the
 //! column guide tables, one `u32` per 8 to 16 texels (at most 1/2 byte per texel), and per
-//! row and per column a few floats (the edges, the row's marginal count and density). At
-//! [`MAX_TEXELS`] that is at most 528 MiB (16.5 bytes per texel).
+//! row and per column a few numbers: at most 36 bytes per row (its marginal count, density and
+//! band, its edge, its share of the row guide), 8 per column (its edge) and 16 more. At
+//! [`MAX_TEXELS`] that is at most 528 MiB (16.5 bytes per texel), the small tables aside.
 
 use std::f32::consts::{FRAC_PI_2, PI};
 
@@ -146,25 +147,15 @@ pub struct EnvironmentMap {
     lit: bool,
 }
 
-/// Cumulative counts out of [`SCALE`] of `weights` (which sum to `total` > 0), given to `out`
-/// one by one; the last is [`SCALE`] exactly.
-fn cumulative(
-    weights: impl ExactSizeIterator<Item = f64>,
-    total: f64,
-    mut out: impl FnMut(usize, u32),
-) {
-    let n = weights.len();
-    let mut acc = 0.0f64;
-    for (k, w) in weights.enumerate() {
-        acc += w;
-        let count = if k + 1 == n {
-            SCALE
-        } else {
-            ((acc / total) * f64::from(SCALE))
-                .round()
-                .min(f64::from(SCALE)) as u32
-        };
-        out(k, count);
+/// The cumulative count out of [`SCALE`] of a running sum `acc` of weights summing to `total`
+/// (> 0): [`SCALE`] exactly at the `last` weight.
+fn count(acc: f64, total: f64, last: bool) -> u32 {
+    if last {
+        SCALE
+    } else {
+        ((acc / total) * f64::from(SCALE))
+            .round()
+            .min(f64::from(SCALE)) as u32
     }
 }
 
@@ -295,8 +286,8 @@ impl EnvironmentMap {
         let n = pixels.len() / 3;
         pixels.resize(4 * n, 0.0);
         for i in (0..n).rev() {
-            pixels.copy_within(3 * i..3 * i + 3, 4 * i);
-            pixels[4 * i + 3] = 0.0;
+            let texel = [pixels[3 * i], pixels[3 * i + 1], pixels[3 * i + 2], 0.0];
+            pixels[4 * i..4 * i + 4].copy_from_slice(&texel);
         }
         // The map holds what it says (`bytes`), not a decoder's spare capacity.
         pixels.shrink_to_fit();
@@ -336,28 +327,27 @@ impl EnvironmentMap {
             .par_chunks_mut(4 * w)
             .zip(column_guide.par_chunks_mut(column_guide_len))
             .map(|(row, guide)| {
-                let lum = |t: &[f32]| f64::from(luminance(Vec3::from_slice(&t[..3])));
-                let sum: f64 = row.chunks_exact(4).map(lum).sum();
+                // The luminances first go to the fourth float, then their counts replace them.
+                let mut sum = 0.0f64;
                 let mut rgb = [0.0f64; 3];
                 let mut max = 0.0f32;
-                for t in row.chunks_exact(4) {
+                for t in row.chunks_exact_mut(4) {
+                    t[3] = luminance(Vec3::new(t[0], t[1], t[2]));
+                    sum += f64::from(t[3]);
                     for c in 0..3 {
                         rgb[c] += f64::from(t[c]);
                         max = max.max(t[c]);
                     }
                 }
-                let mut counts = vec![0u32; w];
-                if sum > 0.0 {
-                    let weights: Vec<f64> = row.chunks_exact(4).map(lum).collect();
-                    cumulative(weights.into_iter(), sum, |k, c| counts[k] = c);
-                } else {
-                    // Never picked (its marginal count is 0); uniform for completeness.
-                    cumulative(std::iter::repeat_n(1.0, w), w as f64, |k, c| counts[k] = c);
+                // A row without light is never picked (its marginal count is 0); uniform for
+                // completeness.
+                let total = if sum > 0.0 { sum } else { w as f64 };
+                let mut acc = 0.0f64;
+                for (k, t) in row.chunks_exact_mut(4).enumerate() {
+                    acc += if sum > 0.0 { f64::from(t[3]) } else { 1.0 };
+                    t[3] = count(acc, total, k + 1 == w) as f32;
                 }
-                for (t, &c) in row.chunks_exact_mut(4).zip(&counts) {
-                    t[3] = c as f32;
-                }
-                build_guide(guide, column_shift, w, |k| counts[k]);
+                build_guide(guide, column_shift, w, |k| row[4 * k + 3] as u32);
                 (sum, rgb, max)
             })
             .collect();
@@ -367,7 +357,11 @@ impl EnvironmentMap {
         let mut marginal = vec![0u32; h];
         let lit = total > 0.0 && total.is_finite();
         if lit {
-            cumulative(weights(), total, |k, c| marginal[k] = c);
+            let mut acc = 0.0f64;
+            for (k, weight) in weights().enumerate() {
+                acc += weight;
+                marginal[k] = count(acc, total, k + 1 == h);
+            }
         }
         let row_bits = (guide_bits(h, 0) + 1).min(24);
         let row_shift = 24 - row_bits;
