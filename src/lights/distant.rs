@@ -56,17 +56,24 @@ impl DistantLight {
         }
     }
 
-    /// A unit world direction towards the light: `u` picks it (for a map, its texel),
-    /// `jitter()` is asked for a second pair of numbers when one is needed (a map's position
-    /// within the texel). `None` if there is nothing to sample.
+    /// A unit world direction towards the light with the radiance the light sends along it and
+    /// its density per steradian (selection not included), read from what was sampled rather
+    /// than by looking the direction up again: `u` picks it (for a map, its texel), `jitter()`
+    /// is asked for a second pair of numbers when one is needed (a map's position within the
+    /// texel). `None` if there is nothing to sample. A direction within float rounding of a
+    /// texel's edge (or of the sun's rim) may be looked up as the neighbour (or as outside):
+    /// a set of measure zero, which weighs nothing in the estimate.
     #[inline]
-    pub fn sample(&self, u: Vec2, jitter: impl FnOnce() -> Vec2) -> Option<Vec3> {
+    pub fn sample(&self, u: Vec2, jitter: impl FnOnce() -> Vec2) -> Option<(Vec3, Vec3, f32)> {
         match self {
-            Self::Environment(e) => e
-                .map
-                .sample(u, jitter())
-                .map(|d| (e.world_from_map * d).normalize()),
-            Self::Sun(s) => Some(s.sample(u)),
+            Self::Environment(e) => e.map.sample(u, jitter()).map(|s| {
+                (
+                    (e.world_from_map * s.direction).normalize(),
+                    e.strength * s.radiance,
+                    s.pdf,
+                )
+            }),
+            Self::Sun(s) => Some((s.sample(u), s.disk_radiance(), 1.0 / s.solid_angle())),
         }
     }
 
@@ -119,10 +126,11 @@ mod tests {
             (Vec3::splat(10.0), map.pdf(into_texel))
         );
         assert_eq!(light.lookup(into_texel).0, Vec3::ZERO);
-        let d = light
+        let (d, radiance, pdf) = light
             .sample(Vec2::new(0.3, 0.6), || Vec2::new(0.5, 0.5))
             .expect("lit");
-        assert!(d.z < -0.9 && light.lookup(d).1 > 0.0, "{d}");
+        assert!(d.z < -0.9, "{d}");
+        assert_eq!(light.lookup(d), (radiance, pdf));
     }
 
     #[test]

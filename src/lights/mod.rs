@@ -209,10 +209,8 @@ impl LightSet {
         let Some(&e) = self.emitters.get(k) else {
             let d = k - self.emitters.len();
             let light = self.distant.get(d)?;
-            let direction = light.sample(u, jitter)?;
-            // Value and density from the direction itself, as a path that leaves the scene
-            // along it is weighed.
-            let (radiance, pdf) = light.lookup(direction);
+            // Value and density of what was sampled: no second lookup of the direction.
+            let (direction, radiance, pdf) = light.sample(u, jitter)?;
             let pdf = pmf * pdf;
             return (pdf > 0.0).then_some(Sampled::Distant(DistantSample {
                 direction,
