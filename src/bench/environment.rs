@@ -1,5 +1,6 @@
 //! `rondo bench environment`: load time and memory of an environment map (the target: a
-//! 4096 × 2048 map loaded and built in at most 0.5 s, in at most 16 bytes per texel).
+//! 4096 × 2048 map loaded and built in at most 0.5 s, in 16 bytes per texel; the sampling guide
+//! tables add at most half a byte per texel and a few bytes per row and column).
 //!
 //! A sky of the requested size (a gradient, a darker ground and a small sun of 2·10⁴ times the
 //! sky, so the distribution is far from uniform) is generated deterministically and written, in
