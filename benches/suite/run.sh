@@ -6,7 +6,7 @@
 #                        [--reference-spp 1024] [--threads N] [--no-cycles] [--out bench/suite]
 #
 # Environment: MITSUBA_VENV, CYCLES_VENV, CYCLES_PYTHON, BPY_VERSION (see benches/mitsuba/venv.sh
-# and benches/cycles/run.sh, whose defaults these share).
+# and benches/cycles/venv.sh, which set up both environments).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 cargo build --release --quiet
@@ -23,16 +23,7 @@ if ! ls /usr/lib/x86_64-linux-gnu/libLLVM.so.{19,2}* /usr/lib/llvm-{19,2}*/lib/l
 fi
 . benches/mitsuba/venv.sh
 "$VENV/bin/pip" install --quiet matplotlib pillow
-CYCLES="${CYCLES_VENV:-$HOME/.cache/rondo-cycles-venv}"
-if [ ! -x "$CYCLES/bin/python" ]; then
-  PY="${CYCLES_PYTHON:-$(command -v python3.13 || echo "$HOME/.pyenv/versions/3.13.0/bin/python3")}"
-  if ! "$PY" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 13))' 2>/dev/null; then
-    echo "bpy ${BPY_VERSION:-5.2.3} needs Python 3.13: set CYCLES_PYTHON (tried $PY)" >&2
-    exit 1
-  fi
-  "$PY" -m venv "$CYCLES"
-fi
-"$CYCLES/bin/pip" install --quiet "bpy==${BPY_VERSION:-5.2.3}" numpy
+. benches/cycles/venv.sh
 lscpu | grep -E 'Model name' || true
 if grep -qw avx512f /proc/cpuinfo; then echo "AVX-512: yes"; else echo "AVX-512: no"; fi
 exec "$VENV/bin/python" benches/suite/suite.py --cycles-python "$CYCLES/bin/python" "$@"
