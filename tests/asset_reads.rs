@@ -1,4 +1,4 @@
-//! Issue 24, goal 1: an asset file is read again only when a change is reported for it or its
+//! An asset file is read again only when a change is reported for it or its
 //! metadata changed (when the caller reports changes), and once per load otherwise. Counted in
 //! bytes read ([`AssetCache::bytes_read`]), never timed.
 

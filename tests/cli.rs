@@ -453,7 +453,7 @@ fn usage_errors_exit_with_status_2_and_input_errors_with_status_1() {
         &["render", scene],
         &["render", scene, "-o", "out.txt"],
         // The README's table: an output that does not end in .png or .exr is a usage error for
-        // every command that writes one (issue 25, item 17).
+        // every command that writes one.
         &["merge", "part.exr", "-o", "out.txt"],
         &["merge", "part.exr", "-o", out_png, "--spp", "0"],
         &["farm", "slurm", scene, "--tasks", "2", "-o", "out.txt"],
@@ -492,7 +492,7 @@ fn usage_errors_exit_with_status_2_and_input_errors_with_status_1() {
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
 }
 
-/// Issue 25, item 17: the summary of a render of a sample range gives the samples it rendered,
+/// The summary of a render of a sample range gives the samples it rendered,
 /// and the rate from them. Every sample traces its camera ray, so rays/s ≥ samples/s holds for
 /// a true count, and fails by far for 1024 spp claimed where 1 was rendered.
 #[test]
@@ -676,4 +676,57 @@ fn a_scenes_denoise_setting_asks_for_the_denoised_image_and_no_denoise_overrides
         "denoised, raw kept"
     );
     assert!(!exr_channels(&off).contains_key("raw.R"), "not denoised");
+}
+
+#[test]
+fn check_command_lists_warnings_with_status_0_and_refuses_broken_scenes_with_status_1() {
+    // `rondo check` on the stress scene: its two deliberate z-fighting pairs, status 0. On a
+    // clean scene: no warnings, status 0. On a degenerate quad: the located load error, status 1.
+    let run = |scene: &std::path::Path| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_rondo"))
+            .arg("check")
+            .arg(scene)
+            .output()
+            .expect("run rondo");
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let stress = common::scenes_dir().join("stress.ron");
+    let (code, stdout, _) = run(&stress);
+    assert_eq!(code, Some(0), "{stdout}");
+    let warnings: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.starts_with("warning:"))
+        .collect();
+    assert_eq!(warnings.len(), 2, "{stdout}");
+    assert!(
+        warnings[0].contains("\"ground\" and \"case\" overlap in one plane"),
+        "{stdout}"
+    );
+    assert!(
+        warnings[1].contains("\"ground\" and \"diamond\""),
+        "{stdout}"
+    );
+    assert!(stdout.ends_with("stress.ron: 2 warnings\n"), "{stdout}");
+
+    let (code, stdout, _) = run(&common::scenes_dir().join("sphere.ron"));
+    assert_eq!((code, stdout.lines().count()), (Some(0), 1), "{stdout}");
+    assert!(stdout.contains("no warnings"), "{stdout}");
+
+    let dir = temp_dir("check-cli");
+    let bad = write_scene(
+        &dir,
+        "bad.ron",
+        "Scene(\n    camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0)),\n    materials: { \"w\": Diffuse(albedo: Constant((1, 1, 1))) },\n    entities: [ Entity(material: \"w\", shape: Quad(a: (0, 0, 0), b: (1, 0, 0), c: (2, 0, 0), d: (0, 1, 0))) ],\n)",
+    );
+    let (code, stdout, stderr) = run(&bad);
+    assert_eq!(code, Some(1), "{stdout}{stderr}");
+    assert!(
+        stderr.contains("bad.ron:4:") && stderr.contains("quad: zero area"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
 }

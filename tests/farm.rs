@@ -92,6 +92,23 @@ fn render_part_with(
     out
 }
 
+/// Renders the sample ranges between consecutive `cuts` into `dir/PREFIX-i.exr`, odd parts on
+/// one thread and even ones on two: the thread count must not matter either.
+fn render_split(dir: &Path, prefix: &str, cuts: &[u32]) -> Vec<PathBuf> {
+    cuts.windows(2)
+        .enumerate()
+        .map(|(i, w)| {
+            render_part(
+                dir,
+                &format!("{prefix}-{i}.exr"),
+                w[0]..w[1],
+                small(),
+                1 + i % 2,
+            )
+        })
+        .collect()
+}
+
 /// The merged sums of `paths` (every sample of `0..SPP` held).
 fn merge_sums(paths: &[PathBuf]) -> Sums {
     let plan = plan_merge(paths, Some(SPP)).unwrap_or_else(|e| panic!("{e}"));
@@ -109,6 +126,36 @@ fn write_sums(path: &Path, meta: &PartialMeta, sums: &Sums) {
     write_output(path, meta, &sums.colour, sums.features.as_ref()).expect("write");
 }
 
+/// The error of a merge of `base` with `other`, which must be refused.
+fn merge_refusal(base: &Path, other: PathBuf) -> String {
+    plan_merge(&[base.to_path_buf(), other], None)
+        .expect_err("must not merge")
+        .0
+}
+
+/// Renders samples `range` with `overrides` into `dir/name`, as [`render_part`] does, and
+/// returns the error of its merge with `base`, which must be refused.
+fn refused_partial(
+    dir: &Path,
+    base: &Path,
+    name: &str,
+    range: Range<u32>,
+    overrides: Overrides,
+) -> String {
+    merge_refusal(base, render_part(dir, name, range, overrides, 2))
+}
+
+/// The error of a resume of `base` with `overrides` into `out`, which must be refused before
+/// anything is rendered.
+fn resume_refusal(base: &Path, overrides: Overrides, out: &Path) -> String {
+    let mut r = Renderer::new(Some(1), PassPlan::Single).expect("pool");
+    let resume = Samples::Resume(base.to_path_buf());
+    prepare(&mut r, overrides, &cornell(), out, &resume)
+        .err()
+        .unwrap_or_else(|| panic!("a resume of {} is refused", base.display()))
+        .to_string()
+}
+
 #[test]
 fn merges_equal_the_single_render_bit_for_bit_for_any_split_and_order() {
     let dir = common::temp_dir("farm-splits");
@@ -120,20 +167,7 @@ fn merges_equal_the_single_render_bit_for_bit_for_any_split_and_order() {
         &[0, 3, 4, 7, 8, 13, 16],
     ];
     for (k, cuts) in splits.iter().enumerate() {
-        let mut parts: Vec<PathBuf> = cuts
-            .windows(2)
-            .enumerate()
-            .map(|(i, w)| {
-                // Odd parts on one thread, even on two: the thread count must not matter either.
-                render_part(
-                    &dir,
-                    &format!("s{k}-{i}.exr"),
-                    w[0]..w[1],
-                    small(),
-                    1 + i % 2,
-                )
-            })
-            .collect();
+        let mut parts = render_split(&dir, &format!("s{k}"), cuts);
         for order in 0..3 {
             match order {
                 1 => parts.reverse(),
@@ -178,51 +212,33 @@ fn merges_refuse_overlaps_and_other_renders_and_report_gaps() {
     let b = render_part(&dir, "b.exr", 4..8, small(), 2);
     let over = render_part(&dir, "over.exr", 6..9, small(), 2);
     let late = render_part(&dir, "late.exr", 12..16, small(), 2);
-    let err = |paths: &[PathBuf]| plan_merge(paths, None).expect_err("must refuse").0;
-
-    let e = err(&[a.clone(), b.clone(), over.clone()]);
+    let e = plan_merge(&[a.clone(), b.clone(), over.clone()], None)
+        .expect_err("must refuse")
+        .0;
     assert!(
         e.contains("over.exr") && e.contains("6..9") && e.contains("b.exr"),
         "{e}"
     );
-    let seed = render_part(
-        &dir,
-        "seed.exr",
-        8..12,
-        Overrides {
-            seed: Some(9),
-            ..small()
-        },
-        2,
-    );
-    let e = err(&[a.clone(), seed]);
+    let seed = Overrides {
+        seed: Some(9),
+        ..small()
+    };
+    let e = refused_partial(&dir, &a, "seed.exr", 8..12, seed);
     assert!(
         e.contains("seed.exr") && e.contains("seed 9") && e.contains("a.exr"),
         "{e}"
     );
-    let size = render_part(
-        &dir,
-        "size.exr",
-        8..12,
-        Overrides {
-            width: Some(21),
-            ..small()
-        },
-        2,
-    );
-    let e = err(&[a.clone(), size]);
+    let size = Overrides {
+        width: Some(21),
+        ..small()
+    };
+    let e = refused_partial(&dir, &a, "size.exr", 8..12, size);
     assert!(e.contains("size.exr") && e.contains("21x15"), "{e}");
-    let depth = render_part(
-        &dir,
-        "depth.exr",
-        8..12,
-        Overrides {
-            max_depth: Some(2),
-            ..small()
-        },
-        2,
-    );
-    let e = err(&[a.clone(), depth]);
+    let depth = Overrides {
+        max_depth: Some(2),
+        ..small()
+    };
+    let e = refused_partial(&dir, &a, "depth.exr", 8..12, depth);
     assert!(
         e.contains("depth.exr") && e.contains("max_depth 2") && e.contains("max_depth 8"),
         "{e}"
@@ -236,7 +252,7 @@ fn merges_refuse_overlaps_and_other_renders_and_report_gaps() {
     let part = prepare(&mut r, small(), &other, &out, &Samples::Range(8..12)).expect("prepare");
     r.render_to_completion();
     part.finish(&mut r).expect("finish");
-    let e = err(&[a.clone(), out]);
+    let e = merge_refusal(&a, out);
     assert!(e.contains("scene.exr") && e.contains("hash"), "{e}");
 
     let plan = plan_merge(&[late.clone(), a.clone()], Some(SPP)).expect("gaps are no error here");
@@ -297,24 +313,13 @@ fn a_resume_continues_with_the_next_samples() {
     assert_eq!(merge_files(std::slice::from_ref(&more)), sum);
     assert!(decode_exr(&more) == exr);
     // Nothing left to add, or another resolution: refused with the reason.
-    let mut r = Renderer::new(Some(2), PassPlan::Single).expect("pool");
-    let e = prepare(
-        &mut r,
-        o,
-        &cornell(),
-        &dir.join("x.exr"),
-        &Samples::Resume(more.clone()),
-    )
-    .expect_err("nothing to add")
-    .to_string();
+    let e = resume_refusal(&more, o, &dir.join("x.exr"));
     assert!(e.contains("already holds samples up to 16"), "{e}");
     let wide = Overrides {
         width: Some(30),
         ..o
     };
-    let e = prepare(&mut r, wide, &cornell(), &dir.join("x.exr"), &resume)
-        .expect_err("other size")
-        .to_string();
+    let e = resume_refusal(&first, wide, &dir.join("x.exr"));
     assert!(e.contains("first.exr") && e.contains("20x15"), "{e}");
 }
 
@@ -382,71 +387,50 @@ fn the_slurm_script_splits_as_the_library_and_merges_after_the_array() {
     assert_eq!(task_range(6, 7, 1000), 857..1000);
 }
 
-/// Issue 25, item 7: every setting that changes the pixels is part of a partial's identity.
+/// Every setting that changes the pixels is part of a partial's identity, so partials of
+/// different renders can never be summed into one image.
 #[test]
 fn partials_of_another_sampler_method_or_roulette_neither_merge_nor_resume() {
     let dir = common::temp_dir("farm-identity");
     let sobol = render_part(&dir, "sobol.exr", 0..4, small(), 2);
-    let other = |name: &str, overrides: Overrides| render_part(&dir, name, 4..8, overrides, 2);
-    let independent = other(
-        "independent.exr",
-        Overrides {
-            sampler: Some(SamplerKind::Independent),
-            ..small()
-        },
-    );
-    let e = plan_merge(&[sobol.clone(), independent], None)
-        .expect_err("another sampler must not merge")
-        .0;
+    let independent = Overrides {
+        sampler: Some(SamplerKind::Independent),
+        ..small()
+    };
+    let e = refused_partial(&dir, &sobol, "independent.exr", 4..8, independent);
     assert!(
         e.contains("independent.exr")
             && e.contains("sampler independent")
             && e.contains("sampler sobol"),
         "{e}"
     );
-    let nee = other(
-        "nee.exr",
-        Overrides {
-            method: Some(Method::Nee),
-            ..small()
-        },
-    );
-    let e = plan_merge(&[sobol.clone(), nee], None)
-        .expect_err("another method must not merge")
-        .0;
+    let nee = Overrides {
+        method: Some(Method::Nee),
+        ..small()
+    };
+    let e = refused_partial(&dir, &sobol, "nee.exr", 4..8, nee);
     assert!(e.contains("nee.exr") && e.contains("method nee"), "{e}");
     let no_roulette = render_part_with(&dir, "no-roulette.exr", 4..8, small(), 2, |r| {
         r.set_roulette(false)
     });
-    let e = plan_merge(&[sobol.clone(), no_roulette], None)
-        .expect_err("another roulette must not merge")
-        .0;
+    let e = merge_refusal(&sobol, no_roulette);
     assert!(
         e.contains("no-roulette.exr") && e.contains("roulette off"),
         "{e}"
     );
     // A resume with another sampler: refused before anything is rendered.
-    let mut r = Renderer::new(Some(2), PassPlan::Single).expect("pool");
     let more = Overrides {
         spp: Some(8),
         sampler: Some(SamplerKind::Independent),
         ..small()
     };
-    let e = prepare(
-        &mut r,
-        more,
-        &cornell(),
-        &dir.join("more.exr"),
-        &Samples::Resume(sobol.clone()),
-    )
-    .expect_err("a resume with another sampler")
-    .to_string();
+    let e = resume_refusal(&sobol, more, &dir.join("more.exr"));
     assert!(
         e.contains("sobol.exr") && e.contains("sampler sobol") && e.contains("--sampler"),
         "{e}"
     );
     // Same settings: the partials do belong together.
-    let same = other("same.exr", small());
+    let same = render_part(&dir, "same.exr", 4..8, small(), 2);
     let plan = plan_merge(&[sobol.clone(), same], None).expect("one render's partials");
     assert_eq!(plan.meta.ranges, vec![0..8]);
     assert!(
@@ -456,7 +440,8 @@ fn partials_of_another_sampler_method_or_roulette_neither_merge_nor_resume() {
     );
 }
 
-/// Issue 25, item 7: the film's fixed-point shift is stored, read back and must agree.
+/// The film's fixed-point shift is stored, read back and must agree: sums in other units do not
+/// add up.
 #[test]
 fn partials_in_another_fixed_point_scale_do_not_merge() {
     let dir = common::temp_dir("farm-shift");
@@ -470,9 +455,7 @@ fn partials_in_another_fixed_point_scale_do_not_merge() {
     };
     write_sums(&shifted, &moved, &sum);
     assert_eq!(read_meta(&shifted).expect("meta").shift, meta.shift - 1);
-    let e = plan_merge(&[a, shifted], None)
-        .expect_err("sums in other units must not add up")
-        .0;
+    let e = merge_refusal(&a, shifted);
     assert!(
         e.contains("shifted.exr") && e.contains(&(meta.shift - 1).to_string()),
         "{e}"
@@ -571,7 +554,7 @@ fn with_data_window(from: &Path, to: &Path, width: i32, height: i32) {
     std::fs::write(to, bytes).expect("write");
 }
 
-/// Issue 25, item 8: every attribute and the size of a partial are checked against the limits
+/// Every attribute and the size of a partial are checked against the limits
 /// of a render before anything is allocated for its pixels.
 #[test]
 fn a_partial_is_checked_before_anything_is_allocated_for_it() {
@@ -589,9 +572,7 @@ fn a_partial_is_checked_before_anything_is_allocated_for_it() {
             e.contains(path.to_str().expect("UTF-8")) && e.contains(reason),
             "{e}"
         );
-        let e = plan_merge(&[good.clone(), path.to_path_buf()], None)
-            .expect_err("must not merge")
-            .0;
+        let e = merge_refusal(&good, path.to_path_buf());
         assert!(e.contains(reason), "{e}");
     };
     // No samples at all: merged with `good`, the image would be twice as bright.
@@ -683,7 +664,7 @@ fn a_partial_is_checked_before_anything_is_allocated_for_it() {
     assert!(e.contains("twice.exr") && e.contains("twice"), "{e}");
 }
 
-/// Issue 25, item 9: a resume reads and checks the whole partial before it renders anything.
+/// A resume reads and checks the whole partial before it renders anything.
 #[test]
 fn a_corrupt_resume_base_is_refused_before_rendering() {
     let dir = common::temp_dir("farm-corrupt-base");
@@ -693,20 +674,11 @@ fn a_corrupt_resume_base_is_refused_before_rendering() {
     let corrupt = dir.join("corrupt.exr");
     std::fs::write(&corrupt, bytes).expect("write");
     read_meta(&corrupt).expect("the header alone is fine");
-    let mut r = Renderer::new(Some(2), PassPlan::Single).expect("pool");
     let o = Overrides {
         spp: Some(8),
         ..small()
     };
-    let e = prepare(
-        &mut r,
-        o,
-        &cornell(),
-        &dir.join("more.exr"),
-        &Samples::Resume(corrupt),
-    )
-    .expect_err("a corrupt base")
-    .to_string();
+    let e = resume_refusal(&corrupt, o, &dir.join("more.exr"));
     assert!(e.contains("corrupt.exr"), "{e}");
 }
 
@@ -744,7 +716,7 @@ fn slurm_script<A: AsRef<std::ffi::OsStr>>(
     path
 }
 
-/// Issue 25, item 7: a task of the Slurm script renders with every override given to `farm
+/// A task of the Slurm script renders with every override given to `farm
 /// slurm`: its partial is the library's for the same overrides, bit for bit.
 #[test]
 fn a_slurm_task_renders_with_every_override() {
@@ -782,7 +754,7 @@ fn a_slurm_task_renders_with_every_override() {
     assert!(task.1 == library.1, "sums differ");
 }
 
-/// Issue 25, item 10: the commands the report prints run as written when pasted into a shell,
+/// The commands the report prints run as written when pasted into a shell,
 /// whatever the paths hold (spaces, quotes, `$(…)`).
 #[test]
 fn the_report_prints_commands_a_shell_runs_as_written() {
@@ -849,7 +821,7 @@ fn the_report_prints_commands_a_shell_runs_as_written() {
     assert!(!dir.join("pwned").exists(), "{all} ran a command");
 }
 
-/// Issue 21, item 1: the full render of every sample with the feature buffers collected: its
+/// The full render of every sample with the feature buffers collected: its
 /// colour sums and its albedo and normal sums.
 fn single_with_features() -> (Vec<Pixel>, Features) {
     let mut r = Renderer::new(Some(2), PassPlan::Single).expect("pool");
@@ -872,7 +844,7 @@ fn single_with_features() -> (Vec<Pixel>, Features) {
     (film.sum.clone(), features)
 }
 
-/// Issue 21, item 1: every partial carries the albedo and normal sums; merged, in any split and
+/// Every partial carries the albedo and normal sums; merged, in any split and
 /// order, they equal those of one render of every sample, bit for bit, and so does a merge of
 /// merges (a merged `.exr` carries them too).
 #[test]
@@ -883,19 +855,7 @@ fn partials_carry_the_feature_buffers_which_merge_bit_for_bit() {
         .iter()
         .enumerate()
     {
-        let mut parts: Vec<PathBuf> = cuts
-            .windows(2)
-            .enumerate()
-            .map(|(i, w)| {
-                render_part(
-                    &dir,
-                    &format!("f{k}-{i}.exr"),
-                    w[0]..w[1],
-                    small(),
-                    1 + i % 2,
-                )
-            })
-            .collect();
+        let mut parts = render_split(&dir, &format!("f{k}"), cuts);
         assert!(read_meta(&parts[0]).expect("meta").features);
         for _ in 0..2 {
             let merged = merge_sums(&parts);
@@ -937,7 +897,7 @@ fn partials_carry_the_feature_buffers_which_merge_bit_for_bit() {
     assert!(meta.features && sums.features.as_ref() == Some(&features));
 }
 
-/// Issue 21, item 1: a resume continues a partial's feature buffers, bit for bit.
+/// A resume continues a partial's feature buffers, bit for bit.
 #[test]
 fn a_resume_continues_the_feature_buffers() {
     let dir = common::temp_dir("farm-features-resume");
@@ -958,7 +918,7 @@ fn a_resume_continues_the_feature_buffers() {
     assert!(sums.features.as_ref() == Some(&features), "feature buffers");
 }
 
-/// A `rondo-partial-2` file as rondo wrote it before the feature buffers, made here with the
+/// A `rondo-partial-2` file (the format without feature buffers), made here with the
 /// exr crate from the format's description: one unnamed layer of the colour's means and sum
 /// words (96-bit two's complement, least significant word first), with the metadata.
 fn write_v2(path: &Path, meta: &PartialMeta, sum: &[Pixel]) {
@@ -1014,8 +974,8 @@ fn write_v2(path: &Path, meta: &PartialMeta, sum: &[Pixel]) {
         .expect("write v2");
 }
 
-/// Issue 21, item 1: partials of the format before the feature buffers (`rondo-partial-2`)
-/// still read and merge (into a partial of their format); mixed with partials that carry the
+/// Partials of the format without feature buffers (`rondo-partial-2`) are still read and
+/// merged, so older renders stay usable (into a partial of their format); mixed with partials that carry the
 /// buffers they are refused, naming both files, and so is a resume of one.
 #[test]
 fn partials_without_feature_buffers_still_merge_but_not_with_those_that_have_them() {
@@ -1054,32 +1014,21 @@ fn partials_without_feature_buffers_still_merge_but_not_with_those_that_have_the
     assert!(!meta.features && sums.colour == sum);
     assert!(decode_exr(&out) == exr);
     // A mix of formats: refused with the reason, naming both files.
-    let e = plan_merge(&[a.1.clone(), b.0.clone()], None)
-        .expect_err("a mix of formats")
-        .0;
+    let e = merge_refusal(&a.1, b.0.clone());
     assert!(
         e.contains("b2.exr") && e.contains("a3.exr") && e.contains("rondo-partial-2"),
         "{e}"
     );
     // A resume of one: refused with the reason before rendering.
-    let mut r = Renderer::new(Some(2), PassPlan::Single).expect("pool");
     let o = Overrides {
         spp: Some(SPP),
         ..small()
     };
-    let e = prepare(
-        &mut r,
-        o,
-        &cornell(),
-        &dir.join("more.exr"),
-        &Samples::Resume(a.0),
-    )
-    .expect_err("a v2 resume")
-    .to_string();
+    let e = resume_refusal(&a.0, o, &dir.join("more.exr"));
     assert!(e.contains("a2.exr") && e.contains("rondo-partial-2"), "{e}");
 }
 
-/// Issue 21, item 1: a partial whose albedo layer is truncated or malformed is refused, naming
+/// A partial whose albedo layer is truncated or malformed is refused, naming
 /// the file (and the layer, where the reader can tell), by a merge and by a resume.
 #[test]
 fn a_partial_with_a_broken_albedo_layer_is_refused_naming_the_file() {
@@ -1115,20 +1064,11 @@ fn a_partial_with_a_broken_albedo_layer_is_refused_naming_the_file() {
             e.contains(path.to_str().expect("UTF-8")) && e.contains(reason),
             "{e}"
         );
-        let mut r = Renderer::new(Some(1), PassPlan::Single).expect("pool");
         let o = Overrides {
             spp: Some(2),
             ..two_tiles
         };
-        let e = prepare(
-            &mut r,
-            o,
-            &cornell(),
-            &dir.join("more.exr"),
-            &Samples::Resume(path.to_path_buf()),
-        )
-        .expect_err("a broken resume base")
-        .to_string();
+        let e = resume_refusal(path, o, &dir.join("more.exr"));
         assert!(
             e.contains(path.to_str().expect("UTF-8")) && e.contains(reason),
             "{e}"
@@ -1176,8 +1116,8 @@ fn a_partial_with_a_broken_albedo_layer_is_refused_naming_the_file() {
 }
 
 /// A partial's sums are bounded by what its samples can reach (2^62 each in fixed point): a
-/// crafted file beyond it, which used to wrap around 96 bits into a negative sum when merged, is
-/// refused by name by a merge and by a resume; at the bound itself it still reads.
+/// crafted file beyond it, whose sums would wrap around 96 bits into a negative sum when merged,
+/// is refused by name by a merge and by a resume; at the bound itself it still reads.
 #[test]
 fn sums_beyond_what_the_samples_reach_are_refused_by_merge_and_resume() {
     let dir = common::temp_dir("farm-overflow");
@@ -1206,7 +1146,7 @@ fn sums_beyond_what_the_samples_reach_are_refused_by_merge_and_resume() {
             value
         );
     }
-    // The issue's file: the top word 0x7fffffff, twice, wrapped to a negative sum.
+    // The top word 0x7fffffff: two such sums added would wrap to a negative sum.
     let top = i128::from(0x7fff_ffff) << 64;
     let x = crafted("x.exr", 0, top);
     let e = merge(
@@ -1230,16 +1170,11 @@ fn sums_beyond_what_the_samples_reach_are_refused_by_merge_and_resume() {
                 e.contains(&file) && e.contains("beyond what 4 samples reach"),
                 "{e}"
             );
-            let mut r = Renderer::new(Some(1), PassPlan::Single).expect("pool");
             let o = Overrides {
                 spp: Some(SPP),
                 ..small()
             };
-            let resume = Samples::Resume(over.clone());
-            let e = prepare(&mut r, o, &cornell(), &dir.join("more.exr"), &resume)
-                .err()
-                .unwrap_or_else(|| panic!("a resume from {file} ({value}) is refused"))
-                .to_string();
+            let e = resume_refusal(&over, o, &dir.join("more.exr"));
             assert!(e.contains(&file) && e.contains("beyond what"), "{e}");
             assert!(!dir.join("more.exr").exists());
         }

@@ -37,7 +37,8 @@ fn temporaries(dir: &Path) -> Vec<String> {
 }
 
 /// A file outside the output's directory, and symlinks to it at every name the temporary of
-/// each output in `outputs` used to have in this process (`.NAME.PID.tmp`), and at a few other
+/// each output in `outputs` would have in this process under a predictable scheme
+/// (`.NAME.PID.tmp`), and at a few other
 /// guessable ones.
 #[cfg(unix)]
 struct Trap {

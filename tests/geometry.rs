@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::geometry_of;
+use common::{geometry_of, random_unit};
 use glam::{Vec2, Vec3};
 use rondo::geometry::packed::{Geometry, HitKind, Primitive};
 use rondo::geometry::ray::Ray;
@@ -80,16 +80,6 @@ fn quad_diagonal_is_never_missed() {
             g.intersect(&ray, f32::INFINITY).is_some(),
             "{origin} → {target}"
         );
-    }
-}
-
-fn random_unit(rng: &mut Rng) -> Vec3 {
-    loop {
-        let v = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3::ONE;
-        let l = v.length_squared();
-        if l > 1e-4 && l <= 1.0 {
-            return v / l.sqrt();
-        }
     }
 }
 

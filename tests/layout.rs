@@ -20,20 +20,10 @@ use rondo::geometry::triangle::TriangleHit;
 use rondo::shading::rng::Rng;
 use rondo::{Overrides, PassPlan, Renderer};
 
-use common::{scenes_dir, temp_dir};
+use common::{random_unit, scenes_dir, temp_dir};
 
 fn random_vec(rng: &mut Rng, scale: f32) -> Vec3 {
     (Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3::ONE) * scale
-}
-
-fn random_unit(rng: &mut Rng) -> Vec3 {
-    loop {
-        let v = random_vec(rng, 1.0);
-        let l = v.length_squared();
-        if l > 1e-4 && l <= 1.0 {
-            return v / l.sqrt();
-        }
-    }
 }
 
 /// Spheres and triangles with the awkward cases mixed in: exact duplicates (ties), axis-aligned

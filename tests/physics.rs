@@ -52,7 +52,8 @@ fn a_lamp_inside_a_glass_ball_is_dimmed_by_the_squared_index() {
     // A camera with a vanishing field of view looks head-on at a lamp of radiance 1 sealed in
     // a glass ball (ior 1.5). At normal incidence a fraction R0 = 0.04 is reflected (to the
     // black background); the rest is refracted, and radiance crossing from glass into air is
-    // divided by 1.5², so the camera reads L = (1 − R0) / 1.5² = 0.4267 (0.96 before the fix).
+    // divided by 1.5², so the camera reads L = (1 − R0) / 1.5² = 0.4267 (0.96 if the division
+    // by the squared index is missed).
     let dir = temp_dir("glass-lamp");
     let scene = write_scene(
         &dir,
@@ -598,7 +599,7 @@ fn a_glass_ball_in_a_white_furnace_is_exactly_white_sample_by_sample() {
 
 #[test]
 fn a_rendered_glass_ball_in_a_white_furnace_is_nowhere_brighter_than_the_sky() {
-    // The furnace, as a user renders it: naive, 64², 64 spp, max depth 64.
+    // A glass-ball furnace as a user would render it: naive, 64², 64 spp, max depth 64.
     let dir = temp_dir("glass-furnace");
     let scene = write_scene(
         &dir,

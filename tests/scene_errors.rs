@@ -393,8 +393,8 @@ fn value_errors_in_a_prefab_name_its_entity() {
     );
 }
 
-/// Issue 25, item 15: a huge bad save gives an error of bounded size (a 50 MB save once
-/// printed a 52 MB line) and a quoted line of at most 200 characters around the column.
+/// A huge bad save gives an error of bounded size (an unbounded one would print a 50 MB save
+/// as a 52 MB line) and a quoted line of at most 200 characters around the column.
 #[test]
 fn a_huge_bad_save_gives_a_bounded_message_and_source_line() {
     use rondo::scene::error::{MAX_MESSAGE, MAX_SOURCE_LINE};
@@ -444,7 +444,7 @@ fn a_huge_bad_save_gives_a_bounded_message_and_source_line() {
     );
 }
 
-/// Issue 25, item 15: control characters from a file (an escape sequence that would clear the
+/// Control characters from a file (an escape sequence that would clear the
 /// terminal, a bell, C1 controls, DEL) are escaped in the message and in the quoted line;
 /// other characters, any script, are kept.
 #[test]
@@ -480,7 +480,7 @@ fn control_characters_from_the_file_are_escaped() {
     );
 }
 
-/// Issue 25, item 15: a file named as a prefab that is not a `.ron` file (a mesh, an image,
+/// A file named as a prefab that is not a `.ron` file (a mesh, an image,
 /// any file) is never quoted, even when its text is located by the parse error; a prefab is.
 #[test]
 fn source_lines_are_quoted_from_scene_and_prefab_files_only() {
@@ -510,7 +510,7 @@ fn source_lines_are_quoted_from_scene_and_prefab_files_only() {
     }
 }
 
-/// Issue 25, item 17: numbers in errors stay short (1e308 printed as its 309 digits).
+/// Numbers in errors stay short (1e308 is not printed as its 309 digits).
 #[test]
 fn huge_numbers_in_errors_are_written_short() {
     let src = format!(
@@ -528,7 +528,7 @@ fn huge_numbers_in_errors_are_written_short() {
     assert_eq!(message(&e), "entity \"#0\": radius must be > 0 (got -3e38)");
 }
 
-/// Issue 25, item 17: too deep a nesting says what to do, not which `ron` option to change.
+/// Too deep a nesting says what to do, not which `ron` option to change.
 #[test]
 fn too_deep_a_nesting_is_named_in_the_users_words() {
     let depth = 300;
@@ -587,4 +587,59 @@ fn an_image_texture_takes_its_filter_and_wrap_and_refuses_unknown_ones() {
     .to_string();
     assert_eq!(location(&e).0, 5, "{e}");
     assert!(e.contains("Trilinear") && e.contains("Bilinear"), "{e}");
+}
+
+#[test]
+fn degenerate_input_is_rejected_at_load_time_with_a_located_message() {
+    // Degenerate shapes, numbers beyond what f32 arithmetic survives, unusable cameras and
+    // settings beyond the render limits. Each: the scene text, the line the message must point
+    // at, and words it must contain.
+    let cam = "camera: Camera(position: (0, 1, -5), look_at: (0, 1, 0))";
+    let with = |entity: &str| {
+        format!(
+            "Scene(\n    {cam},\n    materials: {{ \"w\": Diffuse(albedo: Constant((0.5, 0.5, 0.5))) }},\n    entities: [\n        Entity(material: \"w\", {entity}),\n    ],\n)"
+        )
+    };
+    let cases: Vec<(&str, String, usize, &str)> = vec![
+        ("collinear quad", with("shape: Quad(a: (0, 0, 0), b: (1, 0, 0), c: (2, 0, 0), d: (0, 1, 0))"), 5, "quad: zero area"),
+        ("repeated quad corner", with("shape: Quad(a: (0, 0, 0), b: (1, 0, 0), c: (1, 1, 0), d: (1, 1, 0))"), 5, "quad: zero area"),
+        ("sliver triangle", with("shape: Triangle(a: (0, 0, 0), b: (1, 0, 0), c: (0.5, 1e-7, 0))"), 5, "triangle: zero area"),
+        ("negative radius", with("shape: Sphere(center: (0, 0, 0), radius: -1)"), 5, "radius must be > 0 (got -1)"),
+        ("infinite radius", with("shape: Sphere(center: (0, 0, 0), radius: inf)"), 5, "finite"),
+        ("NaN centre", with("shape: Sphere(center: (0, NaN, 0), radius: 1)"), 5, "finite"),
+        ("NaN plane normal", with("shape: Plane(point: (0, 0, 0), normal: (0, NaN, 1))"), 5, "finite"),
+        ("tiny plane normal", with("shape: Plane(point: (0, 0, 0), normal: (0, 1e-30, 0))"), 5, "`normal` must be non-zero"),
+        ("zero scale", with("shape: Sphere(center: (0, 0, 0), radius: 1), transform: Transform(scale: (1, 0, 1))"), 5, "scale"),
+        ("infinite translate", with("shape: Sphere(center: (0, 0, 0), radius: 1), transform: Transform(translate: (-inf, 0, 0))"), 5, "finite"),
+        ("number beyond f32", with("shape: Sphere(center: (1e39, 0, 0), radius: 1)"), 5, "finite"),
+        // Finite but too large: f32 products of such coordinates overflow (a 10²⁰ triangle's
+        // normal would be NaN and panic the render).
+        ("10²⁰ triangle", with("shape: Triangle(a: (-1e20, -1, 5), b: (1e20, -1, 5), c: (0, 1e20, 5))"), 5, "reaches 1e20 in world space, beyond ±1e9"),
+        ("10²⁵ scale", with("shape: Triangle(a: (-1, -1, 5), b: (1, -1, 5), c: (0, 1, 5)), transform: Transform(scale: (1e25, 1e25, 1e25))"), 5, "in world space, beyond ±1e9"),
+        ("2·10⁹ sphere", with("shape: Sphere(center: (0, 0, 0), radius: 2e9)"), 5, "reaches 2e9 in world space"),
+        ("10³⁰ plane point", with("shape: Plane(point: (0, -1e30, 0), normal: (0, 1, 0))"), 5, "reaches 1e30 in world space"),
+        ("camera at 10¹⁰", "Scene(\n    camera: Camera(position: (1e10, 0, 0), direction: (0, 0, 1)),\n)".into(), 2, "position must be within ±1e9"),
+        ("NaN colour", "Scene(\n    camera: Camera(position: (0, 1, -5), look_at: (0, 1, 0)),\n    materials: { \"w\": Diffuse(albedo: Constant((0.5, NaN, 0.5))) },\n)".into(), 3, "finite"),
+        ("negative colour", "Scene(\n    camera: Camera(position: (0, 1, -5), look_at: (0, 1, 0)),\n    materials: { \"w\": Diffuse(albedo: Constant((0.5, -1, 0.5))) },\n)".into(), 3, "albedo must be >= 0 (got -1)"),
+        ("NaN camera", "Scene(\n    camera: Camera(position: (NaN, 1, -5), look_at: (0, 1, 0)),\n)".into(), 2, "finite"),
+        ("look_at = position", "Scene(\n    camera: Camera(position: (0, 1, -5), look_at: (0, 1, -5)),\n)".into(), 2, "view direction is zero"),
+        ("zero up", "Scene(\n    camera: Camera(position: (0, 1, -5), look_at: (0, 1, 0), up: (0, 0, 0)),\n)".into(), 2, "`up` must be non-zero and not parallel"),
+        ("up parallel, opposite", "Scene(\n    camera: Camera(position: (0, 0, 0), direction: (0, 0, 1), up: (0, 0, -3)),\n)".into(), 2, "`up` must be non-zero and not parallel"),
+        ("fov 0", "Scene(\n    camera: Camera(position: (0, 0, 0), direction: (0, 0, 1), fov: 0),\n)".into(), 2, "fov must be in (0, 180) degrees (got 0)"),
+        ("negative fov", "Scene(\n    camera: Camera(position: (0, 0, 0), direction: (0, 0, 1), fov: -30),\n)".into(), 2, "fov must be in (0, 180) degrees (got -30)"),
+        ("10⁶×10⁶ image", "Scene(\n    camera: Camera(position: (0, 0, 0), direction: (0, 0, 1)),\n    settings: Settings(width: 1000000, height: 1000000),\n)".into(), 3, "width must be at most 16384 (got 1000000)"),
+        ("image over the pixel budget", "Scene(\n    camera: Camera(position: (0, 0, 0), direction: (0, 0, 1)),\n    settings: Settings(width: 16384, height: 16384),\n)".into(), 3, "width × height must be at most"),
+        ("10¹² spp", "Scene(\n    camera: Camera(position: (0, 0, 0), direction: (0, 0, 1)),\n    settings: Settings(spp: 1000000000000),\n)".into(), 3, "spp"),
+        ("spp over the limit", "Scene(\n    camera: Camera(position: (0, 0, 0), direction: (0, 0, 1)),\n    settings: Settings(spp: 1048577),\n)".into(), 3, "spp must be at most 1048576 (got 1048577)"),
+        ("max_depth over the limit", "Scene(\n    camera: Camera(position: (0, 0, 0), direction: (0, 0, 1)),\n    settings: Settings(max_depth: 100000),\n)".into(), 3, "max_depth must be at most 1024 (got 100000)"),
+        ("NaN background", "Scene(\n    camera: Camera(position: (0, 0, 0), direction: (0, 0, 1)),\n    settings: Settings(background: (NaN, 0, 0)),\n)".into(), 3, "finite"),
+        ("NaN intensity", "Scene(\n    camera: Camera(position: (0, 0, 0), direction: (0, 0, 1)),\n    materials: { \"l\": Light(emit: Constant((1, 1, 1)), intensity: NaN) },\n)".into(), 3, "finite"),
+        ("NaN ior", "Scene(\n    camera: Camera(position: (0, 0, 0), direction: (0, 0, 1)),\n    materials: { \"g\": Dielectric(ior: NaN) },\n)".into(), 3, "finite"),
+        ("zero ior", "Scene(\n    camera: Camera(position: (0, 0, 0), direction: (0, 0, 1)),\n    materials: { \"g\": Dielectric(ior: 0) },\n)".into(), 3, "ior must be > 0 (got 0)"),
+    ];
+    for (name, source, line, words) in cases {
+        let e = error_of(name, &source);
+        assert!(e.contains(&format!("scene.ron:{line}:")), "{name}: {e}");
+        assert!(e.contains(words), "{name}: {e}");
+    }
 }

@@ -7,7 +7,7 @@
 #                        [--out bench/suite]
 #
 # Environment: MITSUBA_VENV, CYCLES_VENV, CYCLES_PYTHON, BPY_VERSION (see benches/mitsuba/venv.sh
-# and benches/cycles/run.sh, whose defaults these share), RONDO_OIDN_DIR (src/denoise/).
+# and benches/cycles/venv.sh, which set up both environments), RONDO_OIDN_DIR (src/denoise/).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 cargo build --release --quiet
@@ -24,16 +24,7 @@ if ! ls /usr/lib/x86_64-linux-gnu/libLLVM.so.{19,2}* /usr/lib/llvm-{19,2}*/lib/l
 fi
 . benches/mitsuba/venv.sh
 "$VENV/bin/pip" install --quiet matplotlib pillow
-CYCLES="${CYCLES_VENV:-$HOME/.cache/rondo-cycles-venv}"
-if [ ! -x "$CYCLES/bin/python" ]; then
-  PY="${CYCLES_PYTHON:-$(command -v python3.13 || echo "$HOME/.pyenv/versions/3.13.0/bin/python3")}"
-  if ! "$PY" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 13))' 2>/dev/null; then
-    echo "bpy ${BPY_VERSION:-5.2.3} needs Python 3.13: set CYCLES_PYTHON (tried $PY)" >&2
-    exit 1
-  fi
-  "$PY" -m venv "$CYCLES"
-fi
-"$CYCLES/bin/pip" install --quiet "bpy==${BPY_VERSION:-5.2.3}" numpy
+. benches/cycles/venv.sh
 # rondo's denoiser (the suite's denoised columns): Open Image Denoise in .oidn/lib, unless
 # RONDO_OIDN_DIR names another folder.
 if [ -z "${RONDO_OIDN_DIR:-}" ]; then

@@ -10,6 +10,7 @@ pub mod watch_diff;
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
+use rondo::shading::rng::Rng;
 use rondo::{Film, Overrides, PassPlan, Renderer};
 
 /// A test's temporary directory: removed with its contents when dropped, unless the test is
@@ -99,6 +100,18 @@ pub fn point_estimate(r: &Renderer) -> (f64, f64) {
     let mean = px.iter().sum::<f64>() / n;
     let var = px.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
     (mean, (var / n).sqrt())
+}
+
+/// A uniformly distributed unit vector: a point drawn in the cube [-1, 1]³, kept if inside the
+/// unit ball (and not too near its centre to normalise), projected onto the sphere.
+pub fn random_unit(rng: &mut Rng) -> Vec3 {
+    loop {
+        let v = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3::ONE;
+        let l = v.length_squared();
+        if l > 1e-4 && l <= 1.0 {
+            return v / l.sqrt();
+        }
+    }
 }
 
 /// Packs shapes placed by transforms exactly as the ECS does (`world_primitives`, one owner per
