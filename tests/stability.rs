@@ -18,7 +18,6 @@ use rondo::geometry::ray::Ray;
 use rondo::geometry::triangle::intersect_triangle;
 use rondo::model::MeshData;
 use rondo::render::{point_error, spawn};
-use rondo::scene::assets::AssetCache;
 use rondo::scene::format::Method;
 use rondo::shading::material::Material;
 use rondo::shading::rng::Rng;
