@@ -3,6 +3,7 @@
 //! Both become distant lights of the light table ([`crate::lights::distant`]).
 
 pub mod environment;
+mod guide;
 pub mod sun;
 
 use std::sync::Arc;
