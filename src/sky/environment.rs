@@ -59,10 +59,7 @@ use std::f32::consts::{FRAC_PI_2, PI};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::guide::{bits24, build_guide, count, guide_bits, guided_pick};
-
-/// Resolution of the tables: cumulative counts out of 2²⁴.
-pub(super) const SCALE: u32 = 1 << 24;
+use super::guide::{SCALE, bits24, build_guide, count, guide_bits, guided_pick};
 
 /// Most texels a map may have (a 8192 × 4096 map): at most 528 MiB at 16.5 bytes each.
 pub const MAX_TEXELS: u64 = 1 << 25;

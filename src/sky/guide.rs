@@ -4,7 +4,8 @@
 //! `2^bits` entries bounds that search to a few entries in O(1) (the cutpoint method). No ECS
 //! here.
 
-use super::environment::SCALE;
+/// Resolution of the tables: cumulative counts out of 2²⁴.
+pub(super) const SCALE: u32 = 1 << 24;
 
 /// The cumulative count out of [`SCALE`] of a running sum `acc` of weights summing to `total`
 /// (> 0): [`SCALE`] exactly at the `last` weight.
