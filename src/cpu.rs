@@ -9,7 +9,9 @@
 //!
 //! What the dispatched copy reaches is what the compiler inlines into it: the integrator, the
 //! BVH traversal, the triangle and box tests, the samplers and the materials (the hot functions
-//! are `#[inline]` and called from one place each). Code written once for both copies stays
+//! are `#[inline]` and called from one place each), and what it hands to
+//! [`Lanes::out_of_line`]: a function of its own compiled with the same features, for work too
+//! big to inline (instanced meshes, alpha-masked rays). Code written once for both copies stays
 //! 4 lanes wide (SSE2) in both; where 8 lanes pay, the kernel is written over a [`Lanes`] type,
 //! and the x86-64-v3 copy gets [`Avx`], whose operations are AVX intrinsics: so far the slab
 //! test of a BVH node's eight boxes (`RayQuery::enter_boxes`).
@@ -270,13 +272,15 @@ mod tests {
     fn the_selected_copy_is_one_this_cpu_can_run() {
         let selected = Isa::selected();
         assert!(selected == Isa::BASELINE || selected == Isa::detect());
-        // Running it must work (an unsupported instruction would kill the test process).
+        // Running it, and its out-of-line function, must work (an unsupported instruction would
+        // kill the test process).
         struct Squares(u32);
         impl Kernel for Squares {
             type Output = u32;
             #[inline(always)]
-            fn run<W: Lanes>(self, _lanes: W) -> u32 {
-                (1..=self.0).map(|x| x * x).sum()
+            fn run<W: Lanes>(self, lanes: W) -> u32 {
+                let n = self.0;
+                lanes.out_of_line(|_| (1..=n).map(|x| x * x).sum())
             }
         }
         assert_eq!(selected.run(Squares(10)), 385);
