@@ -389,9 +389,7 @@ fn obj_vertex_normals_give_interpolated_shading_normals_through_the_instance_tra
     // Aim at the centroid (2/3, 1/3, 0) in world space.
     let target = Vec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0);
     let ray = Ray::new(target + Vec3::Z, -Vec3::Z);
-    let h = set
-        .intersect(rondo::cpu::Sse, &ray, f32::INFINITY)
-        .expect("hit");
+    let h = set.intersect(&ray, f32::INFINITY).expect("hit");
     let s = set.surface(h.instance, h.triangle, h.b1, h.b2);
     assert!((s.n - Vec3::Z).length() < 1e-6);
     // By hand: the mean vertex normal is (0.2, 0.2, 0.8667); normals transform by the inverse

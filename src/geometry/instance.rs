@@ -15,7 +15,7 @@ use super::bvh::{Bounds, Bvh, EMPTY, triangle_bounds, union};
 use super::ray::{Ray, gamma};
 use super::surface::{Surface, Tangent, uv_derivatives};
 use super::triangle::intersect_triangle;
-use crate::cpu::Lanes;
+use crate::cpu::{Lanes, Sse};
 use crate::model::MeshData;
 
 /// A mesh's triangles in object space, in BVH order, with their BVH. Compared by identity: two
@@ -245,11 +245,23 @@ impl InstanceSet {
         (q, s)
     }
 
+    /// The closest instanced triangle hit before `t_max` ([`InstanceSet::intersect_with`] with
+    /// four lanes).
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<InstanceHit> {
+        self.intersect_with(Sse, ray, t_max)
+    }
+
+    /// Whether any instance blocks `ray` before `t_max` ([`InstanceSet::occluded_with`] with
+    /// four lanes).
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.occluded_with(Sse, ray, t_max)
+    }
+
     /// The closest instanced triangle hit before `t_max`, with box tests as wide as `lanes`,
     /// out of line but compiled for the instruction set of `lanes` ([`Lanes::out_of_line`]): a
     /// scene without instances pays only for the emptiness test.
     #[inline(always)]
-    pub fn intersect<W: Lanes>(&self, lanes: W, ray: &Ray, t_max: f32) -> Option<InstanceHit> {
+    pub fn intersect_with<W: Lanes>(&self, lanes: W, ray: &Ray, t_max: f32) -> Option<InstanceHit> {
         if self.instances.is_empty() {
             return None;
         }
@@ -314,9 +326,9 @@ impl InstanceSet {
     }
 
     /// Whether any instance blocks `ray` before `t_max` (out of line, as
-    /// [`InstanceSet::intersect`]).
+    /// [`InstanceSet::intersect_with`]).
     #[inline(always)]
-    pub fn occluded<W: Lanes>(&self, lanes: W, ray: &Ray, t_max: f32) -> bool {
+    pub fn occluded_with<W: Lanes>(&self, lanes: W, ray: &Ray, t_max: f32) -> bool {
         if self.instances.is_empty() {
             return false;
         }
@@ -450,7 +462,6 @@ impl InstanceSet {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cpu::Sse;
     use crate::shading::rng::Rng;
 
     fn grid_mesh(n: usize) -> MeshData {
@@ -528,7 +539,7 @@ mod tests {
                     intersect_triangle(&q, *a, *b, *c, f32::INFINITY).map(|h| (h.t, *k))
                 })
                 .min_by(|x, y| x.0.total_cmp(&y.0));
-            let fast = set.intersect(Sse, &ray, f32::INFINITY);
+            let fast = set.intersect(&ray, f32::INFINITY);
             match (brute, fast) {
                 (None, None) => {}
                 (Some((t, owner)), Some(h)) => {
@@ -543,7 +554,7 @@ mod tests {
                             .max_element()
                             > 0.0
                     );
-                    assert!(set.occluded(Sse, &ray, f32::INFINITY));
+                    assert!(set.occluded(&ray, f32::INFINITY));
                 }
                 // A ray grazing an edge may round differently in object space; allow a few.
                 _ => mismatches += 1,

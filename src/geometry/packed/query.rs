@@ -120,7 +120,7 @@ impl<L: Layout> Geometry<L> {
                 best = Some(Hit::at(HitKind::Plane, i, t));
             }
         }
-        if let Some(h) = self.instances.intersect(lanes, ray, t_best) {
+        if let Some(h) = self.instances.intersect_with(lanes, ray, t_best) {
             best = Some(Hit {
                 t: h.t,
                 kind: HitKind::Instance {
@@ -169,7 +169,7 @@ impl<L: Layout> Geometry<L> {
                 .planes
                 .iter()
                 .any(|pl| intersect_plane(ray, pl.point, pl.normal, t_max).is_some())
-            || self.instances.occluded(lanes, ray, t_max)
+            || self.instances.occluded_with(lanes, ray, t_max)
     }
 
     /// The closest hit by testing every primitive with the scalar reference kernels, without
