@@ -348,7 +348,8 @@ fn light_selection_frequencies_match_the_power_shares_of_a_hundred_thousand_emit
         chi2 < dof + 5.0 * (2.0 * dof).sqrt(),
         "χ² = {chi2} for {dof} degrees of freedom"
     );
-    // The estimator divides by the table's probability, which is the power share to 2⁻²⁴.
+    // The estimator divides by the table's probability, which is the power share to 2⁻²⁴ (one
+    // mesh lamp is one light: within it selection goes by power).
     for (k, area) in area_of_slot.iter().enumerate() {
         let pmf = f64::from(set.selection_pmf(k));
         assert!(

@@ -3,9 +3,9 @@
 //! Every sphere and triangle whose material emits ([`crate::shading::material::Material::emission`])
 //! is an area light ([`area`]), and so is every triangle of an emissive instanced mesh (placed
 //! through its instance transform, with its area in world space); the distant lights of the
-//! scene's sky ([`distant`]) follow them in the table. One is chosen with probability
-//! proportional to its power ([`table`]: area × intensity × mean emitted colour for an area
-//! light, what the scene receives for a distant one), then a point on it or a direction towards
+//! scene's sky ([`distant`]) follow them in the table. One is chosen half by power, half evenly
+//! over the scene's lights ([`table`]; power is area × intensity × mean emitted colour for an
+//! area light, what the scene receives for a distant one), then a point on it or a direction towards
 //! it. [`LightSet::sample`] and [`LightSet::pdf`] decide an area light's strategy by the same
 //! rule, so the density a BSDF-sampled hit is weighted with is the one the light sample would
 //! have had. Infinite planes are never light-sampled: their emission is only found by BSDF
@@ -25,7 +25,7 @@ use crate::sky::Sky;
 
 use area::{Emitter, LightSample, radiance_scale};
 use distant::{DistantLight, DistantSample};
-use table::PowerTable;
+use table::{SelectionTable, mixed_weights};
 
 /// Marks a primitive slot that is not an emitter.
 const NONE: u32 = u32::MAX;
@@ -43,8 +43,8 @@ pub enum Sampled {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LightSet {
     emitters: Vec<Emitter>,
-    /// Selection by power: the emitters, then the distant lights.
-    table: PowerTable,
+    /// Selection ([`table`]): the emitters, then the distant lights.
+    table: SelectionTable,
     /// Emitter index per sphere slot, or `NONE`.
     sphere_emitter: Vec<u32>,
     /// Emitter index per triangle slot, or `NONE`.
@@ -87,9 +87,22 @@ impl LightSet {
             ..Self::default()
         };
         let mut powers: Vec<f64> = Vec::new();
-        // Adds an emitter, returning its index.
-        let mut add = |set: &mut Self, emitter: Emitter, power: f32| {
+        // The light (a dense index) each emitter belongs to: one per emitting owner.
+        let mut light_of: Vec<usize> = Vec::new();
+        let mut light_of_owner: Vec<usize> = vec![usize::MAX; owner_material.len()];
+        let mut lights = 0usize;
+        let mut light_index = |owner: u32| {
+            let slot = &mut light_of_owner[owner as usize];
+            if *slot == usize::MAX {
+                *slot = lights;
+                lights += 1;
+            }
+            *slot
+        };
+        // Adds an emitter of `owner`, returning its index.
+        let mut add = |set: &mut Self, emitter: Emitter, power: f32, owner: u32| {
             powers.push(f64::from(emitter.area()) * f64::from(power));
+            light_of.push(light_index(owner));
             set.emitters.push(emitter);
             (set.emitters.len() - 1) as u32
         };
@@ -97,14 +110,14 @@ impl LightSet {
             if let Some((material, power)) = power_of(owner) {
                 let (c, r) = geometry.spheres.get(i);
                 let emitter = Emitter::sphere(i, c, r, material);
-                set.sphere_emitter[i] = add(&mut set, emitter, power);
+                set.sphere_emitter[i] = add(&mut set, emitter, power, owner);
             }
         }
         for (i, &owner) in geometry.triangle_owner.iter().enumerate() {
             if let Some((material, power)) = power_of(owner) {
                 let v = geometry.triangles.get(i);
                 let emitter = Emitter::triangle(HitKind::Triangle, i, v, material);
-                set.triangle_emitter[i] = add(&mut set, emitter, power);
+                set.triangle_emitter[i] = add(&mut set, emitter, power, owner);
             }
         }
         for i in 0..geometry.instances.len() {
@@ -118,7 +131,12 @@ impl LightSet {
             for t in 0..inst.blas.len() as u32 {
                 let v = geometry.instances.world_triangle(i as u32, t);
                 let kind = HitKind::Instance { triangle: t };
-                add(&mut set, Emitter::triangle(kind, i, v, material), power);
+                add(
+                    &mut set,
+                    Emitter::triangle(kind, i, v, material),
+                    power,
+                    inst.owner,
+                );
             }
         }
         let distant = distant::lights_of(sky);
@@ -127,10 +145,14 @@ impl LightSet {
                 let r = 0.5 * (hi - lo).length();
                 if r > 0.0 && r.is_finite() { r } else { 1.0 }
             });
-            powers.extend(distant.iter().map(|light| f64::from(light.power(radius))));
+            for light in &distant {
+                powers.push(f64::from(light.power(radius)));
+                light_of.push(lights);
+                lights += 1;
+            }
         }
         set.distant = distant;
-        set.table = PowerTable::new(&powers);
+        set.table = SelectionTable::new(&mixed_weights(&powers, &light_of));
         if set.table.is_empty() {
             // Emitters with zero power (or none at all): nothing worth sampling.
             return Self {
@@ -285,9 +307,10 @@ mod tests {
     }
 
     #[test]
-    fn selection_is_proportional_to_power_and_pdfs_integrate_to_one() {
-        // A unit-area square (two triangles) of intensity 1 and a sphere of area 4π·0.25 = π
-        // of intensity 2: powers 1 and 2π.
+    fn selection_mixes_power_and_lights_and_pdfs_integrate_to_one() {
+        // A unit-area square (two triangles, one light) of intensity 1 and a sphere of area
+        // 4π·0.25 = π of intensity 2: powers 1 and 2π. Half the selection goes by power, half
+        // evenly to the two lights (the square's half split between its triangles by area).
         let sq = |p: [Vec3; 3]| Primitive::Triangle {
             p,
             uv: [Vec2::ZERO; 3],
@@ -317,14 +340,15 @@ mod tests {
         let set = LightSet::build(&g, &materials, &[0, 1, 2]);
         assert_eq!(set.len(), 3);
         let total = 1.0 + 2.0 * std::f32::consts::PI;
-        // Selection probabilities (spheres first, then triangles) are the power shares and
-        // sum to 1.
+        // Selection probabilities (spheres first, then triangles) sum to 1.
         let pmf: Vec<f32> = (0..3).map(|k| set.selection_pmf(k)).collect();
         assert!(
-            (pmf[0] - 2.0 * std::f32::consts::PI / total).abs() < 1e-6,
+            (pmf[0] - (0.5 * 2.0 * std::f32::consts::PI / total + 0.25)).abs() < 1e-6,
             "{pmf:?}"
         );
-        assert!((pmf[1] + pmf[2] - 1.0 / total).abs() < 1e-6);
+        for triangle in &pmf[1..] {
+            assert!((triangle - (0.25 / total + 0.125)).abs() < 1e-6, "{pmf:?}");
+        }
         assert_eq!(pmf.iter().sum::<f32>(), 1.0);
         let far = Vec3::new(0.0, 0.0, 100.0);
         assert_eq!(
@@ -381,8 +405,8 @@ mod tests {
 
     #[test]
     fn the_point_on_a_rarely_chosen_emitter_takes_its_whole_2d_sample() {
-        // A big lamp and a small triangle 1000 times dimmer, whose count in the selection table is
-        // a few units of 2²⁴. With the point's first coordinate taken from the selection
+        // A lamp of one big sphere and a small triangle, whose count in the selection table is
+        // a few units of 2²⁴ (selection within a light goes by power). With the point's first coordinate taken from the selection
         // number's remainder, that coordinate had only those few values (one value: a single
         // vertex line). From its own dimension, the points cover the triangle uniformly: their
         // mean is the centroid, and the first coordinate of `u` moves them.
@@ -390,13 +414,13 @@ mod tests {
             (
                 0,
                 Primitive::Sphere {
-                    center: Vec3::new(0.0, 0.0, -50.0),
-                    radius: 10.0,
+                    center: Vec3::new(0.0, 0.0, -500.0),
+                    radius: 100.0,
                     frame: glam::Mat3::IDENTITY,
                 },
             ),
             (
-                1,
+                0,
                 Primitive::Triangle {
                     p: [
                         Vec3::ZERO,
@@ -408,7 +432,7 @@ mod tests {
             ),
         ];
         let g = Geometry::build(&prims);
-        let set = LightSet::build(&g, &[light(1.0), light(1e-3)], &[0, 1]);
+        let set = LightSet::build(&g, &[light(1.0)], &[0]);
         // The triangle's share of the selection numbers: at the top of [0, 1).
         let dim = 1.0 - set.selection_pmf(1) * 0.5;
         assert!(set.selection_pmf(1) > 0.0 && set.selection_pmf(1) < 1e-5);
