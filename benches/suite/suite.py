@@ -119,14 +119,14 @@ def rondo_render(rondo, scene, spp, size, seed, out, threads, denoise=False):
 
 
 def own_references(args, name, scene, export, work, size, mi):
-    """Converged images of rondo and Cycles at the reference's spp (kept like it), for a scene
-    of OWN_REFERENCE."""
+    """Converged images of rondo and Cycles at the reference's spp, for a scene of
+    OWN_REFERENCE. Cycles' is kept like Mitsuba's; rondo's is made on every run, by the rondo
+    under test (a kept one would be stale after a change of its materials)."""
     refs = {}
     tag = "%dx%d_%d.exr" % (size + (args.reference_spp,))
     path = os.path.join(work, "rondo_reference_" + tag)
-    if not os.path.isfile(path):
-        r = rondo_render(args.rondo, scene, args.reference_spp, size, 20_000, path, args.threads)
-        print("  rondo reference %d spp, %.1f s" % (args.reference_spp, r["t"]), flush=True)
+    r = rondo_render(args.rondo, scene, args.reference_spp, size, 20_000, path, args.threads)
+    print("  rondo reference %d spp, %.1f s" % (args.reference_spp, r["t"]), flush=True)
     refs["rondo"] = read_exr(mi, path)
     if not args.no_cycles:
         path = os.path.join(work, "cycles_reference_" + tag)
