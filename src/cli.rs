@@ -1,7 +1,9 @@
 //! What the `rondo` binary needs besides parsing its arguments: checks that output paths can be
-//! written, made before any work is done for them, the text of an error, and the exit codes.
+//! written, made before any work is done for them, the text of an error, the exit codes, and
+//! printing to standard output without panicking when its reader has gone.
 
 use std::error::Error;
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 /// Exit status of a run that failed on its input: a scene, an image, an output path.
@@ -103,4 +105,26 @@ mod tests {
         let context = anyhow::Error::new(std::io::Error::other("disk full")).context("writing a");
         assert_eq!(error_text(context.as_ref()), "writing a: disk full");
     }
+}
+
+/// Writes `line` and a newline to standard output. `println!` panics when the reader has gone
+/// (`rondo diff a.exr b.exr | head -1`); this returns the error, which [`is_closed_pipe`]
+/// recognises, so the command can stop quietly.
+pub fn print_line(line: impl std::fmt::Display) -> io::Result<()> {
+    writeln!(io::stdout().lock(), "{line}")
+}
+
+/// Whether `e`, or an error that caused it, is a write to a pipe whose reader has gone.
+pub fn is_closed_pipe(e: &(dyn Error + 'static)) -> bool {
+    let mut cause = Some(e);
+    while let Some(err) = cause {
+        if err
+            .downcast_ref::<io::Error>()
+            .is_some_and(|io| io.kind() == io::ErrorKind::BrokenPipe)
+        {
+            return true;
+        }
+        cause = err.source();
+    }
+    false
 }

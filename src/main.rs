@@ -165,13 +165,17 @@ enum FarmCommand {
 }
 
 /// Parses the command line (clap exits with status 2 on a usage error) and runs it; any other
-/// error exits with status 1.
+/// error exits with status 1. Output cut short by its reader (`| head`) ends quietly, status 0.
 fn main() {
     let cli = Cli::parse();
     // SIGINT, SIGTERM or SIGHUP in the middle of a write removes the temporary before exiting.
     let installed = rondo::output_file::remove_temporaries_on_termination()
         .context("cannot install the signal handler");
     if let Err(e) = installed.and_then(|()| run(cli)) {
+        // The reader of the output has all it wanted (`| head`): not a failure.
+        if rondo::cli::is_closed_pipe(e.as_ref()) {
+            return;
+        }
         eprintln!("error: {}", rondo::cli::error_text(e.as_ref()));
         std::process::exit(EXIT_INPUT);
     }

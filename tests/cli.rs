@@ -441,6 +441,37 @@ fn a_missing_diff_input_says_its_cause_once() {
 }
 
 #[test]
+fn output_whose_reader_has_gone_ends_quietly() {
+    // `rondo diff a b | head -0`: the pipe's read end is closed before rondo writes. `println!`
+    // panicked there (status 101, a backtrace on stderr).
+    let dir = temp_dir("cli-closed-pipe");
+    let a = png(&dir, "a.png", [0, 0]);
+    let b = png(&dir, "b.png", [10, 0]);
+    for args in [
+        vec!["diff", text(&a), text(&b)],
+        vec!["check", text(&cornell())],
+    ] {
+        let (reader, writer) = std::io::pipe().expect("pipe");
+        drop(reader);
+        let mut child = Command::new(env!("CARGO_BIN_EXE_rondo"))
+            .args(&args)
+            .stdin(Stdio::null())
+            .stdout(writer)
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start rondo");
+        assert!(
+            wait_or_kill(&mut child, HANG_GUARD).is_some(),
+            "{args:?} hangs"
+        );
+        let out = child.wait_with_output().expect("rondo output");
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {err}");
+        assert!(err.is_empty(), "{args:?}: {err}");
+    }
+}
+
+#[test]
 fn usage_errors_exit_with_status_2_and_input_errors_with_status_1() {
     let dir = temp_dir("cli-codes");
     let scene = cornell();

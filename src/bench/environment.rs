@@ -20,7 +20,7 @@
 //! `/proc/self/status`, the peak reset through `/proc/self/clear_refs`; Linux only, else `—`).
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use crate::scene::assets::AssetCache;
@@ -230,15 +230,15 @@ pub fn markdown(rows: &[Row], width: u32, height: u32, command: &str) -> String 
     s
 }
 
-/// `rondo bench environment`: a line per run on stderr, then the table on stdout; with `out`,
-/// the table is also written to `out/environment.md`.
+/// `rondo bench environment`: a line per run on stderr; returns the table, which with `out`
+/// is also written to `out/environment.md` (returned as the second value).
 pub fn main(
     width: u32,
     height: u32,
     runs: usize,
     out: Option<&Path>,
     command: &str,
-) -> Result<(), String> {
+) -> Result<(String, Option<PathBuf>), String> {
     // A private directory of a fresh, unpredictable name, removed with its contents when
     // dropped.
     let temp = tempfile::Builder::new()
@@ -248,12 +248,14 @@ pub fn main(
     let rows = run(width, height, runs, temp.path(), |line| eprintln!("{line}"))?;
     drop(temp);
     let table = markdown(&rows, width, height, command);
-    println!("{table}");
-    if let Some(dir) = out {
-        let path = dir.join("environment.md");
-        crate::output_file::write_bytes(&path, table.as_bytes())
-            .map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
-        println!("wrote {}", path.display());
-    }
-    Ok(())
+    let written = match out {
+        Some(dir) => {
+            let path = dir.join("environment.md");
+            crate::output_file::write_bytes(&path, table.as_bytes())
+                .map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
+            Some(path)
+        }
+        None => None,
+    };
+    Ok((table, written))
 }

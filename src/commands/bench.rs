@@ -1,6 +1,7 @@
 //! `rondo bench …`: the benchmark drivers (layout, instances, render, watch, load, accuracy,
 //! environment).
 
+use rondo::cli::print_line;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -29,10 +30,10 @@ pub fn layout(
     options.command = std::env::args().collect::<Vec<_>>().join(" ");
     options.workloads = workloads;
     layout::run(&options).with_context(|| format!("{}", options.out.display()))?;
-    println!(
+    print_line(format_args!(
         "wrote {}/layout.csv, layout.md and layout.svg",
         options.out.display()
-    );
+    ))?;
     Ok(())
 }
 
@@ -42,7 +43,13 @@ pub fn environment(width: u32, height: u32, runs: usize, out: Option<&Path>) -> 
         check_output_dir(dir)?;
     }
     let command = std::env::args().collect::<Vec<_>>().join(" ");
-    rondo::bench::environment::main(width, height, runs, out, &command).map_err(anyhow::Error::msg)
+    let (table, written) = rondo::bench::environment::main(width, height, runs, out, &command)
+        .map_err(anyhow::Error::msg)?;
+    print_line(table)?;
+    if let Some(path) = written {
+        print_line(format_args!("wrote {}", path.display()))?;
+    }
+    Ok(())
 }
 
 /// `rondo bench instances`: one child process per count, so each reports its own peak memory.
@@ -55,11 +62,11 @@ pub fn instances(
     use rondo::bench::instances;
     if let Some(count) = single {
         let run = instances::measure(mesh, count, !flatten).map_err(anyhow::Error::msg)?;
-        println!("{}", instances::csv_line(&run));
+        print_line(instances::csv_line(&run))?;
         return Ok(());
     }
     let exe = std::env::current_exe().context("locating the rondo binary")?;
-    println!("{}", instances::CSV_HEADER);
+    print_line(instances::CSV_HEADER)?;
     for &count in counts {
         let mut cmd = std::process::Command::new(&exe);
         cmd.args(["bench", "instances", "--mesh"])
@@ -80,7 +87,7 @@ pub fn instances(
         let line = text.lines().last().unwrap_or_default();
         instances::parse_csv_line(line)
             .with_context(|| format!("unexpected child output {line:?}"))?;
-        println!("{line}");
+        print_line(format_args!("{line}"))?;
     }
     Ok(())
 }
@@ -100,7 +107,7 @@ pub fn render(scene: &Path, runs: usize, options: &RenderArgs) -> Result<()> {
     }
     times.sort();
     let (wall, rays) = times[times.len() / 2];
-    println!("median: {}", summary_from(&r, wall, rays));
+    print_line(format_args!("median: {}", summary_from(&r, wall, rays)))?;
     Ok(())
 }
 
@@ -209,20 +216,20 @@ pub fn watch(
         let ms = |d: Duration| d.as_secs_f64() * 1e3;
         format!("{:8.1} ms (min {:8.1})", ms(median), ms(min))
     };
-    println!(
+    print_line(format_args!(
         "watch latency, save -> image written, {} (loaded when the save completes, else after {} ms quiet; first pass {first_spp} spp), median of {} edits:",
         scene.display(),
         rondo::watch::DEBOUNCE.as_millis(),
         runs.max(1)
-    );
+    ))?;
     for t in timings {
-        println!(
+        print_line(format_args!(
             "  {:<15} edit: first image {}, full quality {}  ({})",
             t.kind.name(),
             stats(&t.first_image),
             stats(&t.full),
             t.target
-        );
+        ))?;
     }
     Ok(())
 }
@@ -258,12 +265,12 @@ pub fn load(kinds: &[String], sizes: &[usize], with_load: bool, watch: &WatchTab
             );
             interrupt.check()
         });
-        println!("{}", load::markdown(&rows.map_err(anyhow::Error::msg)?));
+        print_line(load::markdown(&rows.map_err(anyhow::Error::msg)?))?;
     }
     if !watch.sizes.is_empty() {
         let rows = load_watch_table::watch_rows(watch, &temp.path().join("watch"), &interrupt)
             .map_err(anyhow::Error::msg)?;
-        println!("{}", load_watch_table::watch_markdown(&rows, watch.edits));
+        print_line(load_watch_table::watch_markdown(&rows, watch.edits))?;
     }
     Ok(())
 }
@@ -292,8 +299,8 @@ pub fn accuracy(options: &rondo::bench::accuracy::AccuracyOptions) -> Result<()>
             r.lamp_out_rmse
         );
     })?;
-    println!("{}", rondo::bench::accuracy::summary_markdown(&report));
-    println!(
+    print_line(rondo::bench::accuracy::summary_markdown(&report))?;
+    print_line(format_args!(
         "wrote {}/accuracy.csv, accuracy.svg, accuracy_relative.svg, accuracy_lamp_out.svg, summary.md{}",
         options.out.display(),
         options
@@ -303,6 +310,6 @@ pub fn accuracy(options: &rondo::bench::accuracy::AccuracyOptions) -> Result<()>
                 " and the images in {}",
                 d.display()
             ))
-    );
+    ))?;
     Ok(())
 }

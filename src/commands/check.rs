@@ -1,5 +1,6 @@
 //! `rondo check`: a scene's load errors and warnings.
 
+use rondo::cli::print_line;
 use std::path::Path;
 
 use anyhow::Result;
@@ -10,15 +11,15 @@ pub fn run(scene: &Path) -> Result<()> {
         rondo::scene::load::load_scene(scene, &mut rondo::scene::assets::AssetCache::default())?;
     let warnings = rondo::scene::check::check_scene(&loaded);
     for w in &loaded.warnings {
-        println!("warning: {w}");
+        print_line(format_args!("warning: {w}"))?;
     }
     for w in &warnings {
-        println!("warning: {w}");
+        print_line(format_args!("warning: {w}"))?;
     }
     match warnings.len() + loaded.warnings.len() {
-        0 => println!("{}: no warnings", scene.display()),
-        1 => println!("{}: 1 warning", scene.display()),
-        n => println!("{}: {n} warnings", scene.display()),
+        0 => print_line(format_args!("{}: no warnings", scene.display()))?,
+        1 => print_line(format_args!("{}: 1 warning", scene.display()))?,
+        n => print_line(format_args!("{}: {n} warnings", scene.display()))?,
     }
     Ok(())
 }

@@ -1,5 +1,6 @@
 //! `rondo export`: a scene written for other renderers (`rondo::export`).
 
+use rondo::cli::print_line;
 use std::path::Path;
 
 use anyhow::Result;
@@ -7,7 +8,7 @@ use anyhow::Result;
 /// `rondo export`: writes the scene into `dir` and prints what it wrote.
 pub fn run(scene: &Path, dir: &Path, max_triangles: u64) -> Result<()> {
     let report = rondo::export::export_scene(scene, dir, max_triangles)?;
-    println!(
+    print_line(format_args!(
         "{}: {} triangles ({} mesh placements flattened), {} spheres, {} plane triangles; {} files in {}",
         scene.display(),
         report.triangles,
@@ -16,6 +17,6 @@ pub fn run(scene: &Path, dir: &Path, max_triangles: u64) -> Result<()> {
         report.plane_triangles,
         report.files.len(),
         dir.display()
-    );
+    ))?;
     Ok(())
 }

@@ -1,5 +1,6 @@
 //! `rondo farm slurm`: the scheduler script of a split render.
 
+use rondo::cli::print_line;
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
@@ -32,7 +33,8 @@ pub fn slurm(
     let mut overrides = options.overrides();
     overrides.spp = None;
     job.render_flags = rondo::farm::render_flags(&overrides, options.layout);
-    print!("{}", rondo::farm::slurm_script(&job)?);
+    let script = rondo::farm::slurm_script(&job)?;
+    print_line(script.trim_end_matches('\n'))?;
     eprintln!(
         "{} tasks, {} spp; partials in {}; submit with `sbatch <this script>`",
         job.tasks,
