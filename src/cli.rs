@@ -89,24 +89,6 @@ pub fn error_text(error: &(dyn Error + 'static)) -> String {
     text
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[derive(Debug, thiserror::Error)]
-    #[error("cannot read x.png: {0}")]
-    struct Outer(#[source] std::io::Error);
-
-    #[test]
-    fn a_cause_already_in_the_message_is_not_repeated() {
-        let inner = std::io::Error::other("no such file");
-        let e = Outer(inner);
-        assert_eq!(error_text(&e), "cannot read x.png: no such file");
-        let context = anyhow::Error::new(std::io::Error::other("disk full")).context("writing a");
-        assert_eq!(error_text(context.as_ref()), "writing a: disk full");
-    }
-}
-
 /// Writes `line` and a newline to standard output. `println!` panics when the reader has gone
 /// (`rondo diff a.exr b.exr | head -1`); this returns the error, which [`is_closed_pipe`]
 /// recognises, so the command can stop quietly.
@@ -127,4 +109,22 @@ pub fn is_closed_pipe(e: &(dyn Error + 'static)) -> bool {
         cause = err.source();
     }
     false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("cannot read x.png: {0}")]
+    struct Outer(#[source] std::io::Error);
+
+    #[test]
+    fn a_cause_already_in_the_message_is_not_repeated() {
+        let inner = std::io::Error::other("no such file");
+        let e = Outer(inner);
+        assert_eq!(error_text(&e), "cannot read x.png: no such file");
+        let context = anyhow::Error::new(std::io::Error::other("disk full")).context("writing a");
+        assert_eq!(error_text(context.as_ref()), "writing a: disk full");
+    }
 }
