@@ -15,12 +15,13 @@
 //! ratio (exactly the albedo for a diffuse surface) and next-event estimation and MIS use the
 //! very density sampled from.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use super::conductor::Conductor;
 use super::dielectric::Dielectric;
 use super::diffuse::Diffuse;
 use super::emission::Emission;
+use super::texture::TexCoords;
 use super::fuzzed::Fuzzed;
 use super::pbr::Pbr;
 use super::sampler::Sampler;
@@ -124,7 +125,7 @@ pub struct Bsdf<'a> {
     /// Unit normal the lobe shades with.
     ns: Vec3,
     /// Texture coordinates, for the emission.
-    uv: Vec2,
+    uv: TexCoords,
     samples_lights: bool,
     emission: Option<Emission<'a>>,
 }
@@ -138,7 +139,7 @@ impl<'a> Bsdf<'a> {
         lobe: Lobe,
         d: Vec3,
         (n, ns): (Vec3, Vec3),
-        uv: Vec2,
+        uv: TexCoords,
         samples_lights: bool,
         emission: Option<Emission<'a>>,
     ) -> Self {

@@ -34,6 +34,8 @@ mod buffers;
 mod data;
 mod material;
 mod nodes;
+mod texture_transform;
+mod uv_sets;
 
 pub use self::accessors::assemble;
 use self::accessors::{Budget, read_primitive, view_shared};
@@ -42,6 +44,7 @@ use self::material::read_material;
 use self::nodes::walk;
 
 pub use self::buffers::{MAX_BUFFER_BYTES, relative_uri};
+pub use self::uv_sets::MAX_UV_SETS;
 pub use self::data::{
     AlphaMode, GltfImage, GltfMaterial, GltfMesh, GltfNode, GltfPrimitive, GltfScene, GltfTexture,
     MAX_NODE_DEPTH, MAX_NODE_INSTANCES, MAX_TRIANGLES, MAX_VERTICES, MAX_ZERO_FILLED, SharedBytes,
@@ -106,6 +109,20 @@ fn read(
         held_bytes,
         ..GltfScene::default()
     };
+    for m in doc.materials() {
+        scene.materials.push(read_material(&m)?);
+    }
+    for (i, m) in scene.materials.iter().enumerate() {
+        let sets = m.uv_sets();
+        if sets.len() > MAX_UV_SETS {
+            let name = m.name.as_deref().map_or(String::new(), |n| format!(" \"{n}\""));
+            scene.warnings.push(format!(
+                "material{name} (materials[{i}]) reads texture coordinate sets {sets:?}; only the first {MAX_UV_SETS} are carried, so its textures on TEXCOORD_{} read set {}",
+                sets[MAX_UV_SETS..].iter().map(u32::to_string).collect::<Vec<_>>().join(", TEXCOORD_"),
+                sets[0]
+            ));
+        }
+    }
     let mut budget = Budget {
         vertices: MAX_VERTICES,
         triangles: MAX_TRIANGLES,
@@ -128,8 +145,14 @@ fn read(
                     .warnings
                     .push(format!("{what}: morph targets are ignored"));
             }
-            let data =
-                read_primitive(&prim, &buffers, &mut budget).map_err(|e| format!("{what}: {e}"))?;
+            let sets = prim
+                .material()
+                .index()
+                .and_then(|m| scene.materials.get(m))
+                .map_or_else(Vec::new, |m| m.uv_sets());
+            let sets = &sets[..sets.len().min(MAX_UV_SETS)];
+            let data = read_primitive(&prim, sets, &buffers, &mut budget)
+                .map_err(|e| format!("{what}: {e}"))?;
             primitives.push(GltfPrimitive {
                 data: Arc::new(data),
                 material: prim.material().index(),
@@ -168,9 +191,6 @@ fn read(
         });
     }
     detach_images(&mut scene.images);
-    for m in doc.materials() {
-        scene.materials.push(read_material(&m)?);
-    }
     if doc.cameras().next().is_some() {
         scene
             .warnings
