@@ -420,7 +420,14 @@ fn direct_light<L: Layout, W: Lanes>(
                 #[inline(always)]
                 |lanes| {
                     let transparency = TRANSPARENCY_DIMENSION + 2 * bounce + 1;
-                    first_present(lanes, view, &mut shadow_ray, end, (sampler, transparency), stats)
+                    first_present(
+                        lanes,
+                        view,
+                        &mut shadow_ray,
+                        end,
+                        (sampler, transparency),
+                        stats,
+                    )
                 },
             )
             .is_some()

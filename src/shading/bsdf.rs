@@ -21,12 +21,12 @@ use super::conductor::Conductor;
 use super::dielectric::Dielectric;
 use super::diffuse::Diffuse;
 use super::emission::Emission;
-use super::texture::TexCoords;
 use super::fuzzed::Fuzzed;
 use super::pbr::Pbr;
 use super::sampler::Sampler;
 use super::sampling::reflect;
 use super::scatter::Scatter;
+use super::texture::TexCoords;
 
 /// The scattering part of a BSDF at one point: one lobe, its textures already looked up.
 #[derive(Clone, Copy, Debug, PartialEq)]

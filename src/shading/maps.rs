@@ -27,7 +27,14 @@ impl NormalMap {
     /// normals do; `ns` itself comes back when the frame or the result is degenerate (zero, or
     /// in the surface's plane) or not finite.
     #[inline]
-    pub fn perturb(&self, uv: impl Into<TexCoords>, n: Vec3, ns: Vec3, tangent: Vec3, sign: f32) -> Vec3 {
+    pub fn perturb(
+        &self,
+        uv: impl Into<TexCoords>,
+        n: Vec3,
+        ns: Vec3,
+        tangent: Vec3,
+        sign: f32,
+    ) -> Vec3 {
         let Some(t) = (tangent - ns * ns.dot(tangent)).try_normalize() else {
             return ns;
         };

@@ -133,8 +133,16 @@ pub(super) fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> 
     };
     let ext = texture_transform::NAME;
     let textured = |field: &str, t: Option<gltf::texture::Info>| {
-        t.map(|t| info(&what, field, &t.texture(), t.tex_coord(), t.extension_value(ext)))
-            .transpose()
+        t.map(|t| {
+            info(
+                &what,
+                field,
+                &t.texture(),
+                t.tex_coord(),
+                t.extension_value(ext),
+            )
+        })
+        .transpose()
     };
     Ok(GltfMaterial {
         base_color_factor: pbr.base_color_factor(),

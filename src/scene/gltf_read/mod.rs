@@ -32,9 +32,11 @@ use gltf::mesh::Mode;
 mod accessors;
 mod buffers;
 mod data;
+mod instancing;
 mod material;
 mod nodes;
 mod texture_transform;
+mod unsupported;
 mod uv_sets;
 
 pub use self::accessors::assemble;
@@ -44,19 +46,21 @@ use self::material::read_material;
 use self::nodes::walk;
 
 pub use self::buffers::{MAX_BUFFER_BYTES, relative_uri};
-pub use self::uv_sets::MAX_UV_SETS;
 pub use self::data::{
     AlphaMode, GltfImage, GltfMaterial, GltfMesh, GltfNode, GltfPrimitive, GltfScene, GltfTexture,
     MAX_NODE_DEPTH, MAX_NODE_INSTANCES, MAX_TRIANGLES, MAX_VERTICES, MAX_ZERO_FILLED, SharedBytes,
     Wrap,
 };
+pub use self::uv_sets::MAX_UV_SETS;
 
 /// Extensions that may appear in `extensionsRequired`.
 const SUPPORTED_REQUIRED: &[&str] = &[
+    "EXT_mesh_gpu_instancing",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_transmission",
     "KHR_mesh_quantization",
+    "KHR_texture_transform",
 ];
 
 /// Reads a glTF file from its `bytes` (`.gltf` JSON or `.glb`); `path` names it in errors.
@@ -115,7 +119,10 @@ fn read(
     for (i, m) in scene.materials.iter().enumerate() {
         let sets = m.uv_sets();
         if sets.len() > MAX_UV_SETS {
-            let name = m.name.as_deref().map_or(String::new(), |n| format!(" \"{n}\""));
+            let name = m
+                .name
+                .as_deref()
+                .map_or(String::new(), |n| format!(" \"{n}\""));
             scene.warnings.push(format!(
                 "material{name} (materials[{i}]) reads texture coordinate sets {sets:?}; only the first {MAX_UV_SETS} are carried, so its textures on TEXCOORD_{} read set {}",
                 sets[MAX_UV_SETS..].iter().map(u32::to_string).collect::<Vec<_>>().join(", TEXCOORD_"),
@@ -198,10 +205,7 @@ fn read(
     }
     for ext in doc.extensions_used() {
         if !SUPPORTED_REQUIRED.contains(&ext) {
-            scene.warnings.push(match ext {
-                "KHR_lights_punctual" => "punctual lights (KHR_lights_punctual) are ignored".into(),
-                other => format!("extension {other} is ignored"),
-            });
+            scene.warnings.push(unsupported::warning(ext));
         }
     }
     let roots = doc.default_scene().or_else(|| doc.scenes().next());
@@ -210,6 +214,7 @@ fn read(
             walk(&node, Affine3A::IDENTITY, 0, &mut scene)?;
         }
     }
+    instancing::expand(doc, &buffers, &mut scene)?;
     Ok(scene)
 }
 

@@ -40,7 +40,10 @@ pub(super) fn to_rondo_space(m: Affine2) -> Affine2 {
 
 /// The transform of a texture reference from the value of its `KHR_texture_transform`
 /// extension (`None`: the reference has none). `what` names the reference in errors.
-pub(super) fn read(ext: Option<&Value>, what: &dyn Fn() -> String) -> Result<Option<Transform>, String> {
+pub(super) fn read(
+    ext: Option<&Value>,
+    what: &dyn Fn() -> String,
+) -> Result<Option<Transform>, String> {
     let Some(ext) = ext else {
         return Ok(None);
     };
@@ -128,6 +131,9 @@ mod tests {
         let e = err(serde_json::json!({"scale": [1]}));
         assert!(e.contains("KHR_texture_transform.scale"), "{e}");
         let ok = read(Some(&serde_json::json!({"texCoord": 1})), &what).expect("read");
-        assert_eq!(ok.map(|t| (t.matrix, t.texcoord)), Some((Affine2::IDENTITY, Some(1))));
+        assert_eq!(
+            ok.map(|t| (t.matrix, t.texcoord)),
+            Some((Affine2::IDENTITY, Some(1)))
+        );
     }
 }

@@ -18,7 +18,10 @@ impl GltfMaterial {
                 "metallicRoughnessTexture",
                 self.metallic_roughness_texture.as_ref(),
             ),
-            ("normalTexture", self.normal_texture.as_ref().map(|(t, _)| t)),
+            (
+                "normalTexture",
+                self.normal_texture.as_ref().map(|(t, _)| t),
+            ),
             ("emissiveTexture", self.emissive_texture.as_ref()),
         ]
         .into_iter()
