@@ -435,6 +435,72 @@ fn a_blended_surface_passes_one_minus_alpha_of_the_light_behind_it() {
 }
 
 #[test]
+fn shadow_rays_pass_a_blended_surface_with_probability_one_minus_alpha() {
+    // A white floor lit by a lamp above, a black veil of alpha 0.4 between them, the camera
+    // under the veil: at depth 2 the floor sees only the lamp's direct light, all of it through
+    // the veil (shadow rays and, under MIS, bounce rays), so the floor's radiance with the veil
+    // is 1 − alpha times that without it.
+    let dir = temp_dir("gltf-ext-shadow");
+    let alpha = 0.4;
+    let mut bin = Bin::default();
+    let v = bin.f32s(&[
+        -1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 1.0, 1.0, 0.0, -1.0, 1.0, 0.0,
+    ]);
+    let i = bin.u16s(&[0, 1, 2, 0, 2, 3]);
+    let file = doc(
+        &bin,
+        json!({
+            "accessors": [
+                {"bufferView": v, "componentType": 5126, "count": 4, "type": "VEC3"},
+                {"bufferView": i, "componentType": 5123, "count": 6, "type": "SCALAR"},
+            ],
+            "materials": [{"name": "veil", "alphaMode": "BLEND",
+                "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, alpha], "metallicFactor": 0.0}}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+            "nodes": [{"name": "veil", "mesh": 0, "scale": [6.0, 6.0, 1.0]}],
+            "scenes": [{"nodes": [0]}],
+        }),
+    );
+    std::fs::write(dir.join("veil.gltf"), file.to_string()).expect("write");
+    for method in ["Nee", "Mis"] {
+        let estimate = |veil: bool| {
+            let veil = if veil {
+                r#"Entity(name: "v", gltf: "veil.gltf", transform: Transform(translate: (0, 0, 1))),"#
+            } else {
+                ""
+            };
+            let path = write_scene(
+                &dir,
+                &format!("{method}-{}.ron", !veil.is_empty()),
+                &format!(
+                    r#"Scene(
+    camera: {},
+    settings: Settings(width: 32, height: 32, spp: 64, max_depth: 2, method: {method}, sampler: Independent),
+    materials: {{ "lamp": Light(emit: Constant((1, 1, 1))), "floor": Diffuse(albedo: Constant((1, 1, 1))) }},
+    entities: [
+        {veil}
+        Entity(material: "floor", shape: Quad(a: (-4, -4, 0), b: (4, -4, 0), c: (4, 4, 0), d: (-4, 4, 0))),
+        Entity(material: "lamp", shape: Quad(a: (-1, -1, 2), b: (-1, 1, 2), c: (1, 1, 2), d: (1, -1, 2))),
+    ],
+)"#,
+                    point_camera("(0, 0, 0.5)", "(0, 0, 0)", "(0, 1, 0)")
+                ),
+            );
+            point_estimate(&render(&path, Overrides::default(), None))
+        };
+        let ((with, se_with), (without, se_without)) = (estimate(true), estimate(false));
+        let ratio = with / without;
+        let se = ratio * ((se_with / with).powi(2) + (se_without / without).powi(2)).sqrt();
+        let expected = 1.0 - f64::from(alpha);
+        assert!(se < 0.02, "{method}: se {se}");
+        assert!(
+            within(ratio, se, expected, 3.0),
+            "{method}: {ratio} ± {se} against {expected}"
+        );
+    }
+}
+
+#[test]
 fn unsupported_extensions_warn_what_will_look_wrong() {
     let dir = temp_dir("gltf-ext-warn");
     let material = json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}});

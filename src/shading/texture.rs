@@ -468,6 +468,37 @@ mod tests {
     }
 
     #[test]
+    fn a_mapped_texture_reads_its_set_through_its_transform() {
+        // Grey 0, 1 / 2, 3 (top row first), nearest and clamped.
+        let image = Texture::Image(Arc::new(grey_2x2()), Sampling::default());
+        let uv = TexCoords([Vec2::new(0.25, 0.75), Vec2::new(0.75, 0.25)]);
+        let set = |set| {
+            Texture::Mapped(
+                Box::new(image.clone()),
+                UvMap {
+                    set,
+                    transform: None,
+                },
+            )
+        };
+        // Unmapped and set 0 read the first set (top left, 0); set 1 the second (bottom right, 3).
+        assert_eq!(image.eval(uv).x, 0.0);
+        assert_eq!(set(0).eval(uv).x, 0.0);
+        assert_eq!(set(1).eval(uv).x, 3.0);
+        // A shift by +0.5 in u moves the first set's point to the top right texel (1).
+        let shifted = Texture::Mapped(
+            Box::new(image.clone()),
+            UvMap {
+                set: 0,
+                transform: Some(glam::Affine2::from_translation(Vec2::new(0.5, 0.0))),
+            },
+        );
+        assert_eq!(shifted.eval(uv).x, 1.0);
+        // A single set stands for both.
+        assert_eq!(set(1).eval(Vec2::new(0.25, 0.25)).x, 2.0);
+    }
+
+    #[test]
     fn checker_alternates_by_the_sign_of_the_sine_product() {
         let t = Texture::Checker {
             scale: std::f32::consts::PI,

@@ -10,14 +10,18 @@
 //! buffers and images name it, and all of them together are bounded by [`MAX_BUFFER_BYTES`].
 //!
 //! Supported: triangles (indexed or not; strips and fans converted), `POSITION`, `NORMAL` (flat
-//! shading when absent: [`MeshData::normals`](crate::model::MeshData::normals) is `None`), `TEXCOORD_0` (float or normalised
-//! integers; stored as `(u, 1 − v)`, rondo's v pointing up the image), sparse accessors,
-//! accessors without a buffer view (zeros), TRS and matrix node transforms, the
-//! metallic–roughness material with its textures, `KHR_materials_emissive_strength`,
-//! `KHR_materials_transmission`, `KHR_materials_ior` and `KHR_mesh_quantization`. Skipped with a
-//! warning: points and lines, morph targets, skins, cameras, punctual lights. Ignored:
-//! animations, vertex colours, tangents (normal maps derive them from texture coordinates). Any
-//! other extension listed in `extensionsRequired` is an error naming it.
+//! shading when absent: [`MeshData::normals`](crate::model::MeshData::normals) is `None`), the
+//! `TEXCOORD_n` sets the primitive's material reads, at most two (float or normalised integers;
+//! stored as `(u, 1 − v)`, rondo's v pointing up the image; `uv_sets.rs`), sparse accessors,
+//! accessors without a buffer view (zeros), TRS and matrix node transforms,
+//! `EXT_mesh_gpu_instancing` (`instancing.rs`), the metallic–roughness material with its
+//! textures and their `KHR_texture_transform` (`texture_transform.rs`),
+//! `KHR_materials_emissive_strength`, `KHR_materials_transmission`, `KHR_materials_ior` and
+//! `KHR_mesh_quantization`. Skipped with a warning: points and lines, morph targets, skins,
+//! cameras, and every other extension the file uses (the warning says what will look wrong:
+//! `unsupported.rs`). Ignored: animations, vertex colours, tangents (normal maps derive them from
+//! texture coordinates). Any other extension listed in `extensionsRequired` is an error naming
+//! it.
 //!
 //! This file reads the document and assembles the result; the bytes behind it are in
 //! `buffers.rs`, accessors in `accessors.rs`, materials in `material.rs` and the node tree with
