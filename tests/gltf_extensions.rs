@@ -425,7 +425,7 @@ fn a_blended_surface_passes_one_minus_alpha_of_the_light_behind_it() {
         );
         let r = render(&path, Overrides::default(), None);
         let (mean, se) = point_estimate(&r);
-        let expected = 1.0 - f64::from(alpha);
+        let expected = 1.0 - alpha;
         assert!(se > 0.0 && se < 0.01, "{method}: se {se}");
         assert!(
             within(mean, se, expected, 3.0),
@@ -491,7 +491,7 @@ fn shadow_rays_pass_a_blended_surface_with_probability_one_minus_alpha() {
         let ((with, se_with), (without, se_without)) = (estimate(true), estimate(false));
         let ratio = with / without;
         let se = ratio * ((se_with / with).powi(2) + (se_without / without).powi(2)).sqrt();
-        let expected = 1.0 - f64::from(alpha);
+        let expected = 1.0 - alpha;
         assert!(se < 0.02, "{method}: se {se}");
         assert!(
             within(ratio, se, expected, 3.0),

@@ -68,7 +68,7 @@ pub struct AlphaMask {
     /// The image whose alpha channel is read (the base colour texture's), and how.
     pub image: Option<(Arc<ImageTexture>, Sampling)>,
     /// Which coordinates the image is read at (the base colour texture's).
-    pub map: UvMap,
+    pub map: Box<UvMap>,
 }
 
 impl AlphaMask {
@@ -91,8 +91,14 @@ impl AlphaMask {
                     0.0
                 }
             }
-            // `max` first: it turns NaN into 0.
-            None => a.max(0.0).min(1.0),
+            // NaN fails `a > 0`: absent.
+            None => {
+                if a > 0.0 {
+                    a.min(1.0)
+                } else {
+                    0.0
+                }
+            }
         }
     }
 
@@ -102,8 +108,8 @@ impl AlphaMask {
     /// everywhere if `cutoff` ≤ 1).
     pub fn of_base_color(cutoff: f32, base_color: &Texture) -> Self {
         let (texture, map) = match base_color {
-            Texture::Mapped(inner, map) => (&**inner, *map),
-            other => (other, UvMap::default()),
+            Texture::Mapped(inner, map) => (&**inner, map.clone()),
+            other => (other, Box::default()),
         };
         Self {
             cutoff: Some(cutoff),
@@ -145,7 +151,7 @@ mod tests {
             cutoff: Some(cutoff),
             factor,
             image: Some((image.clone(), Sampling::default())),
-            map: UvMap::default(),
+            map: Box::default(),
         };
         let texels = [
             Vec2::new(0.25, 0.75),
@@ -168,7 +174,7 @@ mod tests {
             cutoff: Some(0.5),
             factor,
             image: None,
-            map: UvMap::default(),
+            map: Box::default(),
         };
         assert!(flat(1.0).coverage(Vec2::ZERO) == 1.0 && flat(0.4).coverage(Vec2::ZERO) == 0.0);
     }

@@ -268,8 +268,9 @@ pub enum Texture {
     Image(Arc<ImageTexture>, Sampling),
     /// A texture times a factor per channel (glTF's texture × factor).
     Scaled(Box<Texture>, Vec3),
-    /// A texture read at the coordinates a [`UvMap`] gives (another set, a transform).
-    Mapped(Box<Texture>, UvMap),
+    /// A texture read at the coordinates a [`UvMap`] gives (another set, a transform); boxed, as
+    /// the map is larger than every other variant.
+    Mapped(Box<Texture>, Box<UvMap>),
 }
 
 impl PartialEq for Texture {
@@ -475,10 +476,10 @@ mod tests {
         let set = |set| {
             Texture::Mapped(
                 Box::new(image.clone()),
-                UvMap {
+                Box::new(UvMap {
                     set,
                     transform: None,
-                },
+                }),
             )
         };
         // Unmapped and set 0 read the first set (top left, 0); set 1 the second (bottom right, 3).
@@ -488,10 +489,10 @@ mod tests {
         // A shift by +0.5 in u moves the first set's point to the top right texel (1).
         let shifted = Texture::Mapped(
             Box::new(image.clone()),
-            UvMap {
+            Box::new(UvMap {
                 set: 0,
                 transform: Some(glam::Affine2::from_translation(Vec2::new(0.5, 0.0))),
-            },
+            }),
         );
         assert_eq!(shifted.eval(uv).x, 1.0);
         // A single set stands for both.

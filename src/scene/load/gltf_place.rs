@@ -337,7 +337,7 @@ impl Expander<'_> {
         };
         let (image, map) = match base {
             Some((image, map)) if image.0.has_alpha() => (Some(image), map),
-            _ => (None, UvMap::default()),
+            _ => (None, Box::default()),
         };
         let alpha = cutoff.map(|cutoff| AlphaMask {
             cutoff,
@@ -410,17 +410,17 @@ fn scaled(texture: Option<Texture>, factor: Vec3) -> Texture {
 /// Which coordinates texture `t` of material `m` reads: its slot among the sets the material's
 /// primitives carry (slot 0 for a set beyond them, warned about), through its
 /// `KHR_texture_transform`.
-fn uv_map(m: &GltfMaterial, t: &GltfTexture) -> UvMap {
-    UvMap {
+fn uv_map(m: &GltfMaterial, t: &GltfTexture) -> Box<UvMap> {
+    Box::new(UvMap {
         set: m.uv_slot(t).unwrap_or(0),
         transform: t.transform,
-    }
+    })
 }
 
 /// `texture` read through `map`; `texture` itself for the identity map (set 0, no transform),
 /// so files without transforms or second sets render as before.
-fn mapped(texture: Texture, map: UvMap) -> Texture {
-    if map == UvMap::default() {
+fn mapped(texture: Texture, map: Box<UvMap>) -> Texture {
+    if *map == UvMap::default() {
         texture
     } else {
         Texture::Mapped(Box::new(texture), map)
