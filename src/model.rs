@@ -94,6 +94,9 @@ pub struct MeshData {
     pub normals: Option<Vec<Vec3>>,
     /// Per-vertex texture coordinates, if the file has them.
     pub uvs: Option<Vec<glam::Vec2>>,
+    /// A second set of per-vertex texture coordinates, carried only when a material reads one
+    /// (a glTF material whose textures name two `TEXCOORD_n` sets).
+    pub uvs1: Option<Vec<glam::Vec2>>,
     /// Triangles as vertex indices (validated to be in range).
     pub triangles: Vec<[u32; 3]>,
 }

@@ -371,13 +371,13 @@ fn masks_blend_transmission_cameras_and_lights_load_as_documented() {
     };
     assert_eq!(
         alpha(0),
-        Some((0.3, 0.8)),
+        Some((Some(0.3), 0.8)),
         "MASK keeps its cutoff and factor"
     );
-    assert_eq!(alpha(1), Some((0.5, 1.0)), "BLEND is a mask at 0.5");
+    assert_eq!(alpha(1), Some((None, 1.0)), "BLEND is blended, no cutoff");
     assert_eq!(material(2), &Material::Dielectric { ior: 1.33 });
     let warned = |what: &str| scene.warnings.iter().any(|w| w.contains(what));
-    for what in ["BLEND", "transmission", "cameras", "punctual lights"] {
+    for what in ["transmission", "cameras", "punctual lights"] {
         assert!(
             warned(what),
             "no warning about {what}: {:?}",

@@ -226,6 +226,7 @@ fn triangle_mesh(uv: [Vec2; 3]) -> MeshData {
         positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
         normals: None,
         uvs: Some(uv.to_vec()),
+        uvs1: None,
         triangles: vec![[0, 1, 2]],
     }
 }

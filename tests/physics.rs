@@ -231,6 +231,7 @@ fn triangle_light(world: [Vec3; 3], m: Option<Affine3A>) -> (Geometry, HitKind) 
                 positions: world.map(|v| inv.transform_point3(v)).to_vec(),
                 normals: None,
                 uvs: None,
+                uvs1: None,
                 triangles: vec![[0, 1, 2]],
             };
             Primitive::Instance {

@@ -160,6 +160,7 @@ fn sweep_geometry(kind: Kind, shape: &Shape, t: &Placement) -> Geometry {
         positions: vec![a, b, c, d],
         normals: None,
         uvs: None,
+        uvs1: None,
         triangles: vec![[0, 1, 2], [0, 2, 3]],
     };
     let instance = Primitive::Instance {

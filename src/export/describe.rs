@@ -98,6 +98,12 @@ fn texture(t: &Texture, images: &ImageFiles) -> Result<Value, ExportError> {
             "factor": v3(*factor),
             "texture": texture(inner, images)?,
         }),
+        Texture::Mapped(inner, map) => json!({
+            "kind": "mapped",
+            "set": map.set,
+            "transform": map.transform.map(|m| m.to_cols_array()),
+            "texture": texture(inner, images)?,
+        }),
         Texture::Image(image, sampling) => {
             let Some(file) = images.file(image) else {
                 return Err(ExportError("a texture's file was not found".into()));

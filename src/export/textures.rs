@@ -125,7 +125,7 @@ fn material_images(materials: &[&Material]) -> Vec<Arc<ImageTexture>> {
                 walk(odd, out);
             }
             Texture::Image(image, _) => out.push(image.clone()),
-            Texture::Scaled(inner, _) => walk(inner, out),
+            Texture::Scaled(inner, _) | Texture::Mapped(inner, _) => walk(inner, out),
         }
     }
     let mut out = Vec::new();

@@ -27,6 +27,9 @@ pub struct MeshBlas {
     normals: Option<Vec<[Vec3; 3]>>,
     /// Texture coordinates per triangle vertex (BVH order), when the mesh file has them.
     uvs: Option<Vec<[Vec2; 3]>>,
+    /// The second set of texture coordinates per triangle vertex (BVH order), when the mesh
+    /// carries one.
+    uvs1: Option<Vec<[Vec2; 3]>>,
     bvh: Bvh,
     bounds: Bounds,
 }
@@ -62,12 +65,14 @@ impl MeshBlas {
                 .map(|&k| mesh.triangles[k as usize].map(|v| n[v as usize]))
                 .collect()
         });
-        let uvs = mesh.uvs.as_ref().map(|t| {
+        let corner_uvs = |t: &Vec<Vec2>| {
             order
                 .par_iter()
                 .map(|&k| mesh.triangles[k as usize].map(|v| t[v as usize]))
                 .collect()
-        });
+        };
+        let uvs = mesh.uvs.as_ref().map(corner_uvs);
+        let uvs1 = mesh.uvs1.as_ref().map(corner_uvs);
         Self {
             triangles: order
                 .par_iter()
@@ -75,6 +80,7 @@ impl MeshBlas {
                 .collect(),
             normals,
             uvs,
+            uvs1,
             bvh,
             bounds: all,
         }
@@ -405,15 +411,18 @@ impl InstanceSet {
             })
             .filter(|ns| *ns != Vec3::ZERO)
             .map_or(n, |ns| if ns.dot(n) < 0.0 { -ns } else { ns });
-        let uv = inst.blas.uvs.as_ref().map_or(Vec2::ZERO, |uvs| {
+        let at = |uvs: &Vec<[Vec2; 3]>| {
             let [ta, tb, tc] = uvs[k];
             b0 * ta + b1 * tb + b2 * tc
-        });
+        };
+        let uv = inst.blas.uvs.as_ref().map_or(Vec2::ZERO, at);
+        let uv1 = inst.blas.uvs1.as_ref().map_or(uv, at);
         Surface {
             p: inst.world_from_object.transform_point3(p_obj),
             n,
             ns,
             uv,
+            uv1,
             owner: inst.owner,
         }
     }

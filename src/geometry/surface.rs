@@ -5,6 +5,8 @@
 
 use glam::{Vec2, Vec3};
 
+use crate::shading::texture::TexCoords;
+
 /// Local geometry at a hit point, as shading needs it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Surface {
@@ -17,8 +19,19 @@ pub struct Surface {
     pub ns: Vec3,
     /// Texture coordinates.
     pub uv: Vec2,
+    /// The second set of texture coordinates: a mesh's [`MeshData::uvs1`](crate::model::MeshData::uvs1)
+    /// where it has one, else `uv`.
+    pub uv1: Vec2,
     /// Owner (scene entity slot) of the primitive.
     pub owner: u32,
+}
+
+impl Surface {
+    /// Both sets of texture coordinates, as materials read them.
+    #[inline(always)]
+    pub fn tex_coords(&self) -> TexCoords {
+        TexCoords([self.uv, self.uv1])
+    }
 }
 
 /// The texture-space tangent frame of a triangle at a hit, for normal mapping: derived per

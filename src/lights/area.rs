@@ -22,7 +22,7 @@ use crate::geometry::triangle::{
     triangle_solid_angle,
 };
 use crate::shading::emission::Emission;
-use crate::shading::texture::Texture;
+use crate::shading::texture::{TexCoords, Texture};
 
 /// Solid angles (sr) between which a triangle is sampled by solid angle; outside, by area.
 /// Below the lower bound the spherical triangle's angles lose precision in f32 and area
@@ -55,8 +55,8 @@ pub struct LightSample {
     pub p: Vec3,
     /// Unit geometric normal of the emitter at `p`.
     pub n: Vec3,
-    /// Texture coordinates at `p`.
-    pub uv: Vec2,
+    /// Texture coordinates at `p` (both sets).
+    pub uv: TexCoords,
     /// Material index of the emitter.
     pub material: u32,
     /// Probability density of the direction from the shading point to `p`, per steradian
@@ -217,7 +217,7 @@ impl Emitter {
                     _ => sample_sphere_area(u),
                 };
                 let uv = sphere_uv(geometry.sphere_frame[i].transpose() * n);
-                (c + r * n, n, uv, sphere_point_error(c, r))
+                (c + r * n, n, uv.into(), sphere_point_error(c, r))
             }
             HitKind::Triangle | HitKind::Instance { .. } => {
                 let [b0, b1, b2] = match strategy {
@@ -230,7 +230,7 @@ impl Emitter {
                 if let HitKind::Instance { triangle } = self.kind {
                     let s = geometry.instances.surface(self.index, triangle, b1, b2);
                     let err = geometry.instances.point_error(self.index, triangle, b1, b2);
-                    (s.p, s.n, s.uv, err)
+                    (s.p, s.n, s.tex_coords(), err)
                 } else {
                     let [a, b, c] = geometry.triangles.get(i);
                     let [ta, tb, tc] = geometry.triangle_uv[i];
@@ -239,7 +239,7 @@ impl Emitter {
                     (
                         b0 * a + b1 * b + b2 * c,
                         n,
-                        b0 * ta + b1 * tb + b2 * tc,
+                        (b0 * ta + b1 * tb + b2 * tc).into(),
                         err,
                     )
                 }

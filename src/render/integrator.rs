@@ -5,7 +5,8 @@ use glam::Vec3;
 
 use super::{
     BOUNCE_DIMENSIONS, BSDF_DIMENSION, LIGHT_CHOICE_DIMENSION, LIGHT_POINT_DIMENSION,
-    MAX_PASS_THROUGHS, Method, ROULETTE_DIMENSION, SceneView, TEXEL_DIMENSION, TraceStats,
+    MAX_PASS_THROUGHS, Method, ROULETTE_DIMENSION, SceneView, TEXEL_DIMENSION,
+    TRANSPARENCY_DIMENSION, TraceStats,
 };
 use crate::cpu::{Lanes, Sse};
 use crate::film::FeatureSample;
@@ -92,28 +93,46 @@ pub fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
 
 /// The first hit of a surface that is present along `ray`, up to `end` (a shadow ray's end
 /// point; `None`: without end), in a scene with alpha masks. Where a mask says its surface is
-/// absent ([`Material::is_present`]) the ray passes through: it starts again from the hit
-/// point, spawned on the far side with the point's error bound, in the same direction or, with
-/// an `end`, towards it (so that the rounding of the new origin cannot carry the segment into
-/// the surface at its end); `ray` is left as the segment that found the returned hit. No
-/// sampler dimension is drawn, so a path is what it would be without the absent surfaces. After
-/// [`MAX_PASS_THROUGHS`] the next hit counts as present. Called through [`Lanes::out_of_line`]:
-/// the masked scenes' loop stays out of the render loop, compiled for the same instructions.
+/// absent the ray passes through; a blended surface of coverage `c` ([`Material::coverage`]) is
+/// passed with probability 1 − c (stochastic transparency: unbiased, no sorting). The ray then
+/// starts again from the hit point, spawned on the far side with the point's error bound, in
+/// the same direction or, with an `end`, towards it (so that the rounding of the new origin
+/// cannot carry the segment into the surface at its end); `ray` is left as the segment that
+/// found the returned hit. Cutoff masks draw no sampler dimension, so a path is what it would
+/// be without the surfaces they remove. Blended surfaces share one value `u`, drawn from
+/// `dimension` of `sampler` at the first of them: `u < c` keeps the surface, else the ray passes
+/// and `(u − c) / (1 − c)`, again uniform in [0, 1) and independent of the choice made, serves
+/// the next one. After [`MAX_PASS_THROUGHS`] the next hit counts as present. Called through
+/// [`Lanes::out_of_line`]: the masked scenes' loop stays out of the render loop, compiled for
+/// the same instructions.
 #[inline(always)]
 fn first_present<L: Layout, W: Lanes>(
     lanes: W,
     view: &SceneView<L>,
     ray: &mut Ray,
     end: Option<Vec3>,
+    (sampler, dimension): (&mut impl Sampler, u32),
     stats: &mut TraceStats,
 ) -> Option<Hit> {
     let mut t_max = end.map_or(f32::INFINITY, |e| (e - ray.origin).length());
+    let mut u: Option<f32> = None;
     for _ in 0..MAX_PASS_THROUGHS {
         let hit = view.geometry.intersect_with(lanes, ray, t_max)?;
         let s = view.geometry.surface(ray, &hit);
         let material = &view.materials[view.owner_material[s.owner as usize] as usize];
-        if material.is_present(s.uv) {
+        let c = material.coverage(s.tex_coords());
+        if c >= 1.0 {
             return Some(hit);
+        }
+        if c > 0.0 {
+            let x = *u.get_or_insert_with(|| {
+                sampler.seek(dimension);
+                sampler.next_1d()
+            });
+            if x < c {
+                return Some(hit);
+            }
+            u = Some((x - c) / (1.0 - c));
         }
         let err = point_error(view.geometry, &hit, s.p);
         let origin = spawn(s.p, s.n, err, ray.direction).origin;
@@ -191,7 +210,10 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         let found = if view.masked {
             lanes.out_of_line(
                 #[inline(always)]
-                |lanes| first_present(lanes, view, &mut ray, None, stats),
+                |lanes| {
+                    let transparency = TRANSPARENCY_DIMENSION + 2 * depth;
+                    first_present(lanes, view, &mut ray, None, (sampler, transparency), stats)
+                },
             )
         } else {
             view.geometry.intersect_with(lanes, &ray, f32::INFINITY)
@@ -220,7 +242,7 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         };
         let s = view.geometry.surface(&ray, &hit);
         let material = &view.materials[view.owner_material[s.owner as usize] as usize];
-        let bsdf = material.bsdf(ray.direction, s.n, s.ns, s.uv, || {
+        let bsdf = material.bsdf(ray.direction, s.n, s.ns, s.tex_coords(), || {
             view.geometry.uv_tangent(&hit).map(|t| (t.tangent, t.sign))
         });
         if features.is_none() && (!bsdf.is_specular() || depth + 1 == view.max_depth) {
@@ -339,13 +361,19 @@ fn direct_light<L: Layout, W: Lanes>(
             }
             let wi = to_light / dist2.sqrt();
             let emitter = &view.materials[light.material as usize];
-            // A point where the emitter's mask says it is absent sends nothing: the light's
-            // density stays that of its whole surface, as for the BSDF-sampled rays that pass
-            // through such points.
-            if view.masked && !emitter.is_present(light.uv) {
+            // A point where the emitter's mask says it is absent sends nothing, a blended one
+            // its coverage's share (what BSDF-sampled rays, passing with probability
+            // 1 − coverage, find on average): the light's density stays that of its whole
+            // surface.
+            let coverage = if view.masked {
+                emitter.coverage(light.uv)
+            } else {
+                1.0
+            };
+            if coverage == 0.0 {
                 return Vec3::ZERO;
             }
-            let emitted = emitter.emitted(wi, light.n, light.uv);
+            let emitted = emitter.emitted(wi, light.n, light.uv) * coverage;
             // Shadow ray between the two offset points, so neither surface can block it.
             let from = spawn(s.p, s.n, err, wi).origin;
             let to_side = if wi.dot(light.n) < 0.0 {
@@ -390,7 +418,17 @@ fn direct_light<L: Layout, W: Lanes>(
         lanes
             .out_of_line(
                 #[inline(always)]
-                |lanes| first_present(lanes, view, &mut shadow_ray, end, stats),
+                |lanes| {
+                    let transparency = TRANSPARENCY_DIMENSION + 2 * bounce + 1;
+                    first_present(
+                        lanes,
+                        view,
+                        &mut shadow_ray,
+                        end,
+                        (sampler, transparency),
+                        stats,
+                    )
+                },
             )
             .is_some()
     } else {

@@ -71,8 +71,9 @@ pub fn has_masks(materials: &[Material]) -> bool {
     materials.iter().any(Material::is_masked)
 }
 
-/// Most surfaces one ray passes through where their alpha masks say they are absent; the next
-/// hit then counts as present whatever its mask says. A bound on the work a hostile scene (a
+/// Most surfaces one ray passes through where their alpha masks say they are absent (or a
+/// blended surface's coverage lets it pass); the next hit then counts as present whatever its
+/// mask says. A bound on the work a hostile scene (a
 /// stack of thousands of masked layers) can cause, far beyond what real scenes reach.
 pub const MAX_PASS_THROUGHS: u32 = 1024;
 
@@ -129,3 +130,8 @@ pub const LENS_DIMENSION: u32 = EXTRA_DIMENSION;
 /// Bounce `b`'s position within an environment map's texel (2D) at `TEXEL_DIMENSION + b`, drawn
 /// only when next-event estimation picked the map.
 pub const TEXEL_DIMENSION: u32 = EXTRA_DIMENSION + 1;
+/// Bounce `b`'s passes through blended surfaces ([`Material::coverage`] between 0 and 1), 1D:
+/// at `TRANSPARENCY_DIMENSION + 2b` for the ray that finds the bounce's hit, `+ 2b + 1` for its
+/// shadow ray. One value serves every blended surface along the ray (see `first_present`);
+/// drawn only where a ray meets one.
+pub const TRANSPARENCY_DIMENSION: u32 = TEXEL_DIMENSION + MAX_DEPTH;

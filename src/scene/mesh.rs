@@ -552,6 +552,7 @@ fn gather(bytes: &[u8], chunks: &[Chunk], numbered: Numbered) -> Result<MeshData
         positions,
         normals,
         uvs,
+        uvs1: None,
         triangles: numbered.triangles,
     })
 }

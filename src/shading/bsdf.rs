@@ -15,7 +15,7 @@
 //! ratio (exactly the albedo for a diffuse surface) and next-event estimation and MIS use the
 //! very density sampled from.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use super::conductor::Conductor;
 use super::dielectric::Dielectric;
@@ -26,6 +26,7 @@ use super::pbr::Pbr;
 use super::sampler::Sampler;
 use super::sampling::reflect;
 use super::scatter::Scatter;
+use super::texture::TexCoords;
 
 /// The scattering part of a BSDF at one point: one lobe, its textures already looked up.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -124,7 +125,7 @@ pub struct Bsdf<'a> {
     /// Unit normal the lobe shades with.
     ns: Vec3,
     /// Texture coordinates, for the emission.
-    uv: Vec2,
+    uv: TexCoords,
     samples_lights: bool,
     emission: Option<Emission<'a>>,
 }
@@ -138,7 +139,7 @@ impl<'a> Bsdf<'a> {
         lobe: Lobe,
         d: Vec3,
         (n, ns): (Vec3, Vec3),
-        uv: Vec2,
+        uv: TexCoords,
         samples_lights: bool,
         emission: Option<Emission<'a>>,
     ) -> Self {

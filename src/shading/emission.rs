@@ -2,9 +2,9 @@
 //! reading of an emitter's radiance, for the integrator, the light table and the film's range.
 //! No ECS here.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
-use super::texture::Texture;
+use super::texture::{TexCoords, Texture};
 
 /// The emission of a material (see [`super::material::Material::emission`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -21,7 +21,7 @@ impl Emission<'_> {
     /// Radiance emitted towards a ray travelling along `d` that hit the surface (unit geometric
     /// normal `n`) at `uv`.
     #[inline]
-    pub fn radiance(&self, d: Vec3, n: Vec3, uv: Vec2) -> Vec3 {
+    pub fn radiance(&self, d: Vec3, n: Vec3, uv: impl Into<TexCoords>) -> Vec3 {
         if self.two_sided || d.dot(n) < 0.0 {
             self.texture.eval(uv) * self.scale
         } else {

@@ -15,7 +15,7 @@ use super::microfacet::{alpha_from_roughness, is_specular_alpha};
 use super::pbr::Pbr;
 use super::sampler::Sampler;
 use super::scatter::Scatter;
-use super::texture::Texture;
+use super::texture::{TexCoords, Texture};
 
 /// A surface material.
 #[derive(Clone, Debug, PartialEq)]
@@ -128,31 +128,32 @@ impl Material {
     /// Radiance emitted towards a ray travelling along `d` that hit a surface with geometric
     /// normal `n`.
     #[inline]
-    pub fn emitted(&self, d: Vec3, n: Vec3, uv: Vec2) -> Vec3 {
+    pub fn emitted(&self, d: Vec3, n: Vec3, uv: impl Into<TexCoords>) -> Vec3 {
         self.emission().map_or(Vec3::ZERO, |e| e.radiance(d, n, uv))
     }
 
     /// Whether the material has an alpha mask (a `Pbr` with `alpha`): only then may
-    /// [`Material::is_present`] be false.
+    /// [`Material::coverage`] be below 1.
     pub fn is_masked(&self) -> bool {
         matches!(self, Self::Pbr { alpha: Some(_), .. })
     }
 
-    /// Whether the surface is there at `uv`: false where its alpha mask says it is absent, so
-    /// that rays pass through it; true for every material without a mask.
+    /// The probability that the surface is there at `uv` ([`AlphaMask::coverage`]): 0 where a
+    /// cutoff mask makes it absent, its alpha where it is blended, 1 for every material
+    /// without a mask. Rays pass through it with probability 1 − coverage.
     #[inline]
-    pub fn is_present(&self, uv: Vec2) -> bool {
+    pub fn coverage(&self, uv: impl Into<TexCoords>) -> f32 {
         match self {
             Self::Pbr {
                 alpha: Some(mask), ..
-            } => mask.present(uv),
-            _ => true,
+            } => mask.coverage(uv.into()),
+            _ => 1.0,
         }
     }
 
     /// The BSDF at a surface point hit by a ray along `d`, of unit geometric normal `n`, unit
-    /// shading normal `ns` (on `n`'s side) and texture coordinates `uv`: the textures looked
-    /// up, a normal map applied with the texture tangent and handedness `tangent()` gives
+    /// shading normal `ns` (on `n`'s side) and texture coordinates `uv` (one set, or the hit's
+    /// [`TexCoords`]): the textures looked up, a normal map applied with the texture tangent and handedness `tangent()` gives
     /// (asked only by a normal-mapped material; `None` where the surface has none). Glass
     /// shades with `n`, so that its refraction follows the true surface and stays watertight.
     #[inline(always)]
@@ -161,9 +162,10 @@ impl Material {
         d: Vec3,
         n: Vec3,
         ns: Vec3,
-        uv: Vec2,
+        uv: impl Into<TexCoords>,
         tangent: impl FnOnce() -> Option<(Vec3, f32)>,
     ) -> Bsdf<'_> {
+        let uv = uv.into();
         let (lobe, ns, samples_lights) = match self {
             Self::Diffuse { albedo } => (
                 Lobe::Diffuse(Diffuse {
@@ -244,7 +246,7 @@ impl Material {
 #[inline(never)]
 fn normal_mapped(
     map: &NormalMap,
-    uv: Vec2,
+    uv: TexCoords,
     n: Vec3,
     ns: Vec3,
     tangent: impl FnOnce() -> Option<(Vec3, f32)>,

@@ -2,8 +2,43 @@
 
 use std::sync::Arc;
 
-use glam::{Vec2, Vec3};
+use glam::{Affine2, Vec2, Vec3};
 use serde::Deserialize;
+
+/// The texture coordinates of a hit: set 0 and set 1 of its mesh (set 1 is set 0 where the
+/// mesh carries no second set). A single `Vec2` converts to both sets.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TexCoords(pub [Vec2; 2]);
+
+impl From<Vec2> for TexCoords {
+    #[inline(always)]
+    fn from(uv: Vec2) -> Self {
+        Self([uv, uv])
+    }
+}
+
+/// Which texture coordinates a texture reads: one of the hit's sets, through an optional
+/// affine transform (glTF's `texCoord` and `KHR_texture_transform`, in rondo's texture space:
+/// v pointing up the image).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct UvMap {
+    /// The set read: 0 or 1 ([`TexCoords`]); anything above 1 reads set 1.
+    pub set: usize,
+    /// The transform applied to the set's coordinates, if any.
+    pub transform: Option<Affine2>,
+}
+
+impl UvMap {
+    /// The coordinates this map reads from `uv`.
+    #[inline]
+    pub fn apply(&self, uv: TexCoords) -> Vec2 {
+        let t = uv.0[self.set.min(1)];
+        match &self.transform {
+            None => t,
+            Some(m) => m.transform_point2(t),
+        }
+    }
+}
 
 /// How an image texture is read between texel centres.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
@@ -233,6 +268,9 @@ pub enum Texture {
     Image(Arc<ImageTexture>, Sampling),
     /// A texture times a factor per channel (glTF's texture × factor).
     Scaled(Box<Texture>, Vec3),
+    /// A texture read at the coordinates a [`UvMap`] gives (another set, a transform); boxed, as
+    /// the map is larger than every other variant.
+    Mapped(Box<Texture>, Box<UvMap>),
 }
 
 impl PartialEq for Texture {
@@ -254,26 +292,35 @@ impl PartialEq for Texture {
             ) => s == s2 && e == e2 && o == o2,
             (Self::Image(a, s), Self::Image(b, s2)) => Arc::ptr_eq(a, b) && s == s2,
             (Self::Scaled(a, f), Self::Scaled(b, f2)) => a == b && f == f2,
+            (Self::Mapped(a, m), Self::Mapped(b, m2)) => a == b && m == m2,
             _ => false,
         }
     }
 }
 
 impl Texture {
-    /// The colour at `uv`.
+    /// The colour at `uv` (a single set, or a hit's [`TexCoords`]; textures other than
+    /// [`Texture::Mapped`] read set 0).
     #[inline]
-    pub fn eval(&self, uv: Vec2) -> Vec3 {
+    pub fn eval(&self, uv: impl Into<TexCoords>) -> Vec3 {
+        self.eval_at(uv.into())
+    }
+
+    #[inline]
+    fn eval_at(&self, tc: TexCoords) -> Vec3 {
+        let uv = tc.0[0];
         match self {
             Self::Constant(c) => *c,
             Self::Checker { scale, even, odd } => {
                 if (scale * uv.x).sin() * (scale * uv.y).sin() > 0.0 {
-                    even.eval(uv)
+                    even.eval_at(tc)
                 } else {
-                    odd.eval(uv)
+                    odd.eval_at(tc)
                 }
             }
             Self::Image(image, sampling) => image.sample(uv, *sampling),
-            Self::Scaled(texture, factor) => texture.eval(uv) * *factor,
+            Self::Scaled(texture, factor) => texture.eval_at(tc) * *factor,
+            Self::Mapped(texture, map) => texture.eval(map.apply(tc)),
         }
     }
 
@@ -284,6 +331,7 @@ impl Texture {
             Self::Checker { even, odd, .. } => even.max_channel().max(odd.max_channel()),
             Self::Image(image, _) => image.max,
             Self::Scaled(texture, factor) => texture.max_channel() * factor.abs().max_element(),
+            Self::Mapped(texture, _) => texture.max_channel(),
         }
     }
 }
@@ -418,6 +466,37 @@ mod tests {
         let opaque = ImageTexture::from_rgba8(1, 1, &[1, 2, 3, 255], true);
         assert!(!opaque.has_alpha() && srgb.has_alpha());
         assert_eq!(opaque.sample_alpha(Vec2::ZERO, nearest), 1.0);
+    }
+
+    #[test]
+    fn a_mapped_texture_reads_its_set_through_its_transform() {
+        // Grey 0, 1 / 2, 3 (top row first), nearest and clamped.
+        let image = Texture::Image(Arc::new(grey_2x2()), Sampling::default());
+        let uv = TexCoords([Vec2::new(0.25, 0.75), Vec2::new(0.75, 0.25)]);
+        let set = |set| {
+            Texture::Mapped(
+                Box::new(image.clone()),
+                Box::new(UvMap {
+                    set,
+                    transform: None,
+                }),
+            )
+        };
+        // Unmapped and set 0 read the first set (top left, 0); set 1 the second (bottom right, 3).
+        assert_eq!(image.eval(uv).x, 0.0);
+        assert_eq!(set(0).eval(uv).x, 0.0);
+        assert_eq!(set(1).eval(uv).x, 3.0);
+        // A shift by +0.5 in u moves the first set's point to the top right texel (1).
+        let shifted = Texture::Mapped(
+            Box::new(image.clone()),
+            Box::new(UvMap {
+                set: 0,
+                transform: Some(glam::Affine2::from_translation(Vec2::new(0.5, 0.0))),
+            }),
+        );
+        assert_eq!(shifted.eval(uv).x, 1.0);
+        // A single set stands for both.
+        assert_eq!(set(1).eval(Vec2::new(0.25, 0.25)).x, 2.0);
     }
 
     #[test]

@@ -227,6 +227,7 @@ impl<L: Layout> Geometry<L> {
                     n,
                     ns: n,
                     uv,
+                    uv1: uv,
                     owner: self.sphere_owner[i],
                 }
             }
@@ -235,11 +236,13 @@ impl<L: Layout> Geometry<L> {
                 let b0 = 1.0 - hit.b1 - hit.b2;
                 let [t0, t1, t2] = self.triangle_uv[i];
                 let n = self.triangle_normal[i];
+                let uv = b0 * t0 + hit.b1 * t1 + hit.b2 * t2;
                 Surface {
                     p: b0 * p0 + hit.b1 * p1 + hit.b2 * p2,
                     n,
                     ns: n,
-                    uv: b0 * t0 + hit.b1 * t1 + hit.b2 * t2,
+                    uv,
+                    uv1: uv,
                     owner: self.triangle_owner[i],
                 }
             }
@@ -247,11 +250,13 @@ impl<L: Layout> Geometry<L> {
                 let pl = &self.planes[i];
                 let p = ray.at(hit.t);
                 let p = p - pl.normal * (p - pl.point).dot(pl.normal);
+                let uv = plane_uv(p, pl.point, pl.tangent, pl.bitangent);
                 Surface {
                     p,
                     n: pl.normal,
                     ns: pl.normal,
-                    uv: plane_uv(p, pl.point, pl.tangent, pl.bitangent),
+                    uv,
+                    uv1: uv,
                     owner: pl.owner,
                 }
             }

@@ -255,9 +255,11 @@ pub(super) fn read_indices(
     Ok(out)
 }
 
-/// Reads one triangle primitive into a [`MeshData`].
+/// Reads one triangle primitive into a [`MeshData`], with texture coordinate sets `sets` (the
+/// first as `uvs`, the second, if any, as `uvs1`; `TEXCOORD_0` when empty).
 pub(super) fn read_primitive(
     prim: &gltf::Primitive,
+    sets: &[u32],
     buffers: &[SharedBytes],
     budget: &mut Budget,
 ) -> Result<MeshData, String> {
@@ -299,29 +301,10 @@ pub(super) fn read_primitive(
             ));
         }
     };
-    let uvs = match prim.get(&gltf::Semantic::TexCoords(0)) {
+    let uvs = read_uvs(prim, sets.first().copied().unwrap_or(0), n, buffers)?;
+    let uvs1 = match sets.get(1) {
+        Some(&set) => read_uvs(prim, set, n, buffers)?,
         None => None,
-        Some(acc) if acc.count() == n => {
-            // glTF's v runs down the image from its top row, rondo's up from the bottom row.
-            let uv: Vec<Vec2> = read_floats(&acc, 2, buffers)?
-                .chunks_exact(2)
-                .map(|t| Vec2::new(t[0], 1.0 - t[1]))
-                .collect();
-            if let Some(k) = uv.iter().position(|t| !t.is_finite()) {
-                return Err(format!(
-                    "accessor {}: non-finite texture coordinate {k}",
-                    acc.index()
-                ));
-            }
-            Some(uv)
-        }
-        Some(acc) => {
-            return Err(format!(
-                "accessor {}: {} texture coordinates for {n} positions",
-                acc.index(),
-                acc.count()
-            ));
-        }
     };
     let indices = match prim.indices() {
         Some(acc) => {
@@ -345,8 +328,41 @@ pub(super) fn read_primitive(
         positions,
         normals,
         uvs,
+        uvs1,
         triangles,
     })
+}
+
+/// Texture coordinate set `TEXCOORD_<set>` of a primitive of `n` vertices, stored as
+/// `(u, 1 − v)`; `None` when the primitive has no such set.
+fn read_uvs(
+    prim: &gltf::Primitive,
+    set: u32,
+    n: usize,
+    buffers: &[SharedBytes],
+) -> Result<Option<Vec<Vec2>>, String> {
+    match prim.get(&gltf::Semantic::TexCoords(set)) {
+        None => Ok(None),
+        Some(acc) if acc.count() == n => {
+            // glTF's v runs down the image from its top row, rondo's up from the bottom row.
+            let uv: Vec<Vec2> = read_floats(&acc, 2, buffers)?
+                .chunks_exact(2)
+                .map(|t| Vec2::new(t[0], 1.0 - t[1]))
+                .collect();
+            if let Some(k) = uv.iter().position(|t| !t.is_finite()) {
+                return Err(format!(
+                    "accessor {}: non-finite texture coordinate {k}",
+                    acc.index()
+                ));
+            }
+            Ok(Some(uv))
+        }
+        Some(acc) => Err(format!(
+            "accessor {}: {} texture coordinates for {n} positions",
+            acc.index(),
+            acc.count()
+        )),
+    }
 }
 
 /// Triangles of a triangle list, strip or fan, each in the winding the spec gives (strips

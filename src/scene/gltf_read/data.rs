@@ -4,7 +4,7 @@
 use std::ops::Range;
 use std::sync::Arc;
 
-use glam::{Affine3A, Vec3};
+use glam::{Affine2, Affine3A, Vec3};
 
 use crate::model::MeshData;
 
@@ -98,8 +98,11 @@ pub enum Wrap {
 pub struct GltfTexture {
     /// Index into [`GltfScene::images`].
     pub image: usize,
-    /// Which `TEXCOORD_n` set it uses (only set 0 is read).
+    /// Which `TEXCOORD_n` set it uses (`KHR_texture_transform`'s `texCoord` when it names one).
     pub texcoord: u32,
+    /// Its `KHR_texture_transform`, carried into rondo's texture space (v pointing up the
+    /// image, as the coordinates are stored).
+    pub transform: Option<Affine2>,
     /// Wrap mode along u.
     pub wrap_s: Wrap,
     /// Wrap mode along v.
@@ -146,7 +149,8 @@ pub struct GltfMaterial {
     pub emissive_texture: Option<GltfTexture>,
     /// Alpha mode.
     pub alpha_mode: AlphaMode,
-    /// Whether back faces are shaded as front faces.
+    /// Whether the spec's back-face culling is off (see `load/gltf_place.rs`: a path tracer
+    /// renders both sides either way).
     pub double_sided: bool,
     /// `KHR_materials_transmission`'s factor (0 without the extension).
     pub transmission: f32,

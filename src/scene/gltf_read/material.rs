@@ -5,9 +5,16 @@ use std::ops::RangeInclusive;
 use glam::Vec3;
 
 use super::data::{AlphaMode, GltfMaterial, GltfTexture, Wrap};
+use super::texture_transform;
 
-/// A texture reference with its sampler.
-pub(super) fn texture(tex: &gltf::Texture, texcoord: u32) -> GltfTexture {
+/// A texture reference with its sampler, and its `KHR_texture_transform` from the reference's
+/// extension value `ext` (`slot` names the reference in errors).
+pub(super) fn texture(
+    tex: &gltf::Texture,
+    texcoord: u32,
+    ext: Option<&gltf::json::Value>,
+    slot: &dyn Fn() -> String,
+) -> Result<GltfTexture, String> {
     use gltf::texture::{MagFilter, WrappingMode};
     let wrap = |w| match w {
         WrappingMode::Repeat => Wrap::Repeat,
@@ -15,13 +22,27 @@ pub(super) fn texture(tex: &gltf::Texture, texcoord: u32) -> GltfTexture {
         WrappingMode::ClampToEdge => Wrap::ClampToEdge,
     };
     let sampler = tex.sampler();
-    GltfTexture {
+    let transform = texture_transform::read(ext, slot)?;
+    Ok(GltfTexture {
         image: tex.source().index(),
-        texcoord,
+        texcoord: transform.and_then(|t| t.texcoord).unwrap_or(texcoord),
+        transform: transform.map(|t| texture_transform::to_rondo_space(t.matrix)),
         wrap_s: wrap(sampler.wrap_s()),
         wrap_t: wrap(sampler.wrap_t()),
         nearest: sampler.mag_filter() == Some(MagFilter::Nearest),
-    }
+    })
+}
+
+/// A `textureInfo` (or the normal texture's) read by [`texture`]; `field` is its name in the
+/// material.
+fn info(
+    what: &dyn Fn() -> String,
+    field: &str,
+    tex: &gltf::Texture,
+    texcoord: u32,
+    ext: Option<&gltf::json::Value>,
+) -> Result<GltfTexture, String> {
+    texture(tex, texcoord, ext, &|| format!("{}: {field}", what()))
 }
 
 /// Checks that a material's field `field` holds `v`, a finite number within `range` (the
@@ -110,23 +131,46 @@ pub(super) fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> 
         gltf::material::AlphaMode::Mask => AlphaMode::Mask(m.alpha_cutoff().unwrap_or(0.5)),
         gltf::material::AlphaMode::Blend => AlphaMode::Blend,
     };
+    let ext = texture_transform::NAME;
+    let textured = |field: &str, t: Option<gltf::texture::Info>| {
+        t.map(|t| {
+            info(
+                &what,
+                field,
+                &t.texture(),
+                t.tex_coord(),
+                t.extension_value(ext),
+            )
+        })
+        .transpose()
+    };
     Ok(GltfMaterial {
         base_color_factor: pbr.base_color_factor(),
-        base_color_texture: pbr
-            .base_color_texture()
-            .map(|t| texture(&t.texture(), t.tex_coord())),
+        base_color_texture: textured(
+            "pbrMetallicRoughness.baseColorTexture",
+            pbr.base_color_texture(),
+        )?,
         metallic,
         roughness,
-        metallic_roughness_texture: pbr
-            .metallic_roughness_texture()
-            .map(|t| texture(&t.texture(), t.tex_coord())),
+        metallic_roughness_texture: textured(
+            "pbrMetallicRoughness.metallicRoughnessTexture",
+            pbr.metallic_roughness_texture(),
+        )?,
         normal_texture: m
             .normal_texture()
-            .map(|t| (texture(&t.texture(), t.tex_coord()), t.scale())),
+            .map(|t| {
+                let tex = info(
+                    &what,
+                    "normalTexture",
+                    &t.texture(),
+                    t.tex_coord(),
+                    t.extension_value(ext),
+                )?;
+                Ok::<_, String>((tex, t.scale()))
+            })
+            .transpose()?,
         emissive,
-        emissive_texture: m
-            .emissive_texture()
-            .map(|t| texture(&t.texture(), t.tex_coord())),
+        emissive_texture: textured("emissiveTexture", m.emissive_texture())?,
         alpha_mode,
         double_sided: m.double_sided(),
         transmission,

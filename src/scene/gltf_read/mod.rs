@@ -10,14 +10,18 @@
 //! buffers and images name it, and all of them together are bounded by [`MAX_BUFFER_BYTES`].
 //!
 //! Supported: triangles (indexed or not; strips and fans converted), `POSITION`, `NORMAL` (flat
-//! shading when absent: [`MeshData::normals`](crate::model::MeshData::normals) is `None`), `TEXCOORD_0` (float or normalised
-//! integers; stored as `(u, 1 − v)`, rondo's v pointing up the image), sparse accessors,
-//! accessors without a buffer view (zeros), TRS and matrix node transforms, the
-//! metallic–roughness material with its textures, `KHR_materials_emissive_strength`,
-//! `KHR_materials_transmission`, `KHR_materials_ior` and `KHR_mesh_quantization`. Skipped with a
-//! warning: points and lines, morph targets, skins, cameras, punctual lights. Ignored:
-//! animations, vertex colours, tangents (normal maps derive them from texture coordinates). Any
-//! other extension listed in `extensionsRequired` is an error naming it.
+//! shading when absent: [`MeshData::normals`](crate::model::MeshData::normals) is `None`), the
+//! `TEXCOORD_n` sets the primitive's material reads, at most two (float or normalised integers;
+//! stored as `(u, 1 − v)`, rondo's v pointing up the image; `uv_sets.rs`), sparse accessors,
+//! accessors without a buffer view (zeros), TRS and matrix node transforms,
+//! `EXT_mesh_gpu_instancing` (`instancing.rs`), the metallic–roughness material with its
+//! textures and their `KHR_texture_transform` (`texture_transform.rs`),
+//! `KHR_materials_emissive_strength`, `KHR_materials_transmission`, `KHR_materials_ior` and
+//! `KHR_mesh_quantization`. Skipped with a warning: points and lines, morph targets, skins,
+//! cameras, and every other extension the file uses (the warning says what will look wrong:
+//! `unsupported.rs`). Ignored: animations, vertex colours, tangents (normal maps derive them from
+//! texture coordinates). Any other extension listed in `extensionsRequired` is an error naming
+//! it.
 //!
 //! This file reads the document and assembles the result; the bytes behind it are in
 //! `buffers.rs`, accessors in `accessors.rs`, materials in `material.rs` and the node tree with
@@ -32,8 +36,12 @@ use gltf::mesh::Mode;
 mod accessors;
 mod buffers;
 mod data;
+mod instancing;
 mod material;
 mod nodes;
+mod texture_transform;
+mod unsupported;
+mod uv_sets;
 
 pub use self::accessors::assemble;
 use self::accessors::{Budget, read_primitive, view_shared};
@@ -47,13 +55,16 @@ pub use self::data::{
     MAX_NODE_DEPTH, MAX_NODE_INSTANCES, MAX_TRIANGLES, MAX_VERTICES, MAX_ZERO_FILLED, SharedBytes,
     Wrap,
 };
+pub use self::uv_sets::MAX_UV_SETS;
 
 /// Extensions that may appear in `extensionsRequired`.
 const SUPPORTED_REQUIRED: &[&str] = &[
+    "EXT_mesh_gpu_instancing",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_transmission",
     "KHR_mesh_quantization",
+    "KHR_texture_transform",
 ];
 
 /// Reads a glTF file from its `bytes` (`.gltf` JSON or `.glb`); `path` names it in errors.
@@ -106,6 +117,23 @@ fn read(
         held_bytes,
         ..GltfScene::default()
     };
+    for m in doc.materials() {
+        scene.materials.push(read_material(&m)?);
+    }
+    for (i, m) in scene.materials.iter().enumerate() {
+        let sets = m.uv_sets();
+        if sets.len() > MAX_UV_SETS {
+            let name = m
+                .name
+                .as_deref()
+                .map_or(String::new(), |n| format!(" \"{n}\""));
+            scene.warnings.push(format!(
+                "material{name} (materials[{i}]) reads texture coordinate sets {sets:?}; only the first {MAX_UV_SETS} are carried, so its textures on TEXCOORD_{} read set {}",
+                sets[MAX_UV_SETS..].iter().map(u32::to_string).collect::<Vec<_>>().join(", TEXCOORD_"),
+                sets[0]
+            ));
+        }
+    }
     let mut budget = Budget {
         vertices: MAX_VERTICES,
         triangles: MAX_TRIANGLES,
@@ -128,8 +156,14 @@ fn read(
                     .warnings
                     .push(format!("{what}: morph targets are ignored"));
             }
-            let data =
-                read_primitive(&prim, &buffers, &mut budget).map_err(|e| format!("{what}: {e}"))?;
+            let sets = prim
+                .material()
+                .index()
+                .and_then(|m| scene.materials.get(m))
+                .map_or_else(Vec::new, |m| m.uv_sets());
+            let sets = &sets[..sets.len().min(MAX_UV_SETS)];
+            let data = read_primitive(&prim, sets, &buffers, &mut budget)
+                .map_err(|e| format!("{what}: {e}"))?;
             primitives.push(GltfPrimitive {
                 data: Arc::new(data),
                 material: prim.material().index(),
@@ -168,9 +202,6 @@ fn read(
         });
     }
     detach_images(&mut scene.images);
-    for m in doc.materials() {
-        scene.materials.push(read_material(&m)?);
-    }
     if doc.cameras().next().is_some() {
         scene
             .warnings
@@ -178,10 +209,7 @@ fn read(
     }
     for ext in doc.extensions_used() {
         if !SUPPORTED_REQUIRED.contains(&ext) {
-            scene.warnings.push(match ext {
-                "KHR_lights_punctual" => "punctual lights (KHR_lights_punctual) are ignored".into(),
-                other => format!("extension {other} is ignored"),
-            });
+            scene.warnings.push(unsupported::warning(ext));
         }
     }
     let roots = doc.default_scene().or_else(|| doc.scenes().next());
@@ -190,6 +218,7 @@ fn read(
             walk(&node, Affine3A::IDENTITY, 0, &mut scene)?;
         }
     }
+    instancing::expand(doc, &buffers, &mut scene)?;
     Ok(scene)
 }
 

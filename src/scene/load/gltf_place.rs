@@ -18,10 +18,12 @@ use crate::model::{MeshRef, Shape, Transform};
 use crate::scene::assets::{Encoding, GltfAsset, inside_folder};
 use crate::scene::error::SceneError;
 use crate::scene::format::EntityDesc;
-use crate::scene::gltf_read::{AlphaMode, GltfImage, GltfMaterial, GltfTexture, Wrap as GltfWrap};
+use crate::scene::gltf_read::{
+    AlphaMode, GltfImage, GltfMaterial, GltfTexture, MAX_UV_SETS, Wrap as GltfWrap,
+};
 use crate::shading::maps::{AlphaMask, NormalMap};
 use crate::shading::material::Material;
-use crate::shading::texture::{Filter, ImageTexture, Sampling, Texture, Wrap};
+use crate::shading::texture::{Filter, ImageTexture, Sampling, Texture, UvMap, Wrap};
 
 /// The name a placement's `materials` uses for primitives without a material.
 const DEFAULT_MATERIAL: &str = "#default";
@@ -283,51 +285,65 @@ impl Expander<'_> {
             );
             return Ok(Material::Dielectric { ior: m.ior });
         }
+        for (field, t) in m.textures() {
+            if m.uv_slot(t).is_none() {
+                let first = m.uv_sets().first().copied().unwrap_or_default();
+                self.warn(
+                    path,
+                    &format!(
+                        "{what}: {field} reads TEXCOORD_{}, beyond the {MAX_UV_SETS} sets a primitive carries: it reads TEXCOORD_{first}",
+                        t.texcoord
+                    ),
+                );
+            }
+        }
         let image = |x: &mut Self, t: &GltfTexture, encoding: Encoding| {
             x.gltf_image(asset, path, t, encoding)
                 .map_err(|e| format!("{what}: {e}"))
         };
+        let textured = |x: &mut Self, t: &GltfTexture, encoding: Encoding| {
+            let (img, sampling) = image(x, t, encoding)?;
+            Ok::<_, String>(mapped(Texture::Image(img, sampling), uv_map(m, t)))
+        };
         let base = match &m.base_color_texture {
-            Some(t) => Some(image(self, t, Encoding::Srgb)?),
+            Some(t) => Some((image(self, t, Encoding::Srgb)?, uv_map(m, t))),
             None => None,
         };
-        let base_color = scaled(base.clone(), factor);
+        let base_color = scaled(
+            base.clone()
+                .map(|((img, sampling), map)| mapped(Texture::Image(img, sampling), map)),
+            factor,
+        );
         let emissive = match &m.emissive_texture {
-            Some(t) => scaled(Some(image(self, t, Encoding::Srgb)?), m.emissive),
+            Some(t) => scaled(Some(textured(self, t, Encoding::Srgb)?), m.emissive),
             None => Texture::Constant(m.emissive),
         };
         let metallic_roughness = match &m.metallic_roughness_texture {
-            Some(t) => {
-                let (img, sampling) = image(self, t, Encoding::Linear)?;
-                Some(Texture::Image(img, sampling))
-            }
+            Some(t) => Some(textured(self, t, Encoding::Linear)?),
             None => None,
         };
         let normal_map = match &m.normal_texture {
-            Some((t, scale)) => {
-                let (img, sampling) = image(self, t, Encoding::Linear)?;
-                Some(NormalMap {
-                    texture: Texture::Image(img, sampling),
-                    scale: *scale,
-                })
-            }
+            Some((t, scale)) => Some(NormalMap {
+                texture: textured(self, t, Encoding::Linear)?,
+                scale: *scale,
+            }),
             None => None,
         };
+        // BLEND is stochastic transparency (`AlphaMask`'s doc): no cutoff.
         let cutoff = match m.alpha_mode {
             AlphaMode::Opaque => None,
-            AlphaMode::Mask(cutoff) => Some(cutoff),
-            AlphaMode::Blend => {
-                self.warn(
-                    path,
-                    &format!("{what}: alphaMode BLEND is rendered as MASK with cutoff 0.5"),
-                );
-                Some(0.5)
-            }
+            AlphaMode::Mask(cutoff) => Some(Some(cutoff)),
+            AlphaMode::Blend => Some(None),
+        };
+        let (image, map) = match base {
+            Some((image, map)) if image.0.has_alpha() => (Some(image), map),
+            _ => (None, Box::default()),
         };
         let alpha = cutoff.map(|cutoff| AlphaMask {
             cutoff,
             factor: m.base_color_factor[3],
-            image: base.filter(|(img, _)| img.has_alpha()),
+            image,
+            map,
         });
         Ok(Material::Pbr {
             base_color,
@@ -351,15 +367,6 @@ impl Expander<'_> {
         t: &GltfTexture,
         encoding: Encoding,
     ) -> Result<(Arc<ImageTexture>, Sampling), String> {
-        if t.texcoord != 0 {
-            self.warn(
-                path,
-                &format!(
-                    "a texture uses TEXCOORD_{}; only TEXCOORD_0 is read",
-                    t.texcoord
-                ),
-            );
-        }
         let image = match asset.scene.images.get(t.image) {
             Some(GltfImage::File(relative)) => {
                 let dir = path.parent().unwrap_or(Path::new(""));
@@ -390,12 +397,32 @@ impl Expander<'_> {
     }
 }
 
-/// A texture image times a colour factor (the factor alone without an image; the image alone
-/// for a white factor).
-fn scaled(image: Option<(Arc<ImageTexture>, Sampling)>, factor: Vec3) -> Texture {
-    match image {
+/// A texture times a colour factor (the factor alone without a texture; the texture alone for
+/// a white factor).
+fn scaled(texture: Option<Texture>, factor: Vec3) -> Texture {
+    match texture {
         None => Texture::Constant(factor),
-        Some((img, sampling)) if factor == Vec3::ONE => Texture::Image(img, sampling),
-        Some((img, sampling)) => Texture::Scaled(Box::new(Texture::Image(img, sampling)), factor),
+        Some(texture) if factor == Vec3::ONE => texture,
+        Some(texture) => Texture::Scaled(Box::new(texture), factor),
+    }
+}
+
+/// Which coordinates texture `t` of material `m` reads: its slot among the sets the material's
+/// primitives carry (slot 0 for a set beyond them, warned about), through its
+/// `KHR_texture_transform`.
+fn uv_map(m: &GltfMaterial, t: &GltfTexture) -> Box<UvMap> {
+    Box::new(UvMap {
+        set: m.uv_slot(t).unwrap_or(0),
+        transform: t.transform,
+    })
+}
+
+/// `texture` read through `map`; `texture` itself for the identity map (set 0, no transform),
+/// so files without transforms or second sets render as before.
+fn mapped(texture: Texture, map: Box<UvMap>) -> Texture {
+    if *map == UvMap::default() {
+        texture
+    } else {
+        Texture::Mapped(Box::new(texture), map)
     }
 }
