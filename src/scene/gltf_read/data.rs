@@ -149,8 +149,9 @@ pub struct GltfMaterial {
     pub emissive_texture: Option<GltfTexture>,
     /// Alpha mode.
     pub alpha_mode: AlphaMode,
-    /// Whether the spec's back-face culling is off (see `load/gltf_place.rs`: a path tracer
-    /// renders both sides either way).
+    /// Whether the spec's back-face culling is off. Read but not used: rondo renders both
+    /// sides, as Blender Cycles does (culling is a rasteriser's optimisation; scenes/README.md,
+    /// "glTF models").
     pub double_sided: bool,
     /// `KHR_materials_transmission`'s factor (0 without the extension).
     pub transmission: f32,
