@@ -96,6 +96,9 @@ fn albedo(m: &Material, theta: f64, roughness: f64, n: usize) -> f64 {
     sum / (n * n) as f64
 }
 
+/// A white lobe's name and its material of a given roughness.
+type Lobe = (&'static str, fn(f32) -> Material);
+
 /// The (angle in degrees, roughness) pairs: 15 angles up to 88°, 20 roughnesses from 0.05.
 fn pairs() -> Vec<(f64, f64)> {
     let angles = [
@@ -112,7 +115,7 @@ fn pairs() -> Vec<(f64, f64)> {
 
 #[test]
 fn white_lobes_reflect_everything_at_every_angle_and_roughness() {
-    let lobes: [(&str, fn(f32) -> Material); 4] = [
+    let lobes: [Lobe; 4] = [
         ("Glossy", |r| glossy(Vec3::ONE, r)),
         ("Pbr metallic 1", |r| pbr(Vec3::ONE, 1.0, r)),
         ("Pbr metallic 0", |r| pbr(Vec3::ONE, 0.0, r)),

@@ -5,8 +5,6 @@
 
 mod common;
 
-use std::f64::consts::PI;
-
 use common::chi2::{cell, chi_square_of_directions};
 use common::{point_estimate, temp_dir, write_scene};
 use glam::{Vec2, Vec3};
