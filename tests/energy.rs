@@ -186,6 +186,11 @@ fn sampled_directions_of_the_compensated_lobes_follow_the_density() {
         ("Glossy", glossy(Vec3::ONE, 0.6), 0.4),
         ("Pbr metal", pbr(Vec3::new(0.9, 0.6, 0.3), 1.0, 0.8), 1.2),
         ("Pbr dielectric", pbr(Vec3::ONE, 0.0, 0.7), 1.3),
+        (
+            "Pbr dielectric, narrow",
+            pbr(Vec3::ONE, 0.0, 0.3),
+            80f32.to_radians(),
+        ),
         ("Pbr mix", pbr(Vec3::new(0.3, 0.8, 0.5), 0.5, 0.6), 0.5),
     ] {
         let d = Vec3::new(f32::sin(theta), 0.0, -f32::cos(theta));

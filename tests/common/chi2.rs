@@ -25,10 +25,11 @@ pub fn cell(i: usize, j: usize, n: usize, m: usize) -> (Vec3, f64) {
 
 /// The χ² statistic of `count` directions sampled by `m` for a ray along `d` at the flat normal
 /// +z, binned on a 20 × 20 (cos θ, φ) grid plus one bin for absorbed samples, against the
-/// density of `eval` integrated over each bin (a 6 × 6 sub-grid); bins expecting fewer than 5
+/// density of `eval` integrated over each bin (a 24 × 24 sub-grid: a 6 × 6 one is off by a few
+/// per cent on a narrow lobe near the horizon, a χ² of 12,600 for `Pbr` at roughness 0.3, 80°); bins expecting fewer than 5
 /// samples are pooled. Returns the statistic and its 0.1 % critical value.
 pub fn chi_square_of_directions(m: &Material, d: Vec3, count: usize, seed: u64) -> (f64, f64) {
-    let (nc, nphi, sub) = (20usize, 20usize, 6usize);
+    let (nc, nphi, sub) = (20usize, 20usize, 24usize);
     let bsdf = m.bsdf_at(d, Vec3::Z, Vec2::ZERO);
     let mut expected = vec![0.0f64; nc * nphi + 1];
     for i in 0..nc * sub {
