@@ -178,7 +178,7 @@ mod tests {
             (0.3, 0.6),
             (0.5, 0.5),
             (0.0, 0.05),
-            (1.2, 1.5707963),
+            (1.2, std::f32::consts::FRAC_PI_2),
         ] {
             let c = PunctualLight::spot(Vec3::ZERO, Vec3::Z, Vec3::ONE, inner, outer)
                 .cone

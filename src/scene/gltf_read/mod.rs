@@ -14,8 +14,9 @@
 //! integers; stored as `(u, 1 − v)`, rondo's v pointing up the image), sparse accessors,
 //! accessors without a buffer view (zeros), TRS and matrix node transforms, the
 //! metallic–roughness material with its textures, `KHR_materials_emissive_strength`,
-//! `KHR_materials_transmission`, `KHR_materials_ior` and `KHR_mesh_quantization`. Skipped with a
-//! warning: points and lines, morph targets, skins, cameras, punctual lights. Ignored:
+//! `KHR_materials_transmission`, `KHR_materials_ior`, `KHR_mesh_quantization`, the nodes'
+//! cameras and `KHR_lights_punctual` lights (`lights.rs`; the scene loader decides what becomes
+//! of them). Skipped with a warning: points and lines, morph targets, skins. Ignored:
 //! animations, vertex colours, tangents (normal maps derive them from texture coordinates). Any
 //! other extension listed in `extensionsRequired` is an error naming it.
 //!
@@ -32,24 +33,27 @@ use gltf::mesh::Mode;
 mod accessors;
 mod buffers;
 mod data;
+mod lights;
 mod material;
 mod nodes;
 
 pub use self::accessors::assemble;
 use self::accessors::{Budget, read_primitive, view_shared};
 use self::buffers::{decode_data_uri, detach_images, read_buffers, split_glb};
+use self::lights::{place_cameras_and_lights, read_cameras, read_lights};
 use self::material::read_material;
 use self::nodes::walk;
 
 pub use self::buffers::{MAX_BUFFER_BYTES, relative_uri};
 pub use self::data::{
-    AlphaMode, GltfImage, GltfMaterial, GltfMesh, GltfNode, GltfPrimitive, GltfScene, GltfTexture,
-    MAX_NODE_DEPTH, MAX_NODE_INSTANCES, MAX_TRIANGLES, MAX_VERTICES, MAX_ZERO_FILLED, SharedBytes,
-    Wrap,
+    AlphaMode, GltfCamera, GltfImage, GltfLight, GltfLightKind, GltfMaterial, GltfMesh, GltfNode,
+    GltfPrimitive, GltfProjection, GltfScene, GltfTexture, MAX_NODE_DEPTH, MAX_NODE_INSTANCES,
+    MAX_TRIANGLES, MAX_VERTICES, MAX_ZERO_FILLED, SharedBytes, Wrap,
 };
 
 /// Extensions that may appear in `extensionsRequired`.
 const SUPPORTED_REQUIRED: &[&str] = &[
+    "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_transmission",
@@ -171,25 +175,20 @@ fn read(
     for m in doc.materials() {
         scene.materials.push(read_material(&m)?);
     }
-    if doc.cameras().next().is_some() {
-        scene
-            .warnings
-            .push("cameras are ignored (the scene's camera is used)".into());
-    }
     for ext in doc.extensions_used() {
         if !SUPPORTED_REQUIRED.contains(&ext) {
-            scene.warnings.push(match ext {
-                "KHR_lights_punctual" => "punctual lights (KHR_lights_punctual) are ignored".into(),
-                other => format!("extension {other} is ignored"),
-            });
+            scene.warnings.push(format!("extension {ext} is ignored"));
         }
     }
+    let cameras = read_cameras(doc)?;
+    let lights = read_lights(doc)?;
     let roots = doc.default_scene().or_else(|| doc.scenes().next());
     if let Some(root) = roots {
         for node in root.nodes() {
             walk(&node, Affine3A::IDENTITY, 0, &mut scene)?;
         }
     }
+    place_cameras_and_lights(&mut scene, &cameras, &lights);
     Ok(scene)
 }
 
