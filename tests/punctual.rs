@@ -139,6 +139,7 @@ fn editing_a_light_renders_what_a_fresh_render_shows() {
     live.load(&path).unwrap_or_else(|e| panic!("{e}"));
     live.render_to_completion();
     let before = live.film().mean();
+    let builds = live.counters().bvh_builds;
 
     let edited = first.replace("position: (0, 2, 0)", "position: (0.5, 1, 0)");
     std::fs::write(&path, &edited).expect("write");
@@ -147,6 +148,11 @@ fn editing_a_light_renders_what_a_fresh_render_shows() {
     let changes = live.change_summary();
     assert!(changes.lights, "{changes:?}");
     assert_eq!(changes.changed + changes.added + changes.removed, 0);
+    assert_eq!(
+        live.counters().bvh_builds,
+        builds,
+        "a light edit builds no BVH"
+    );
     let after = live.film().mean();
     let fresh = render(&path, Default::default(), Some(1)).film().mean();
     assert_eq!(after, fresh, "the edit renders as the file renders");
