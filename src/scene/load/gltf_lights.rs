@@ -23,14 +23,6 @@ use crate::scene::gltf_read::{GltfCamera, GltfLightKind, GltfProjection};
 /// Angular diameter of the sun a directional light becomes, in degrees: the real sun's.
 const DIRECTIONAL_SUN_DIAMETER: f32 = 0.53;
 
-/// A directional light of a placed file, waiting to become the scene's sun.
-pub(super) struct GltfSun {
-    /// The sun.
-    pub sun: SunDesc,
-    /// What it is, for a warning if it is not used: the file and the light.
-    pub what: String,
-}
-
 impl Expander<'_> {
     /// Adds the lights of the file at `full` placed by `world_from_file`: points and spots to
     /// the scene's lights, directional lights to the candidate suns.
@@ -70,14 +62,13 @@ impl Expander<'_> {
                     if !radiance.is_finite() {
                         return Err(format!("{what}: the intensity is too large to represent"));
                     }
-                    self.suns.push(GltfSun {
-                        sun: SunDesc {
-                            direction: (-axis).normalize(),
-                            angular_diameter: DIRECTIONAL_SUN_DIAMETER,
-                            radiance,
-                        },
-                        what: format!("{}: directional {what}", full.display()),
-                    });
+                    let sun = SunDesc {
+                        direction: (-axis).normalize(),
+                        angular_diameter: DIRECTIONAL_SUN_DIAMETER,
+                        radiance,
+                    };
+                    self.suns
+                        .push((sun, format!("{}: directional {what}", full.display())));
                 }
             }
         }

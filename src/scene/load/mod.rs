@@ -28,14 +28,13 @@ mod materials;
 mod prefab;
 mod reach;
 
-use self::gltf_lights::GltfSun;
 use self::reach::{corner_reach, world_reach};
 use super::assets::AssetCache;
 use super::assets::GltfAsset;
 use super::error::{Location, SceneError};
 use super::format::{
     CameraDesc, EntityDesc, MAX_COORDINATE, PrefabDesc, SceneCamera, SceneDesc, SettingsDesc,
-    ShapeDesc,
+    ShapeDesc, SunDesc,
 };
 use super::incremental::parse_scene_text;
 use super::locate::{Locator, Places, SourceText};
@@ -245,8 +244,9 @@ struct Expander<'a> {
     warned: HashSet<String>,
     /// Point and spot lights of placed glTF files.
     lights: Vec<PunctualLight>,
-    /// Directional lights of placed glTF files, candidates for the scene's sun.
-    suns: Vec<GltfSun>,
+    /// Directional lights of placed glTF files, candidates for the scene's sun, each with what
+    /// it is (its file and light) for a warning if it is not used.
+    suns: Vec<(SunDesc, String)>,
     /// Qualified names of the glTF placements, for the error of a camera that names none.
     gltf_placements: Vec<String>,
     /// The placement whose camera the scene uses, if it is a glTF file's.
@@ -335,9 +335,8 @@ fn expand_scene(
     x.expand(&file, &desc.entities, &scope, Affine3A::IDENTITY, "")?;
     x.unique_names()?;
     let mut settings = desc.settings.clone();
-    for candidate in std::mem::take(&mut x.suns) {
+    for (s, what) in std::mem::take(&mut x.suns) {
         if settings.sun.is_none() {
-            let s = candidate.sun;
             sky.sun = Some(Sun::new(
                 s.direction,
                 s.angular_diameter.to_radians(),
@@ -345,10 +344,8 @@ fn expand_scene(
             ));
             settings.sun = Some(s);
         } else {
-            let warning = format!(
-                "{} is ignored: the scene already has a sun, and rondo has one",
-                candidate.what
-            );
+            let warning =
+                format!("{what} is ignored: the scene already has a sun, and rondo has one");
             if x.warned.insert(warning.clone()) {
                 x.warnings.push(warning);
             }
