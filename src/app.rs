@@ -10,9 +10,9 @@ use bevy_ecs::schedule::{SystemCondition, common_conditions::resource_changed};
 
 use crate::ecs::frame_log::FrameLog;
 use crate::ecs::resources::{
-    Accumulation, ActiveCamera, ActiveSky, ChangeSummary, Counters, MaterialTable, Output,
-    OwnerMaterials, PackedGeometry, PassPlan, PendingScene, Preview, RenderControl, RenderSettings,
-    SceneVersion, Timings,
+    Accumulation, ActiveCamera, ActiveLights, ActiveSky, ChangeSummary, Counters, MaterialTable,
+    Output, OwnerMaterials, PackedGeometry, PassPlan, PendingScene, Preview, RenderControl,
+    RenderSettings, SceneVersion, Timings,
 };
 use crate::ecs::sets::RenderSystems;
 use crate::film::Film;
@@ -124,6 +124,7 @@ impl Renderer {
         world.init_resource::<RenderSettings>();
         world.init_resource::<MaterialTable>();
         world.init_resource::<ActiveSky>();
+        world.init_resource::<ActiveLights>();
         world.init_resource::<SceneVersion>();
         world.init_resource::<PackedGeometry>();
         world.init_resource::<OwnerMaterials>();
@@ -165,6 +166,7 @@ impl Renderer {
                     resource_changed::<PackedGeometry>
                         .or_eager(resource_changed::<MaterialTable>)
                         .or_eager(resource_changed::<ActiveSky>)
+                        .or_eager(resource_changed::<ActiveLights>)
                         .or_eager(material_refs_changed),
                 ),
             )

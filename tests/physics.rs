@@ -27,7 +27,7 @@ use rondo::{Film, Overrides};
 fn surface(s: Sampled) -> Option<LightSample> {
     match s {
         Sampled::Surface(s) => Some(s),
-        Sampled::Distant(_) => None,
+        Sampled::Distant(_) | Sampled::Punctual(_) => None,
     }
 }
 

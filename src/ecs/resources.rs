@@ -15,6 +15,7 @@ use crate::geometry::instance::BlasCache;
 use crate::geometry::layout::LayoutKind;
 use crate::geometry::packed::Geometry;
 use crate::lights::LightSet;
+use crate::lights::punctual::PunctualLight;
 use crate::render::TraceStats;
 use crate::scene::format::{CameraDesc, SettingsDesc};
 use crate::scene::load::LoadedScene;
@@ -36,6 +37,10 @@ pub struct RenderSettings(pub SettingsDesc);
 /// The distant lights of the current scene (environment map and sun).
 #[derive(Resource, Clone, Debug, PartialEq, Default)]
 pub struct ActiveSky(pub Sky);
+
+/// The point and spot lights of the current scene (its `lights` and those of its glTF files).
+#[derive(Resource, Clone, Debug, PartialEq, Default)]
+pub struct ActiveLights(pub Vec<PunctualLight>);
 
 /// Materials of the current scene by name.
 #[derive(Resource, Clone, Debug, PartialEq, Default)]
@@ -105,6 +110,8 @@ pub struct ChangeSummary {
     pub settings: bool,
     /// Whether the distant lights changed (their settings, or the environment map's file).
     pub sky: bool,
+    /// Whether the point and spot lights changed.
+    pub lights: bool,
     /// Whether entities kept by the reload changed their order in the scene (geometry is packed
     /// in scene order, so this rebuilds the BVH).
     pub reordered: bool,

@@ -3,9 +3,10 @@
 //! Every sphere and triangle whose material emits ([`crate::shading::material::Material::emission`])
 //! is an area light ([`area`]), and so is every triangle of an emissive instanced mesh (placed
 //! through its instance transform, with its area in world space); the distant lights of the
-//! scene's sky ([`distant`]) follow them in the table. One is chosen half by power, half evenly
-//! over the scene's lights ([`table`]; power is area × intensity × mean emitted colour for an
-//! area light, what the scene receives for a distant one), then a point on it or a direction towards
+//! scene's sky ([`distant`]) follow them in the table, then the point and spot lights
+//! ([`punctual`]). One is chosen half by power, half evenly over the scene's lights ([`table`];
+//! power is area × intensity × mean emitted colour for an area light, what the scene receives
+//! for a distant one, flux / π for a punctual one), then a point on it or a direction towards
 //! it. [`LightSet::sample`] and [`LightSet::pdf`] decide an area light's strategy by the same
 //! rule, so the density a BSDF-sampled hit is weighted with is the one the light sample would
 //! have had. Infinite planes are never light-sampled: their emission is only found by BSDF
@@ -13,6 +14,7 @@
 
 pub mod area;
 pub mod distant;
+pub mod punctual;
 pub mod table;
 
 use glam::{Vec2, Vec3};
@@ -25,6 +27,7 @@ use crate::sky::Sky;
 
 use area::{Emitter, LightSample, radiance_scale};
 use distant::{DistantLight, DistantSample};
+use punctual::{PunctualLight, PunctualSample};
 use table::{SelectionTable, mixed_weights};
 
 /// Marks a primitive slot that is not an emitter.
@@ -37,6 +40,8 @@ pub enum Sampled {
     Surface(LightSample),
     /// A direction towards a distant light.
     Distant(DistantSample),
+    /// A point or spot light: a delta light, whose sample counts at full weight.
+    Punctual(PunctualSample),
 }
 
 /// The lights of a scene with their selection probabilities.
@@ -54,6 +59,8 @@ pub struct LightSet {
     instance_emitter: Vec<u32>,
     /// The distant lights: entries `emitters.len() + k` of the table.
     distant: Vec<DistantLight>,
+    /// The point and spot lights: entries `emitters.len() + distant.len() + k` of the table.
+    punctual: Vec<PunctualLight>,
 }
 
 impl LightSet {
@@ -74,6 +81,18 @@ impl LightSet {
         materials: &[Material],
         owner_material: &[u32],
         sky: &Sky,
+    ) -> Self {
+        Self::build_with_lights(geometry, materials, owner_material, sky, &[])
+    }
+
+    /// [`LightSet::build_with_sky`] with the point and spot lights `punctual` after the distant
+    /// lights, in the given order, each weighed by [`PunctualLight::power`].
+    pub fn build_with_lights<L: Layout>(
+        geometry: &Geometry<L>,
+        materials: &[Material],
+        owner_material: &[u32],
+        sky: &Sky,
+        punctual: &[PunctualLight],
     ) -> Self {
         let power_of = |owner: u32| -> Option<(u32, f32)> {
             let m = *owner_material.get(owner as usize)?;
@@ -152,6 +171,12 @@ impl LightSet {
             }
         }
         set.distant = distant;
+        // Each point or spot light is a light of its own.
+        for (k, light) in punctual.iter().enumerate() {
+            powers.push(f64::from(light.power()));
+            light_of.push(lights + k);
+        }
+        set.punctual = punctual.to_vec();
         set.table = SelectionTable::new(&mixed_weights(&powers, &light_of));
         if set.table.is_empty() {
             // Emitters with zero power (or none at all): nothing worth sampling.
@@ -160,6 +185,7 @@ impl LightSet {
                 triangle_emitter: vec![NONE; set.triangle_emitter.len()],
                 instance_emitter: vec![NONE; set.instance_emitter.len()],
                 distant: set.distant,
+                punctual: set.punctual,
                 ..Self::default()
             };
         }
@@ -182,6 +208,20 @@ impl LightSet {
             .iter()
             .map(DistantLight::max_radiance)
             .fold(0.0, f32::max)
+    }
+
+    /// The brightest radiant intensity (any channel) of the point and spot lights: the
+    /// irradiance they give at unit distance, a scale for the film's fixed point.
+    pub fn punctual_max_intensity(&self) -> f32 {
+        self.punctual
+            .iter()
+            .map(|light| light.intensity.max_element())
+            .fold(0.0, f32::max)
+    }
+
+    /// The point and spot lights, in table order after the distant lights.
+    pub fn punctual(&self) -> &[PunctualLight] {
+        &self.punctual
     }
 
     /// The distant lights, in the order [`LightSet::distant_lookup`] numbers them.
@@ -213,8 +253,9 @@ impl LightSet {
     }
 
     /// Samples a light seen from shading point `p_ref`: `u_select` picks it, `u` the point on
-    /// it (or the direction towards a distant one); `jitter()` is asked for two more numbers
-    /// only by a light that needs them (a map's texel). The numbers come from separate sampler
+    /// it (or the direction towards a distant one; a point or spot light needs neither);
+    /// `jitter()` is asked for two more numbers only by a light that needs them (a map's
+    /// texel). The numbers come from separate sampler
     /// dimensions: rescaling the remainder of `u_select` within the emitter's share into a point
     /// coordinate leaves an emitter with a count of c out of 2²⁴ only c distinct values (a lone
     /// triangle lamp would always give one edge).
@@ -230,7 +271,10 @@ impl LightSet {
         let (k, pmf) = self.select(u_select)?;
         let Some(&e) = self.emitters.get(k) else {
             let d = k - self.emitters.len();
-            let light = self.distant.get(d)?;
+            let Some(light) = self.distant.get(d) else {
+                let light = self.punctual.get(d - self.distant.len())?;
+                return light.sample(p_ref, pmf).map(Sampled::Punctual);
+            };
             // Value and density of what was sampled: no second lookup of the direction.
             let (direction, radiance, pdf) = light.sample(u, jitter)?;
             let pdf = pmf * pdf;

@@ -322,7 +322,8 @@ struct Vertex<'a> {
 
 /// One light sample at a vertex's surface `s` for a ray arriving along `d`: emitted radiance
 /// from a point sampled on an emitter, times the BSDF and cosine, over the light density,
-/// MIS-weighted against BSDF sampling under `Method::Mis`.
+/// MIS-weighted against BSDF sampling under `Method::Mis` (a point or spot light's irradiance
+/// over its selection probability, at full weight).
 #[inline(always)]
 fn direct_light<L: Layout, W: Lanes>(
     lanes: W,
@@ -399,7 +400,26 @@ fn direct_light<L: Layout, W: Lanes>(
             let shadow = spawn(s.p, s.n, err, wi);
             (wi, light.radiance, light.pdf, (shadow, f32::INFINITY, None))
         }
+        Sampled::Punctual(light) => {
+            // The shadow ray ends at the light itself: a point on no surface.
+            let wi = (light.position - s.p).normalize();
+            let from = spawn(s.p, s.n, err, wi).origin;
+            let span = light.position - from;
+            let length = span.length();
+            if !(length > 0.0 && length.is_finite()) {
+                return Vec3::ZERO;
+            }
+            let shadow = Ray::new(from, span / length);
+            (
+                wi,
+                light.irradiance,
+                light.pdf,
+                (shadow, length, Some(light.position)),
+            )
+        }
     };
+    // No BSDF-sampled ray finds a delta light: its sample is the only estimate, at full weight.
+    let delta = matches!(sampled, Sampled::Punctual(_));
     if emitted == Vec3::ZERO {
         return Vec3::ZERO;
     }
@@ -437,7 +457,7 @@ fn direct_light<L: Layout, W: Lanes>(
     if occluded {
         return Vec3::ZERO;
     }
-    let weight = if view.method == Method::Mis {
+    let weight = if view.method == Method::Mis && !delta {
         power_heuristic(pdf_light, pdf_bsdf)
     } else {
         1.0

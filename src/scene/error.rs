@@ -313,6 +313,9 @@ fn describe(error: &ron::Error, at: &[Segment], source: &str) -> String {
         [first, Segment::Map { key: name }, rest @ ..] if key(first) == Some("materials") => {
             (Some(format!("material \"{name}\"")), rest)
         }
+        [first, Segment::Seq { index }, rest @ ..] if key(first) == Some("lights") => {
+            (Some(format!("lights[{index}]")), rest)
+        }
         [first, rest @ ..] if matches!(key(first), Some("camera" | "settings")) => {
             (key(first).map(str::to_string), rest)
         }
@@ -383,6 +386,8 @@ fn kind_of(outer: Option<&str>) -> String {
         Some("RawShape") => "shape kind".into(),
         Some("TextureDesc") => "texture kind".into(),
         Some("Method") => "method".into(),
+        Some("RawLight") => "light kind".into(),
+        Some("SceneCamera") => "camera kind".into(),
         Some(other) => format!("{other} variant"),
         None => "variant".into(),
     }

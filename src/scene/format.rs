@@ -11,13 +11,15 @@ use serde::de::DeserializeOwned;
 use crate::scene::error::SceneError;
 
 mod camera;
+mod light;
 mod material;
 mod number;
 mod settings;
 mod shape;
 mod transform;
 
-pub use camera::CameraDesc;
+pub use camera::{CameraDesc, GltfCameraDesc, SceneCamera};
+pub use light::{LightDesc, check_cone, checked_intensity};
 pub use material::{MaterialDesc, NormalMapDesc, TextureDesc};
 pub use number::{Color, Count, NonNegative, Positive, Real, UnitInterval, V3};
 pub use settings::{
@@ -52,11 +54,14 @@ pub fn parse<T: DeserializeOwned>(path: &Path, source: &str) -> Result<T, SceneE
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Scene")]
 pub struct SceneDesc {
-    /// The camera.
-    pub camera: CameraDesc,
+    /// The camera: its own, or one of a placed glTF file.
+    pub camera: SceneCamera,
     /// Image and sampling settings.
     #[serde(default)]
     pub settings: SettingsDesc,
+    /// Point and spot lights, in world space.
+    #[serde(default)]
+    pub lights: Vec<LightDesc>,
     /// Named materials.
     #[serde(default)]
     pub materials: BTreeMap<String, MaterialDesc>,

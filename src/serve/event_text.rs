@@ -46,6 +46,7 @@ pub fn changed_text(c: &ChangeSummary) -> String {
         (c.camera, "camera"),
         (c.settings, "settings"),
         (c.sky, "sky"),
+        (c.lights, "lights"),
         (c.reordered, "order"),
     ]
     .into_iter()

@@ -7,8 +7,8 @@ use bevy_ecs::prelude::*;
 use crate::ecs::components::{EntityName, MaterialRef, SceneOrder, Shape, Transform};
 use crate::ecs::frame_log::FrameLog;
 use crate::ecs::resources::{
-    ActiveCamera, ActiveSky, ChangeSummary, MaterialTable, PendingScene, RenderSettings,
-    SceneVersion,
+    ActiveCamera, ActiveLights, ActiveSky, ChangeSummary, MaterialTable, PendingScene,
+    RenderSettings, SceneVersion,
 };
 use crate::scene::load::LoadedEntity;
 
@@ -48,6 +48,7 @@ pub fn apply_scene(
     mut settings: ResMut<RenderSettings>,
     mut materials: ResMut<MaterialTable>,
     mut sky: ResMut<ActiveSky>,
+    mut lights: ResMut<ActiveLights>,
     mut version: ResMut<SceneVersion>,
     mut summary: ResMut<ChangeSummary>,
     mut log: ResMut<FrameLog>,
@@ -115,6 +116,7 @@ pub fn apply_scene(
     report.settings = settings.set_if_neq(RenderSettings(scene.settings));
     report.materials = materials.set_if_neq(MaterialTable(scene.materials));
     report.sky = sky.set_if_neq(ActiveSky(scene.sky));
+    report.lights = lights.set_if_neq(ActiveLights(scene.lights));
     if version.0 == 0 || !report.is_empty() {
         version.0 += 1;
     }

@@ -4,7 +4,9 @@ use bevy_ecs::prelude::*;
 
 use crate::ecs::components::MaterialRef;
 use crate::ecs::frame_log::FrameLog;
-use crate::ecs::resources::{ActiveSky, Counters, MaterialTable, OwnerMaterials, PackedGeometry};
+use crate::ecs::resources::{
+    ActiveLights, ActiveSky, Counters, MaterialTable, OwnerMaterials, PackedGeometry,
+};
 use crate::lights::LightSet;
 
 /// Run condition: a `MaterialRef` was added or changed.
@@ -12,13 +14,19 @@ pub fn material_refs_changed(changed: Query<(), Changed<MaterialRef>>) -> bool {
     !changed.is_empty()
 }
 
-/// Rebuilds [`OwnerMaterials`] and the light set (the sky's distant lights included): linear in entities and primitives, and never
+/// Rebuilds [`OwnerMaterials`] and the light set (the sky's distant lights and the point and
+/// spot lights included): linear in entities and primitives, and never
 /// touches the BVH, so a material-only edit costs no geometry build.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the materials, the geometry and every kind of light"
+)]
 pub fn assign_materials(
     refs: Query<&MaterialRef>,
     packed: Res<PackedGeometry>,
     table: Res<MaterialTable>,
     sky: Res<ActiveSky>,
+    punctual: Res<ActiveLights>,
     mut out: ResMut<OwnerMaterials>,
     mut counters: ResMut<Counters>,
     mut log: ResMut<FrameLog>,
@@ -35,7 +43,13 @@ pub fn assign_materials(
         })
         .collect();
     let materials: Vec<_> = table.0.values().cloned().collect();
-    let lights = LightSet::build_with_sky(&packed.geometry, &materials, &owner_material, &sky.0);
+    let lights = LightSet::build_with_lights(
+        &packed.geometry,
+        &materials,
+        &owner_material,
+        &sky.0,
+        &punctual.0,
+    );
     out.set_if_neq(OwnerMaterials {
         materials,
         owner_material,

@@ -92,7 +92,8 @@ pub fn render_frame(
             film_shift(
                 &materials.materials,
                 s.background
-                    .max(Vec3::splat(materials.lights.sky_max_radiance())),
+                    .max(Vec3::splat(materials.lights.sky_max_radiance()))
+                    .max(Vec3::splat(materials.lights.punctual_max_intensity())),
             ),
         );
         acc.preview = Preview::Due;

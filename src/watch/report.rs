@@ -152,6 +152,7 @@ impl fmt::Display for ReloadReport {
             (c.camera, "camera"),
             (c.settings, "settings"),
             (c.sky, "sky"),
+            (c.lights, "lights"),
         ] {
             if flag {
                 changed.push(what.to_string());

@@ -62,6 +62,7 @@ fn scene(
         origins: Vec::new(),
         material_origins: BTreeMap::new(),
         sky: Default::default(),
+        lights: Vec::new(),
         stats: Default::default(),
     }
 }

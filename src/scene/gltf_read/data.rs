@@ -33,6 +33,11 @@ pub struct GltfScene {
     pub materials: Vec<GltfMaterial>,
     /// The file's images, in file order (indexed by [`GltfTexture::image`]).
     pub images: Vec<GltfImage>,
+    /// The cameras of the default scene's nodes, in node order (a node reached twice is
+    /// listed twice).
+    pub cameras: Vec<GltfCamera>,
+    /// The lights (`KHR_lights_punctual`) of the default scene's nodes, in node order.
+    pub lights: Vec<GltfLight>,
     /// What was skipped or ignored, one sentence each.
     pub warnings: Vec<String>,
     /// Bytes held by the file's buffers (each source once), at most [`MAX_BUFFER_BYTES`](super::MAX_BUFFER_BYTES).
@@ -69,6 +74,76 @@ pub struct GltfNode {
     pub world_from_node: Affine3A,
     /// Index into [`GltfScene::meshes`].
     pub mesh: Option<usize>,
+    /// Index of the node's camera in the file.
+    pub camera: Option<usize>,
+    /// Index of the node's light (`KHR_lights_punctual`) in the file.
+    pub light: Option<usize>,
+}
+
+/// A camera placed by a node.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GltfCamera {
+    /// The node's index in the file.
+    pub node: usize,
+    /// The node's name in the file.
+    pub node_name: Option<String>,
+    /// The camera's name in the file.
+    pub name: Option<String>,
+    /// Camera to file space: the node's transform composed with its ancestors'. The camera
+    /// looks along its −z, +y up.
+    pub world_from_camera: Affine3A,
+    /// Its projection.
+    pub projection: GltfProjection,
+}
+
+/// A camera's projection.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum GltfProjection {
+    /// Perspective: vertical field of view in radians, and the aspect ratio if the file gives
+    /// one.
+    Perspective {
+        /// Vertical field of view, radians, in (0, π).
+        yfov: f32,
+        /// Width over height, if given.
+        aspect_ratio: Option<f32>,
+    },
+    /// Orthographic (not supported as a scene camera).
+    Orthographic,
+}
+
+/// A `KHR_lights_punctual` light placed by a node, its values checked (colour and intensity
+/// finite and ≥ 0, cone angles `0 ≤ inner ≤ outer ≤ π/2`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GltfLight {
+    /// The light's index in the file's list.
+    pub index: usize,
+    /// The light's name in the file.
+    pub name: Option<String>,
+    /// Light to file space: the node's transform composed with its ancestors'. Directional
+    /// lights and spots shine along its −z.
+    pub world_from_light: Affine3A,
+    /// Linear colour.
+    pub colour: Vec3,
+    /// Candela for points and spots, lux for directional lights.
+    pub intensity: f32,
+    /// Its kind.
+    pub kind: GltfLightKind,
+}
+
+/// The kind of a glTF light.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum GltfLightKind {
+    /// Light from infinitely far away along −z.
+    Directional,
+    /// A point light.
+    Point,
+    /// A spot along −z with its cone half-angles in radians.
+    Spot {
+        /// Full intensity within this angle of the axis.
+        inner: f32,
+        /// No light beyond this angle.
+        outer: f32,
+    },
 }
 
 /// How a material's alpha is used.

@@ -16,12 +16,13 @@
 //! accessors without a buffer view (zeros), TRS and matrix node transforms,
 //! `EXT_mesh_gpu_instancing` (`instancing.rs`), the metallic–roughness material with its
 //! textures and their `KHR_texture_transform` (`texture_transform.rs`),
-//! `KHR_materials_emissive_strength`, `KHR_materials_transmission`, `KHR_materials_ior` and
-//! `KHR_mesh_quantization`. Skipped with a warning: points and lines, morph targets, skins,
-//! cameras, and every other extension the file uses (the warning says what will look wrong:
-//! `unsupported.rs`). Ignored: animations, vertex colours, tangents (normal maps derive them from
-//! texture coordinates). Any other extension listed in `extensionsRequired` is an error naming
-//! it.
+//! `KHR_materials_emissive_strength`, `KHR_materials_transmission`, `KHR_materials_ior`,
+//! `KHR_mesh_quantization`, the nodes' cameras and `KHR_lights_punctual` lights (`lights.rs`;
+//! the scene loader decides what becomes of them). Skipped with a warning: points and lines,
+//! morph targets, skins, and every other extension the file uses (the warning says what will
+//! look wrong: `unsupported.rs`). Ignored: animations, vertex colours, tangents (normal maps
+//! derive them from texture coordinates). Any other extension listed in `extensionsRequired` is
+//! an error naming it.
 //!
 //! This file reads the document and assembles the result; the bytes behind it are in
 //! `buffers.rs`, accessors in `accessors.rs`, materials in `material.rs` and the node tree with
@@ -37,6 +38,7 @@ mod accessors;
 mod buffers;
 mod data;
 mod instancing;
+mod lights;
 mod material;
 mod nodes;
 mod texture_transform;
@@ -46,20 +48,22 @@ mod uv_sets;
 pub use self::accessors::assemble;
 use self::accessors::{Budget, read_primitive, view_shared};
 use self::buffers::{decode_data_uri, detach_images, read_buffers, split_glb};
+use self::lights::{place_cameras_and_lights, read_cameras, read_lights};
 use self::material::read_material;
 use self::nodes::walk;
 
 pub use self::buffers::{MAX_BUFFER_BYTES, relative_uri};
 pub use self::data::{
-    AlphaMode, GltfImage, GltfMaterial, GltfMesh, GltfNode, GltfPrimitive, GltfScene, GltfTexture,
-    MAX_NODE_DEPTH, MAX_NODE_INSTANCES, MAX_TRIANGLES, MAX_VERTICES, MAX_ZERO_FILLED, SharedBytes,
-    Wrap,
+    AlphaMode, GltfCamera, GltfImage, GltfLight, GltfLightKind, GltfMaterial, GltfMesh, GltfNode,
+    GltfPrimitive, GltfProjection, GltfScene, GltfTexture, MAX_NODE_DEPTH, MAX_NODE_INSTANCES,
+    MAX_TRIANGLES, MAX_VERTICES, MAX_ZERO_FILLED, SharedBytes, Wrap,
 };
 pub use self::uv_sets::MAX_UV_SETS;
 
 /// Extensions that may appear in `extensionsRequired`.
 const SUPPORTED_REQUIRED: &[&str] = &[
     "EXT_mesh_gpu_instancing",
+    "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_transmission",
@@ -202,16 +206,13 @@ fn read(
         });
     }
     detach_images(&mut scene.images);
-    if doc.cameras().next().is_some() {
-        scene
-            .warnings
-            .push("cameras are ignored (the scene's camera is used)".into());
-    }
     for ext in doc.extensions_used() {
         if !SUPPORTED_REQUIRED.contains(&ext) {
             scene.warnings.push(unsupported::warning(ext));
         }
     }
+    let cameras = read_cameras(doc)?;
+    let lights = read_lights(doc)?;
     let roots = doc.default_scene().or_else(|| doc.scenes().next());
     if let Some(root) = roots {
         for node in root.nodes() {
@@ -219,6 +220,7 @@ fn read(
         }
     }
     instancing::expand(doc, &buffers, &mut scene)?;
+    place_cameras_and_lights(&mut scene, &cameras, &lights);
     Ok(scene)
 }
 

@@ -95,6 +95,10 @@ pub(super) fn walk(
         name: node.name().map(str::to_owned),
         world_from_node: world,
         mesh: node.mesh().map(|m| m.index()),
+        camera: node.camera().map(|c| c.index()),
+        // The index was validated against the file's lights (`validate`), so the crate's
+        // lookup finds it.
+        light: node.light().map(|l| l.index()),
     });
     for child in node.children() {
         walk(&child, world, depth + 1, scene)?;

@@ -4,9 +4,6 @@
 /// What is missing from the render when extension `ext` is ignored.
 fn consequence(ext: &str) -> &'static str {
     match ext {
-        "KHR_lights_punctual" => {
-            "punctual lights are ignored: the scene is lit by its own lights only"
-        }
         "KHR_materials_clearcoat" => {
             "the clear coat is ignored: coated surfaces lose their sharp top reflection and show the base alone"
         }

@@ -5,7 +5,7 @@
 //! primitives), each placed by the placement's transform times the node's. Every node that uses
 //! a mesh shares its data, so it is instanced. The file's materials become `Pbr` materials keyed
 //! `<canonical path>::<material name, or #index>` unless the placement maps their names to the
-//! scene's, as a prefab placement does.
+//! scene's, as a prefab placement does. Its lights and cameras are placed by `gltf_lights.rs`.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -98,6 +98,12 @@ impl Expander<'_> {
         }
         for w in &asset.scene.warnings {
             self.warn(&full, w);
+        }
+        self.place_gltf_lights(&full, &asset, transform)
+            .map_err(|m| fail(Some(gltf), format!("glTF {}: {m}", full.display())))?;
+        self.gltf_placements.push(name.to_owned());
+        if self.camera_placement.as_deref() == Some(name) {
+            self.camera_source = Some((asset.clone(), transform, full.clone()));
         }
         let materials = &asset.scene.materials;
         let material_labels = labels(

@@ -16,11 +16,13 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Vec3};
 
+use crate::lights::punctual::PunctualLight;
 use crate::model::{MeshData, MeshRef, Shape, Transform};
 use crate::shading::material::Material;
 use crate::shading::texture::ImageTexture;
-use crate::sky::Sky;
+use crate::sky::{Sky, Sun};
 
+mod gltf_lights;
 mod gltf_place;
 mod materials;
 mod prefab;
@@ -28,9 +30,11 @@ mod reach;
 
 use self::reach::{corner_reach, world_reach};
 use super::assets::AssetCache;
+use super::assets::GltfAsset;
 use super::error::{Location, SceneError};
 use super::format::{
-    CameraDesc, EntityDesc, MAX_COORDINATE, PrefabDesc, SceneDesc, SettingsDesc, ShapeDesc,
+    CameraDesc, EntityDesc, MAX_COORDINATE, PrefabDesc, SceneCamera, SceneDesc, SettingsDesc,
+    ShapeDesc, SunDesc,
 };
 use super::incremental::parse_scene_text;
 use super::locate::{Locator, Places, SourceText};
@@ -96,7 +100,7 @@ pub struct LoadStats {
 pub struct LoadedScene {
     /// The scene file.
     pub path: PathBuf,
-    /// The camera.
+    /// The camera (a glTF file's resolved).
     pub camera: CameraDesc,
     /// Settings.
     pub settings: SettingsDesc,
@@ -115,8 +119,12 @@ pub struct LoadedScene {
     pub material_origins: BTreeMap<String, (u32, String)>,
     /// Work counted while loading.
     pub stats: LoadStats,
-    /// The distant lights of `settings.environment` and `settings.sun`, the map loaded.
+    /// The distant lights of `settings.environment` and `settings.sun`, the map loaded (the
+    /// sun may come from a placed glTF file's directional light: `settings.sun` is then set).
     pub sky: Sky,
+    /// The point and spot lights: the scene's `lights`, then those of the glTF files placed, in
+    /// expansion order.
+    pub lights: Vec<PunctualLight>,
     /// What was loaded differently from how the files ask (parts of glTF files that rondo
     /// skips or approximates), one sentence each, naming the file.
     pub warnings: Vec<String>,
@@ -234,6 +242,17 @@ struct Expander<'a> {
     /// Warnings in first-seen order, each once.
     warnings: Vec<String>,
     warned: HashSet<String>,
+    /// Point and spot lights of placed glTF files.
+    lights: Vec<PunctualLight>,
+    /// Directional lights of placed glTF files, candidates for the scene's sun, each with what
+    /// it is (its file and light) for a warning if it is not used.
+    suns: Vec<(SunDesc, String)>,
+    /// Qualified names of the glTF placements, for the error of a camera that names none.
+    gltf_placements: Vec<String>,
+    /// The placement whose camera the scene uses, if it is a glTF file's.
+    camera_placement: Option<String>,
+    /// That placement's file, transform and path, once placed.
+    camera_source: Option<(Arc<GltfAsset>, Affine3A, PathBuf)>,
 }
 
 /// Reads, parses and validates the scene at `path`, expanding prefabs and loading textures and
@@ -296,6 +315,14 @@ fn expand_scene(
         gltf_bounds: HashMap::new(),
         warnings: Vec::new(),
         warned: HashSet::new(),
+        lights: Vec::new(),
+        suns: Vec::new(),
+        gltf_placements: Vec::new(),
+        camera_placement: match &desc.camera {
+            SceneCamera::Gltf(g) => Some(g.placement.clone()),
+            SceneCamera::Camera(_) => None,
+        },
+        camera_source: None,
     };
     x.depend(path);
     let mut scope = Scope::new();
@@ -304,13 +331,36 @@ fn expand_scene(
         x.materials.insert(name.clone(), material);
         scope.insert(name.clone(), name.clone());
     }
-    let sky = x.sky(&file, &desc.settings)?;
+    let mut sky = x.sky(&file, &desc.settings)?;
     x.expand(&file, &desc.entities, &scope, Affine3A::IDENTITY, "")?;
     x.unique_names()?;
+    let mut settings = desc.settings.clone();
+    for (s, what) in std::mem::take(&mut x.suns) {
+        if settings.sun.is_none() {
+            sky.sun = Some(Sun::new(
+                s.direction,
+                s.angular_diameter.to_radians(),
+                s.radiance,
+            ));
+            settings.sun = Some(s);
+        } else {
+            let warning =
+                format!("{what} is ignored: the scene already has a sun, and rondo has one");
+            if x.warned.insert(warning.clone()) {
+                x.warnings.push(warning);
+            }
+        }
+    }
+    let camera = match &desc.camera {
+        SceneCamera::Camera(c) => *c,
+        SceneCamera::Gltf(g) => x.gltf_camera(&file, g, settings.width, settings.height)?,
+    };
+    let mut lights: Vec<PunctualLight> = desc.lights.iter().map(|l| l.light).collect();
+    lights.append(&mut x.lights);
     Ok(LoadedScene {
         path: path.to_path_buf(),
-        camera: desc.camera,
-        settings: desc.settings.clone(),
+        camera,
+        settings,
         materials: x.materials,
         entities: x.entities,
         dependencies: x.dependencies,
@@ -319,6 +369,7 @@ fn expand_scene(
         material_origins: x.material_origins,
         stats: x.stats,
         sky,
+        lights,
         warnings: x.warnings,
     })
 }
