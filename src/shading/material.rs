@@ -35,8 +35,9 @@ pub enum Material {
     },
     /// Rough metal with an evaluable BSDF: GGX (Trowbridge–Reitz) microfacet reflection,
     /// Schlick's Fresnel with `albedo` as the reflectance at normal incidence, height-correlated
-    /// Smith shadowing; directions are sampled from the visible normals (see
-    /// [`super::conductor`]). Unlike `Metal`, next-event estimation and MIS apply to it, except
+    /// Smith shadowing, and Kulla & Conty's compensation for the light that scatters between
+    /// microfacets (a white `Glossy` reflects everything at any roughness); directions are
+    /// sampled from the visible normals or the cosine (see [`super::conductor`]). Unlike `Metal`, next-event estimation and MIS apply to it, except
     /// below [`super::microfacet::SPECULAR_ALPHA`], where it is a perfect mirror reflecting
     /// Schlick's Fresnel at the view's cosine.
     Glossy {
@@ -62,7 +63,8 @@ pub enum Material {
         two_sided: bool,
     },
     /// The glTF 2.0 metallic–roughness material ([`super::pbr`]): a conductor and a dielectric
-    /// (GGX specular over Lambertian base colour) mixed by `metallic`, plus an emission that
+    /// (GGX specular over a Lambertian base colour that gets what the specular lobe does not
+    /// reflect) mixed by `metallic`, both energy conserving (white reflects everything), plus an emission that
     /// is added to what it reflects, from both sides, and light-sampled like a `Light`'s.
     Pbr {
         /// Base colour: the conductor's F0 and the dielectric's diffuse reflectance.

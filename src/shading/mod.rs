@@ -1,11 +1,13 @@
 //! Shading kernels: random numbers, samplers, sampling, textures, materials and the BSDF they
 //! become at a hit, one file per lobe. No ECS here.
 
+pub mod albedo_table;
 pub mod bsdf;
 pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
 pub mod emission;
+pub mod energy;
 pub mod fuzzed;
 pub mod maps;
 pub mod material;

@@ -1,0 +1,250 @@
+//! Writes `src/shading/albedo_table.rs`: the directional albedo E(μ, roughness) of rondo's
+//! single-scattering GGX reflection (height-correlated Smith, α = roughness²) with Fresnel 1 (the
+//! conductor's table) and with Schlick's Fresnel of F0 = 0.04 (the dielectric specular lobe of
+//! `Pbr`), and each row's cosine-weighted average E_avg = 2 ∫ E(μ) μ dμ (as 1 − E_avg).
+//!
+//! ```text
+//! cargo run --release --example make_albedo_tables > src/shading/albedo_table.rs
+//! cargo run --release --example make_albedo_tables -- --check   # interpolation error
+//! ```
+//!
+//! The GGX terms are written here again in `f64`, independently of `src/shading/microfacet.rs`.
+//! Each entry is the mean of `F (1 + Λ(wo)) / (1 + Λ(wo) + Λ(wi))` (zero for `wi` below the
+//! surface) over a `GRID × GRID` midpoint grid of the unit square mapped to microfacet normals
+//! by Heitz's visible-normal sampling (JCGT 2018): that map carries the uniform measure to the
+//! density `G₁(wo) D(h) (wo·h) / cos θo`, under which `f cos θi / pdf` is exactly that
+//! integrand. Row 0 (roughness 0) is the mirror's limit: 1, and Schlick's F(μ). Nodes are
+//! uniform in roughness and in √μ, which puts them close together at grazing angles, where E
+//! changes fastest. The averages are the exact integrals of the table as rondo interpolates it
+//! (linear in √μ between nodes), computed from the rounded values written out, so that
+//! `2 ∫ (1 − E(μ)) μ dμ = 1 − E_avg` holds for the interpolated table to rounding.
+//! Deterministic: the same source gives the same bytes.
+
+use std::f64::consts::PI;
+
+use rayon::prelude::*;
+
+/// Nodes in roughness (0 … 1).
+const ROUGHNESS: usize = 64;
+/// Nodes in √μ (0 … 1).
+const COS: usize = 64;
+/// Grid side of the quadrature over the visible-normal sample square.
+const GRID: usize = 512;
+/// The cosine used for the node μ = 0, where the view is in the surface's plane.
+const GRAZING: f64 = 1e-6;
+/// Reflectance at normal incidence of the dielectric lobe (ior 1.5).
+const DIELECTRIC_F0: f64 = 0.04;
+
+/// Smith's Λ of a direction of cosine `mu` to the normal, for GGX `alpha`.
+fn lambda(mu: f64, alpha: f64) -> f64 {
+    let tan2 = (1.0 - mu * mu).max(0.0) / (mu * mu);
+    ((1.0 + alpha * alpha * tan2).sqrt() - 1.0) / 2.0
+}
+
+/// Schlick's Fresnel of reflectance `f0` at cosine `c`.
+fn schlick(f0: f64, c: f64) -> f64 {
+    f0 + (1.0 - f0) * (1.0 - c.clamp(0.0, 1.0)).powi(5)
+}
+
+/// A visible normal for the view `wo` (unit, local frame, z up) from the uniform pair `(u1, u2)`.
+fn visible_normal(wo: [f64; 3], alpha: f64, u1: f64, u2: f64) -> [f64; 3] {
+    let v = [alpha * wo[0], alpha * wo[1], wo[2]];
+    let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let v = [v[0] / l, v[1] / l, v[2] / l];
+    let len2 = v[0] * v[0] + v[1] * v[1];
+    let t1 = if len2 > 0.0 {
+        [-v[1] / len2.sqrt(), v[0] / len2.sqrt(), 0.0]
+    } else {
+        [1.0, 0.0, 0.0]
+    };
+    let t2 = [
+        v[1] * t1[2] - v[2] * t1[1],
+        v[2] * t1[0] - v[0] * t1[2],
+        v[0] * t1[1] - v[1] * t1[0],
+    ];
+    let r = u1.sqrt();
+    let phi = 2.0 * PI * u2;
+    let p1 = r * phi.cos();
+    let s = 0.5 * (1.0 + v[2]);
+    let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
+    let p3 = (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
+    let n: Vec<f64> = (0..3)
+        .map(|k| p1 * t1[k] + p2 * t2[k] + p3 * v[k])
+        .collect();
+    let h = [alpha * n[0], alpha * n[1], n[2].max(0.0)];
+    let l = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
+    [h[0] / l, h[1] / l, h[2] / l]
+}
+
+/// Directional albedo at view cosine `mu` of GGX `alpha` with Schlick's Fresnel of `f0`.
+fn albedo(mu: f64, roughness: f64, f0: f64) -> f64 {
+    if roughness == 0.0 {
+        return schlick(f0, mu);
+    }
+    let alpha = roughness * roughness;
+    let mu = mu.max(GRAZING);
+    let wo = [(1.0 - mu * mu).sqrt(), 0.0, mu];
+    let lo = lambda(mu, alpha);
+    let mut sum = 0.0;
+    for i in 0..GRID {
+        let u1 = (i as f64 + 0.5) / GRID as f64;
+        for j in 0..GRID {
+            let u2 = (j as f64 + 0.5) / GRID as f64;
+            let h = visible_normal(wo, alpha, u1, u2);
+            let oh = wo[0] * h[0] + wo[1] * h[1] + wo[2] * h[2];
+            let wi_z = 2.0 * oh * h[2] - wo[2];
+            if wi_z > 0.0 {
+                sum += schlick(f0, oh) * (1.0 + lo) / (1.0 + lo + lambda(wi_z, alpha));
+            }
+        }
+    }
+    sum / (GRID * GRID) as f64
+}
+
+/// The √μ of node `i`.
+fn x_node(i: usize) -> f64 {
+    i as f64 / (COS - 1) as f64
+}
+
+/// A table over (roughness node, √μ node), rounded to the `f32` written out (in its shortest
+/// exact form).
+fn table(f0: f64) -> Vec<Vec<f32>> {
+    (0..ROUGHNESS)
+        .into_par_iter()
+        .map(|j| {
+            let r = j as f64 / (ROUGHNESS - 1) as f64;
+            (0..COS)
+                .map(|i| albedo(x_node(i).powi(2), r, f0) as f32)
+                .collect()
+        })
+        .collect()
+}
+
+/// 2 ∫ E(μ) μ dμ = 4 ∫ E(x) x³ dx for E linear in x = √μ between the nodes of `row`, in `f64`.
+fn average(row: &[f32]) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..COS - 1 {
+        let (a, b) = (x_node(i), x_node(i + 1));
+        let (ea, eb) = (f64::from(row[i]), f64::from(row[i + 1]));
+        let s = (eb - ea) / (b - a);
+        let x4 = (b.powi(4) - a.powi(4)) / 4.0;
+        let x5 = (b.powi(5) - a.powi(5)) / 5.0;
+        sum += ea * x4 + s * (x5 - a * x4);
+    }
+    4.0 * sum
+}
+
+/// The table's bilinear value at (μ, roughness), as rondo interpolates it.
+fn interpolate(t: &[Vec<f32>], mu: f64, r: f64) -> f64 {
+    let fx = mu.sqrt() * (COS - 1) as f64;
+    let i = (fx as usize).min(COS - 2);
+    let u = fx - i as f64;
+    let fr = r * (ROUGHNESS - 1) as f64;
+    let j = (fr as usize).min(ROUGHNESS - 2);
+    let v = fr - j as f64;
+    let at = |j: usize| f64::from(t[j][i]) * (1.0 - u) + f64::from(t[j][i + 1]) * u;
+    at(j) * (1.0 - v) + at(j + 1) * v
+}
+
+/// Prints the largest error of the interpolated tables at the centres of their cells, of all
+/// and of those at most 88° from the normal.
+fn check(tables: &[(&str, f64, Vec<Vec<f32>>)]) {
+    for ((name, f0, t), min_mu) in tables
+        .iter()
+        .flat_map(|t| [(t, 0.0), (t, 88f64.to_radians().cos())])
+    {
+        let worst = (1..ROUGHNESS - 1)
+            .into_par_iter()
+            .map(|j| {
+                let r = (j as f64 + 0.5) / (ROUGHNESS - 1) as f64;
+                let mut worst = (0.0f64, 0.0, 0.0);
+                for i in 0..COS - 1 {
+                    let mu = ((x_node(i) + x_node(i + 1)) / 2.0).powi(2);
+                    if mu < min_mu {
+                        continue;
+                    }
+                    let e = (albedo(mu, r, *f0) - interpolate(t, mu, r)).abs();
+                    if e > worst.0 {
+                        worst = (e, mu, r);
+                    }
+                }
+                worst
+            })
+            .reduce(|| (0.0, 0.0, 0.0), |a, b| if a.0 >= b.0 { a } else { b });
+        eprintln!(
+            "{name}, μ ≥ {min_mu:.3}: worst interpolation error {:.5} at μ {:.4}, roughness {:.3}",
+            worst.0, worst.1, worst.2
+        );
+    }
+}
+
+/// Rust source of a table and its averages.
+fn write(out: &mut String, name: &str, what: &str, t: &[Vec<f32>]) {
+    out.push_str(&format!(
+        "/// Directional albedo of {what},\n\
+         /// by roughness node (rows) and √μ node (columns).\n\
+         pub static {name}: [[f32; COS_NODES]; ROUGHNESS_NODES] = [\n"
+    ));
+    for row in t {
+        out.push_str("    [\n");
+        for chunk in row.chunks(8) {
+            let items: Vec<String> = chunk.iter().map(|v| format!("{v:?}")).collect();
+            out.push_str(&format!("        {},\n", items.join(", ")));
+        }
+        out.push_str("    ],\n");
+    }
+    out.push_str("];\n\n");
+    out.push_str(&format!(
+        "/// 1 − E_avg = 2 ∫ (1 − E(μ)) μ dμ of each row of [`{name}`] as interpolated (linear in\n\
+         /// √μ), stored as the loss for its relative precision where E_avg is near 1.\n\
+         pub static {name}_LOST: [f32; ROUGHNESS_NODES] = [\n"
+    ));
+    for chunk in t.chunks(8) {
+        let items: Vec<String> = chunk
+            .iter()
+            .map(|row| format!("{:?}", (1.0 - average(row)) as f32))
+            .collect();
+        out.push_str(&format!("    {},\n", items.join(", ")));
+    }
+    out.push_str("];\n\n");
+}
+
+fn main() {
+    let conductor = table(1.0);
+    let dielectric = table(DIELECTRIC_F0);
+    if std::env::args().any(|a| a == "--check") {
+        check(&[
+            ("conductor", 1.0, conductor),
+            ("dielectric", DIELECTRIC_F0, dielectric),
+        ]);
+        return;
+    }
+    let mut out = String::new();
+    out.push_str(
+        "//! Directional albedo tables of GGX reflection, written by\n\
+         //! `cargo run --release --example make_albedo_tables` (examples/make_albedo_tables.rs,\n\
+         //! which says how they are computed; about 4 minutes on 2 cores): do not edit by hand.\n\
+         //! Nodes are uniform in roughness (α = roughness², row 0 the mirror) and in √μ (μ the\n\
+         //! cosine of the view). Read through [`super::energy`]. No ECS here.\n\n",
+    );
+    out.push_str(&format!(
+        "/// Number of roughness nodes (rows), uniform over 0 … 1.\n\
+         pub const ROUGHNESS_NODES: usize = {ROUGHNESS};\n\n\
+         /// Number of √μ nodes (columns), uniform over 0 … 1.\n\
+         pub const COS_NODES: usize = {COS};\n\n"
+    ));
+    write(
+        &mut out,
+        "CONDUCTOR",
+        "single-scattering GGX with Fresnel 1",
+        &conductor,
+    );
+    write(
+        &mut out,
+        "DIELECTRIC",
+        "single-scattering GGX with Schlick's Fresnel of F0 = 0.04",
+        &dielectric,
+    );
+    print!("{}", out.trim_end_matches('\n'));
+    println!();
+}
