@@ -141,11 +141,29 @@ fn the_shading_normal_follows_the_map_in_the_frame_of_the_texture_coordinates() 
     }
 }
 
-/// The glTF 2.0 metallic–roughness BRDF (specification, Appendix B) of a dielectric
-/// (`metallic` 0) of grey base colour `base` and perceptual roughness `roughness`, for unit
-/// view `v` and light `l` about unit normal `n`: `fresnel_mix(ior 1.5, diffuse, specular)`
-/// with the spec's GGX `D` and height-correlated visibility `V`.
-fn gltf_dielectric_brdf(base: f64, roughness: f64, n: DVec3, v: DVec3, l: DVec3) -> f64 {
+/// The BRDF rondo's `Pbr` gives a dielectric (`metallic` 0) of grey base colour `base` and
+/// perceptual roughness `roughness`, for unit view `v` and light `l` about unit normal `n`: the
+/// spec's GGX specular lobe (`D`, height-correlated `V`, Schlick's F with F0 = 0.04) over the base
+/// weighted by what that lobe leaves in both directions, (1 − E(μo))(1 − E(μi)) / (π (1 − E_avg)),
+/// E the lobe's directional albedo and E_avg its cosine-weighted mean, both integrated here by
+/// quadrature (rondo reads them from tables).
+fn pbr_dielectric_brdf(base: f64, roughness: f64, n: DVec3, v: DVec3, l: DVec3) -> f64 {
+    let albedo = |mu: f64| specular_albedo(roughness, mu);
+    let e_avg = {
+        let k = 64;
+        (0..k)
+            .map(|i| {
+                let mu = (i as f64 + 0.5) / k as f64;
+                2.0 * albedo(mu) * mu / k as f64
+            })
+            .sum::<f64>()
+    };
+    specular_brdf(roughness, n, v, l)
+        + base * (1.0 - albedo(n.dot(v))) * (1.0 - albedo(n.dot(l))) / (PI * (1.0 - e_avg))
+}
+
+/// The spec's specular lobe alone: Schlick's F (F0 = 0.04) · GGX `D` · height-correlated `V`.
+fn specular_brdf(roughness: f64, n: DVec3, v: DVec3, l: DVec3) -> f64 {
     let a2 = roughness.powi(4);
     let h = (v + l).normalize();
     let (nl, nv, nh, vh) = (n.dot(l), n.dot(v), n.dot(h), v.dot(h).abs());
@@ -153,7 +171,26 @@ fn gltf_dielectric_brdf(base: f64, roughness: f64, n: DVec3, v: DVec3, l: DVec3)
     let vis =
         0.5 / (nl * (nv * nv * (1.0 - a2) + a2).sqrt() + nv * (nl * nl * (1.0 - a2) + a2).sqrt());
     let f = 0.04 + 0.96 * (1.0 - vh).powi(5);
-    (1.0 - f) * base / PI + f * d * vis
+    f * d * vis
+}
+
+/// Directional albedo of [`specular_brdf`] for a view at cosine `mu`: midpoint quadrature over
+/// (cos θ, φ) of the hemisphere.
+fn specular_albedo(roughness: f64, mu: f64) -> f64 {
+    let v = DVec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
+    let (nc, nphi) = (200, 200);
+    let dw = 2.0 * PI / (nc * nphi) as f64;
+    let mut sum = 0.0;
+    for i in 0..nc {
+        let c = (i as f64 + 0.5) / nc as f64;
+        let s = (1.0 - c * c).sqrt();
+        for j in 0..nphi {
+            let phi = (j as f64 + 0.5) / nphi as f64 * 2.0 * PI;
+            let l = DVec3::new(s * phi.cos(), s * phi.sin(), c);
+            sum += specular_brdf(roughness, DVec3::Z, v, l) * c * dw;
+        }
+    }
+    sum
 }
 
 #[test]
@@ -188,7 +225,7 @@ fn a_sunlit_normal_mapped_plane_sends_the_closed_form_radiance_of_its_tilted_nor
         let a = (0.5 * diameter).to_radians();
         let e = radiance * PI * a.sin().powi(2) * sun.dot(n);
         let v = camera.normalize();
-        let expected = gltf_dielectric_brdf(base, roughness, n, v, sun) * e;
+        let expected = pbr_dielectric_brdf(base, roughness, n, v, sun) * e;
         let scene = write_scene(
             &dir,
             "sun.ron",
