@@ -23,7 +23,7 @@ const SELECT_SCALE: u32 = 1 << 24;
 const UNIFORM_SHARE: f64 = 0.5;
 
 /// Selection weights of emitters of power `powers`, emitter `k` belonging to light
-/// `light_of[k]` (a dense index): [`UNIFORM_SHARE`] of the selection spread evenly over the
+/// `light_of[k]` (a dense index): half of the selection (`UNIFORM_SHARE`) spread evenly over the
 /// lights of positive power (within a light by power), the rest by power. A power that is not
 /// positive and finite counts as 0 and keeps weight 0.
 pub fn mixed_weights(powers: &[f64], light_of: &[usize]) -> Vec<f64> {
