@@ -1,10 +1,10 @@
-//! Writes `src/shading/albedo_table.rs`: the directional albedo E(μ, roughness) of rondo's
+//! Writes `src/shading/albedo_table/` (`mod.rs`, `conductor.rs`, `dielectric.rs`): the directional albedo E(μ, roughness) of rondo's
 //! single-scattering GGX reflection (height-correlated Smith, α = roughness²) with Fresnel 1 (the
 //! conductor's table) and with Schlick's Fresnel of F0 = 0.04 (the dielectric specular lobe of
 //! `Pbr`), and each row's cosine-weighted average E_avg = 2 ∫ E(μ) μ dμ (as 1 − E_avg).
 //!
 //! ```text
-//! cargo run --release --example make_albedo_tables > src/shading/albedo_table.rs
+//! cargo run --release --example make_albedo_tables -- src/shading/albedo_table
 //! cargo run --release --example make_albedo_tables -- --check   # interpolation error
 //! ```
 //!
@@ -183,6 +183,7 @@ fn write(out: &mut String, name: &str, what: &str, t: &[Vec<f32>]) {
     out.push_str(&format!(
         "/// Directional albedo of {what},\n\
          /// by roughness node (rows) and √μ node (columns).\n\
+         #[rustfmt::skip]\n\
          pub static {name}: [[f32; COS_NODES]; ROUGHNESS_NODES] = [\n"
     ));
     for row in t {
@@ -197,6 +198,7 @@ fn write(out: &mut String, name: &str, what: &str, t: &[Vec<f32>]) {
     out.push_str(&format!(
         "/// 1 − E_avg = 2 ∫ (1 − E(μ)) μ dμ of each row of [`{name}`] as interpolated (linear in\n\
          /// √μ), stored as the loss for its relative precision where E_avg is near 1.\n\
+         #[rustfmt::skip]\n\
          pub static {name}_LOST: [f32; ROUGHNESS_NODES] = [\n"
     ));
     for chunk in t.chunks(8) {
@@ -219,32 +221,58 @@ fn main() {
         ]);
         return;
     }
-    let mut out = String::new();
-    out.push_str(
+    let Some(dir) = std::env::args().nth(1).map(std::path::PathBuf::from) else {
+        eprintln!("usage: make_albedo_tables DIR (src/shading/albedo_table) | --check");
+        std::process::exit(2);
+    };
+    let mut head = String::new();
+    head.push_str(
         "//! Directional albedo tables of GGX reflection, written by\n\
          //! `cargo run --release --example make_albedo_tables` (examples/make_albedo_tables.rs,\n\
          //! which says how they are computed; about 4 minutes on 2 cores): do not edit by hand.\n\
          //! Nodes are uniform in roughness (α = roughness², row 0 the mirror) and in √μ (μ the\n\
-         //! cosine of the view). Read through [`super::energy`]. No ECS here.\n\n",
+         //! cosine of the view). Read through [`super::energy`]. One file per table. No ECS here.\n\n",
     );
-    out.push_str(&format!(
+    head.push_str(&format!(
         "/// Number of roughness nodes (rows), uniform over 0 … 1.\n\
          pub const ROUGHNESS_NODES: usize = {ROUGHNESS};\n\n\
          /// Number of √μ nodes (columns), uniform over 0 … 1.\n\
-         pub const COS_NODES: usize = {COS};\n\n"
+         pub const COS_NODES: usize = {COS};\n\n\
+         mod conductor;\n\
+         mod dielectric;\n\n\
+         pub use conductor::{{CONDUCTOR, CONDUCTOR_LOST}};\n\
+         pub use dielectric::{{DIELECTRIC, DIELECTRIC_LOST}};\n"
     ));
-    write(
-        &mut out,
-        "CONDUCTOR",
-        "single-scattering GGX with Fresnel 1",
-        &conductor,
-    );
-    write(
-        &mut out,
-        "DIELECTRIC",
-        "single-scattering GGX with Schlick's Fresnel of F0 = 0.04",
-        &dielectric,
-    );
-    print!("{}", out.trim_end_matches('\n'));
-    println!();
+    let save = |file: &str, text: &str| {
+        let path = dir.join(file);
+        if let Err(e) = std::fs::write(&path, text) {
+            eprintln!("{}: {e}", path.display());
+            std::process::exit(1);
+        }
+    };
+    save("mod.rs", &head);
+    for (file, name, what, t) in [
+        (
+            "conductor",
+            "CONDUCTOR",
+            "single-scattering GGX with Fresnel 1",
+            &conductor,
+        ),
+        (
+            "dielectric",
+            "DIELECTRIC",
+            "single-scattering GGX with Schlick's Fresnel of F0 = 0.04",
+            &dielectric,
+        ),
+    ] {
+        let mut out = format!(
+            "//! The {file}'s table (see the module above), written by the generator.\n\n\
+             use super::{{COS_NODES, ROUGHNESS_NODES}};\n\n"
+        );
+        write(&mut out, name, what, t);
+        save(
+            &format!("{file}.rs"),
+            &format!("{}\n", out.trim_end_matches('\n')),
+        );
+    }
 }
