@@ -4,6 +4,7 @@
     reason = "each test binary uses a different subset of the helpers"
 )]
 
+pub mod chi2;
 pub mod gltf_doc;
 pub mod watch_diff;
 

@@ -21,6 +21,7 @@ use crate::shading::material::Material;
 use crate::shading::texture::ImageTexture;
 use crate::sky::Sky;
 
+mod gltf_glass;
 mod gltf_place;
 mod materials;
 mod prefab;
