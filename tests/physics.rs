@@ -555,7 +555,7 @@ fn a_glass_ball_in_a_white_furnace_is_exactly_white_sample_by_sample() {
             frame: Mat3::IDENTITY,
         },
     )]);
-    let materials = [Material::Dielectric { ior: 1.5 }];
+    let materials = [Material::glass(1.5)];
     let lights = LightSet::build(&g, &materials, &[0]);
     let camera = Camera::new(Vec3::new(0.0, 0.0, -2.5), Vec3::Z, Vec3::Y, 50.0);
     let view = SceneView {

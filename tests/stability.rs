@@ -337,7 +337,7 @@ fn glass_paths(
     rng: &mut Rng,
     spawn_with: fn(&Geometry, &Ray, &Hit, Vec3) -> Ray,
 ) -> (usize, usize, usize) {
-    let glass = Material::Dielectric { ior: 1.5 };
+    let glass = Material::glass(1.5);
     let (mut spawned, mut wrong_side, mut escaped) = (0, 0, 0);
     for _ in 0..300 {
         let mut ray = incoming_ray(Kind::Sphere, t, rng);

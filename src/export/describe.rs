@@ -142,7 +142,18 @@ fn material(m: &Material, images: &ImageFiles) -> Result<Value, ExportError> {
             "roughness": roughness,
             "alpha": roughness * roughness,
         }),
-        Material::Dielectric { ior } => json!({"kind": "dielectric", "ior": ior}),
+        Material::Dielectric {
+            ior,
+            roughness,
+            absorption,
+        } => json!({
+            "kind": "dielectric",
+            "ior": ior,
+            "roughness": roughness,
+            "alpha": roughness * roughness,
+            // σa per unit length, per channel (an infinite channel, black, is written null).
+            "absorption": absorption.to_array(),
+        }),
         Material::Light {
             emit,
             intensity,

@@ -380,7 +380,7 @@ mod tests {
             ),
         ];
         let g = Geometry::build(&prims);
-        let materials = [light(1.0), light(2.0), Material::Dielectric { ior: 1.5 }];
+        let materials = [light(1.0), light(2.0), Material::glass(1.5)];
         let set = LightSet::build(&g, &materials, &[0, 1, 2]);
         assert_eq!(set.len(), 3);
         let total = 1.0 + 2.0 * std::f32::consts::PI;

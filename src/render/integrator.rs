@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 
+use super::medium::Medium;
 use super::{
     BOUNCE_DIMENSIONS, BSDF_DIMENSION, LIGHT_CHOICE_DIMENSION, LIGHT_POINT_DIMENSION,
     MAX_PASS_THROUGHS, Method, ROULETTE_DIMENSION, SceneView, TEXEL_DIMENSION,
@@ -162,6 +163,10 @@ fn first_present<L: Layout, W: Lanes>(
 /// Surfaces that alpha masks make absent are passed through without a bounce, a depth step or a
 /// sampler dimension, at most [`MAX_PASS_THROUGHS`] per ray.
 ///
+/// Inside tinted glass (a path that refracted into it) the throughput falls by Beer–Lambert's
+/// law over each segment, bounce and shadow rays alike ([`Medium`], which says what is
+/// approximated).
+///
 /// Emission seen by the camera or after a glass/mirror bounce always counts in full. Russian
 /// roulette (after a few bounces, survival probability = the path's throughput without the
 /// (n1/n2)² radiance scale of refractions, as pbrt-v4's `etaScale`) ends paths early without
@@ -205,8 +210,11 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     // Collected once, at the first hit that is not a perfect mirror or glass; `Some` at once
     // when not collected.
     let mut features = (!collect).then(FeatureSample::default);
+    // The medium the current ray travels through.
+    let mut medium = Medium::CLEAR;
     for depth in 0..view.max_depth {
         stats.rays += 1;
+        let start = ray.origin;
         let found = if view.masked {
             lanes.out_of_line(
                 #[inline(always)]
@@ -241,6 +249,9 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
             break;
         };
         let s = view.geometry.surface(&ray, &hit);
+        if !medium.is_clear() {
+            throughput *= medium.transmittance((s.p - start).length());
+        }
         let material = &view.materials[view.owner_material[s.owner as usize] as usize];
         let bsdf = material.bsdf(ray.direction, s.n, s.ns, s.tex_coords(), || {
             view.geometry.uv_tangent(&hit).map(|t| (t.tangent, t.sign))
@@ -266,6 +277,7 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         // Only a vertex the path continues from needs the hit point's error bound.
         let err = point_error(view.geometry, &hit, s.p);
         let dimension = 1 + depth * BOUNCE_DIMENSIONS;
+        let beyond = medium.beyond(material, ray.direction, s.n);
         if sample_lights && bsdf.samples_lights() {
             sampler.seek(dimension + LIGHT_CHOICE_DIMENSION);
             let vertex = Vertex {
@@ -273,6 +285,8 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
                 err,
                 bsdf: &bsdf,
                 dimension,
+                arriving: ray.direction,
+                media: (medium, beyond),
             };
             radiance += throughput * direct_light(lanes, view, vertex, sampler, stats);
         }
@@ -281,6 +295,7 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
             break;
         };
         previous = scatter.pdf.map(|pdf| (s.p, pdf));
+        medium = medium.leaving(beyond, ray.direction, s.n, scatter.direction);
         throughput *= scatter.attenuation;
         eta_scale *= scatter.radiance_scale;
         if throughput == Vec3::ZERO {
@@ -318,6 +333,11 @@ struct Vertex<'a> {
     bsdf: &'a Bsdf<'a>,
     /// The bounce's first sampler dimension.
     dimension: u32,
+    /// Direction of the ray that hit the surface.
+    arriving: Vec3,
+    /// The medium that ray travelled through, and the one beyond the surface
+    /// ([`Medium::beyond`]).
+    media: (Medium, Medium),
 }
 
 /// One light sample at a vertex's surface `s` for a ray arriving along `d`: emitted radiance
@@ -462,5 +482,12 @@ fn direct_light<L: Layout, W: Lanes>(
     } else {
         1.0
     };
-    f_cos * emitted * (weight / pdf_light)
+    let (here, beyond) = vertex.media;
+    let through = here.leaving(beyond, vertex.arriving, s.n, wi);
+    // A shadow ray to a distant light has no length to attenuate over (see [`Medium`]).
+    if through.is_clear() || !length.is_finite() {
+        f_cos * emitted * (weight / pdf_light)
+    } else {
+        f_cos * emitted * through.transmittance(length) * (weight / pdf_light)
+    }
 }

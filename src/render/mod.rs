@@ -5,6 +5,7 @@
 
 pub mod camera;
 pub mod integrator;
+pub mod medium;
 pub mod pass;
 
 use glam::Vec3;

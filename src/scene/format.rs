@@ -21,7 +21,7 @@ mod transform;
 pub use camera::{CameraDesc, GltfCameraDesc, SceneCamera};
 pub use light::{LightDesc, check_cone, checked_intensity};
 pub use material::{MaterialDesc, NormalMapDesc, TextureDesc};
-pub use number::{Color, Count, NonNegative, Positive, Real, UnitInterval, V3};
+pub use number::{Color, Count, NonNegative, Positive, Real, UnitColor, UnitInterval, V3};
 pub use settings::{
     EnvironmentDesc, MAX_COORDINATE, MAX_DEPTH, MAX_PIXELS, MAX_SIDE, MAX_SPP, Method,
     SettingsDesc, SunDesc,

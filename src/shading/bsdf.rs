@@ -3,7 +3,7 @@
 //! it evaluates, samples and gives the density of its lobe, says whether it is a perfect
 //! specular one or can be light-sampled, and carries the surface's emission. The lobes live in
 //! their own files ([`super::diffuse`], [`super::fuzzed`], [`super::conductor`],
-//! [`super::dielectric`], [`super::pbr`]). No ECS here.
+//! [`super::dielectric`], [`super::rough_dielectric`], [`super::pbr`]). No ECS here.
 //!
 //! Where the shading normal differs from the geometric one (a smooth mesh), the lobe sampled
 //! about the shading normal is folded onto the side of the geometric surface the ray came from:
@@ -23,6 +23,7 @@ use super::diffuse::Diffuse;
 use super::emission::Emission;
 use super::fuzzed::Fuzzed;
 use super::pbr::Pbr;
+use super::rough_dielectric::RoughDielectric;
 use super::sampler::Sampler;
 use super::sampling::reflect;
 use super::scatter::Scatter;
@@ -41,6 +42,8 @@ pub enum Lobe {
     Conductor(Conductor),
     /// Smooth glass.
     Dielectric(Dielectric),
+    /// Rough glass.
+    RoughDielectric(RoughDielectric),
     /// The glTF metallic–roughness mix.
     MetallicRoughness(Pbr),
 }
@@ -55,6 +58,7 @@ impl Lobe {
         match self {
             Self::Diffuse(l) => Some(l.eval(d, wi, n)),
             Self::Conductor(l) => l.eval(d, wi, n),
+            Self::RoughDielectric(l) => Some(l.eval(d, wi, n)),
             Self::MetallicRoughness(l) => {
                 let facing = if d.dot(n) < 0.0 { n } else { -n };
                 (!l.is_delta()).then(|| l.eval(-d, wi, facing))
@@ -72,6 +76,7 @@ impl Lobe {
             Self::Fuzzed(l) => l.sample(d, n, sampler),
             Self::Conductor(l) => l.sample(d, n, sampler),
             Self::Dielectric(l) => Some(l.sample(d, n, sampler)),
+            Self::RoughDielectric(l) => l.sample(d, n, sampler),
             Self::MetallicRoughness(l) => {
                 let facing = if d.dot(n) < 0.0 { n } else { -n };
                 let s = l.sample(-d, facing, sampler.next_2d())?;
@@ -95,7 +100,7 @@ impl Lobe {
             Self::Fuzzed(l) => l.roughness == 0.0,
             Self::Conductor(l) => l.is_specular(),
             Self::MetallicRoughness(l) => l.is_delta(),
-            Self::Diffuse(_) | Self::None => false,
+            Self::Diffuse(_) | Self::RoughDielectric(_) | Self::None => false,
         }
     }
 
@@ -108,7 +113,7 @@ impl Lobe {
             Self::Fuzzed(l) => l.albedo,
             Self::Conductor(l) => l.f0,
             Self::MetallicRoughness(l) => l.base_color,
-            Self::Dielectric(_) => Vec3::ONE,
+            Self::Dielectric(_) | Self::RoughDielectric(_) => Vec3::ONE,
             Self::None => Vec3::ZERO,
         }
     }

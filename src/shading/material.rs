@@ -13,6 +13,7 @@ use super::fuzzed::Fuzzed;
 use super::maps::{AlphaMask, NormalMap};
 use super::microfacet::{alpha_from_roughness, is_specular_alpha};
 use super::pbr::Pbr;
+use super::rough_dielectric::RoughDielectric;
 use super::sampler::Sampler;
 use super::scatter::Scatter;
 use super::texture::{TexCoords, Texture};
@@ -46,12 +47,19 @@ pub enum Material {
         /// Roughness in [`super::microfacet::MIN_ROUGHNESS`], 1]; GGX α = roughness².
         roughness: f32,
     },
-    /// Smooth glass: Fresnel (Schlick) reflection, Snell refraction, total internal reflection.
-    /// Refracted radiance is scaled by (n1/n2)², n1 the index on the side the camera path
-    /// comes from.
+    /// Glass: exact Fresnel reflection, refraction, total internal reflection; smooth
+    /// ([`super::dielectric`]) below [`super::microfacet::SPECULAR_ALPHA`], GGX-rough
+    /// ([`super::rough_dielectric`]) above. Refracted radiance is scaled by (n1/n2)², n1 the
+    /// index on the side the camera path comes from. Inside (behind its front faces) light is
+    /// absorbed by Beer–Lambert's law at `absorption` per unit length; the integrator tracks
+    /// only the last glass a path entered, not nested media (see [`crate::render::medium`]).
     Dielectric {
         /// Index of refraction relative to the outside medium.
         ior: f32,
+        /// Perceptual roughness in [0, 1]; GGX α = roughness² (0: smooth glass).
+        roughness: f32,
+        /// Absorption coefficient σa per unit length inside, per channel (zero: clear glass).
+        absorption: Vec3,
     },
     /// Emitter ("diffuse light"): emits `emit · intensity`, scatters nothing.
     Light {
@@ -89,6 +97,25 @@ pub enum Material {
 }
 
 impl Material {
+    /// Smooth clear glass of index `ior`.
+    pub const fn glass(ior: f32) -> Self {
+        Self::Dielectric {
+            ior,
+            roughness: 0.0,
+            absorption: Vec3::ZERO,
+        }
+    }
+
+    /// The absorption coefficient inside the material if it bounds a volume a path can enter
+    /// by refraction (glass; zero for clear glass); `None` for a surface that does not.
+    #[inline]
+    pub fn interior_absorption(&self) -> Option<Vec3> {
+        match self {
+            Self::Dielectric { absorption, .. } => Some(*absorption),
+            _ => None,
+        }
+    }
+
     /// What the material emits: a `Light`'s emission, a `Pbr`'s if it is not black; `None`
     /// for every other material.
     #[inline]
@@ -192,7 +219,15 @@ impl Material {
                 });
                 (lobe, ns, !is_specular_alpha(alpha))
             }
-            Self::Dielectric { ior } => (Lobe::Dielectric(Dielectric { ior: *ior }), n, false),
+            Self::Dielectric { ior, roughness, .. } => {
+                let alpha = alpha_from_roughness(*roughness);
+                if is_specular_alpha(alpha) {
+                    (Lobe::Dielectric(Dielectric { ior: *ior }), n, false)
+                } else {
+                    let lobe = Lobe::RoughDielectric(RoughDielectric { ior: *ior, alpha });
+                    (lobe, n, true)
+                }
+            }
             Self::Light { .. } => (Lobe::None, ns, false),
             Self::Pbr {
                 base_color,
@@ -243,6 +278,18 @@ impl Material {
     }
 }
 
+/// The absorption coefficient σa = −ln(colour) / distance of a medium that turns white light
+/// `color` (each channel in [0, 1]) after `distance` (> 0, infinite: no absorption): Beer–Lambert,
+/// as `KHR_materials_volume` defines its attenuation. A black channel absorbs everything
+/// (σa = ∞).
+pub fn absorption_coefficient(color: Vec3, distance: f32) -> Vec3 {
+    if distance.is_infinite() {
+        return Vec3::ZERO;
+    }
+    // −ln 1 is −0: `abs` keeps the clear channels at +0.
+    color.to_array().map(|c| (-c.ln() / distance).abs()).into()
+}
+
 /// The shading normal `ns` perturbed by `map` at `uv` where `tangent()` gives a texture tangent;
 /// `ns` elsewhere. Out of line: only normal-mapped hits get here.
 #[inline(never)]
@@ -264,7 +311,7 @@ mod tests {
 
     #[test]
     fn dielectric_reflects_four_percent_at_normal_incidence() {
-        let glass = Material::Dielectric { ior: 1.5 };
+        let glass = Material::glass(1.5);
         let mut rng = Rng::new(11, 13);
         let n = 1_000_000;
         let reflected = (0..n)
@@ -283,7 +330,7 @@ mod tests {
     fn refraction_scales_radiance_by_the_squared_index_ratio() {
         // Along the camera path, entering glass (1 → 1.5) carries (1/1.5)², leaving it 1.5²;
         // reflection carries 1.
-        let glass = Material::Dielectric { ior: 1.5 };
+        let glass = Material::glass(1.5);
         let mut rng = Rng::new(4, 4);
         for (d, refracted) in [(-Vec3::Z, 1.0 / 2.25), (Vec3::Z, 2.25)] {
             for _ in 0..200 {
@@ -302,7 +349,7 @@ mod tests {
 
     #[test]
     fn glass_to_air_beyond_the_critical_angle_always_reflects() {
-        let glass = Material::Dielectric { ior: 1.5 };
+        let glass = Material::glass(1.5);
         let critical = (1.0f32 / 1.5).asin();
         let mut rng = Rng::new(1, 2);
         for k in 1..=50 {

@@ -1,4 +1,7 @@
-//! χ² test of a material's sampled directions against the density its BSDF evaluates.
+//! Pearson's χ² tests of sampled counts against expected probabilities, as the sampling tests
+//! use them (pbrt-v4's `bsdfs_test.cpp` does the same): bins expecting fewer than 5 samples are
+//! pooled into one, and the statistic is held to its 99.9th percentile. [`chi2_test`] takes the
+//! counts; [`chi_square_of_directions`] bins a material's sampled directions itself.
 
 use std::f64::consts::PI;
 
@@ -11,6 +14,43 @@ use rondo::shading::rng::Rng;
 pub fn chi2_quantile(k: f64, z: f64) -> f64 {
     let a = 2.0 / (9.0 * k);
     k * (1.0 - a + z * a.sqrt()).powi(3)
+}
+
+/// The χ² statistic of `observed` counts (of `count` samples in all) against `expected`
+/// probabilities, small bins pooled, and its limit at the 0.1 % level (z = 3.09).
+fn pooled_statistic(expected: &[f64], observed: &[usize], count: usize) -> (f64, f64) {
+    let (mut chi2, mut dof, mut pool_e, mut pool_o) = (0.0, 0usize, 0.0, 0.0);
+    for (e, &o) in expected.iter().zip(observed) {
+        let e = e * count as f64;
+        if e < 5.0 {
+            pool_e += e;
+            pool_o += o as f64;
+        } else {
+            chi2 += (o as f64 - e).powi(2) / e;
+            dof += 1;
+        }
+    }
+    if pool_e > 0.0 || pool_o > 0.0 {
+        chi2 += (pool_o - pool_e).powi(2) / pool_e.max(1.0);
+        dof += 1;
+    }
+    let limit = chi2_quantile(dof.saturating_sub(1).max(1) as f64, 3.09);
+    (chi2, limit)
+}
+
+/// The χ² statistic of `observed` counts (of `count` samples in all) against `expected`
+/// probabilities, small bins pooled: `Err` with the statistic and its limit at the 0.1 % level
+/// if the statistic passes the limit.
+pub fn chi2_test(expected: &[f64], observed: &[usize], count: usize) -> Result<f64, String> {
+    let (chi2, limit) = pooled_statistic(expected, observed, count);
+    if chi2 < limit {
+        Ok(chi2)
+    } else {
+        Err(format!(
+            "χ² {chi2:.1} over {} bins (limit {limit:.1})",
+            expected.len()
+        ))
+    }
 }
 
 /// Direction of cell-centre `(i, j)` of an `n × m` grid over (cos θ ∈ [0,1], φ ∈ [0, 2π)), and
@@ -26,8 +66,9 @@ pub fn cell(i: usize, j: usize, n: usize, m: usize) -> (Vec3, f64) {
 /// The χ² statistic of `count` directions sampled by `m` for a ray along `d` at the flat normal
 /// +z, binned on a 20 × 20 (cos θ, φ) grid plus one bin for absorbed samples, against the
 /// density of `eval` integrated over each bin (a 24 × 24 sub-grid: a 6 × 6 one is off by a few
-/// per cent on a narrow lobe near the horizon, a χ² of 12,600 for `Pbr` at roughness 0.3, 80°); bins expecting fewer than 5
-/// samples are pooled. Returns the statistic and its 0.1 % critical value.
+/// per cent on a narrow lobe near the horizon, a χ² of 12,600 for `Pbr` at roughness 0.3, 80°);
+/// bins expecting fewer than 5 samples are pooled. Returns the statistic and its 0.1 % critical
+/// value.
 pub fn chi_square_of_directions(m: &Material, d: Vec3, count: usize, seed: u64) -> (f64, f64) {
     let (nc, nphi, sub) = (20usize, 20usize, 24usize);
     let bsdf = m.bsdf_at(d, Vec3::Z, Vec2::ZERO);
@@ -56,20 +97,5 @@ pub fn chi_square_of_directions(m: &Material, d: Vec3, count: usize, seed: u64) 
         };
         observed[bin] += 1;
     }
-    let (mut chi2, mut dof, mut pool_e, mut pool_o) = (0.0, 0usize, 0.0, 0.0);
-    for (e, &o) in expected.iter().zip(&observed) {
-        let e = e * count as f64;
-        if e < 5.0 {
-            pool_e += e;
-            pool_o += o as f64;
-        } else {
-            chi2 += (o as f64 - e).powi(2) / e;
-            dof += 1;
-        }
-    }
-    if pool_e > 0.0 {
-        chi2 += (pool_o - pool_e).powi(2) / pool_e.max(1.0);
-        dof += 1;
-    }
-    (chi2, chi2_quantile((dof - 1) as f64, 3.09))
+    pooled_statistic(&expected, &observed, count)
 }

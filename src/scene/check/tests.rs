@@ -234,10 +234,7 @@ fn a_glass_box_standing_on_a_floor_is_reported_and_an_opaque_one_is_not() {
     };
     let on_floor = |material: &'static str| {
         scene(
-            &[
-                ("w", diffuse(0.5)),
-                ("glass", Material::Dielectric { ior: 1.5 }),
-            ],
+            &[("w", diffuse(0.5)), ("glass", Material::glass(1.5))],
             vec![
                 ("floor", "w", floor.clone(), ID),
                 ("cube", material, cube.clone(), ID),

@@ -3,7 +3,7 @@
 use glam::Vec3;
 use serde::Deserialize;
 
-use super::number::{Color, NonNegative, Positive, Real, UnitInterval};
+use super::number::{Color, NonNegative, Positive, Real, UnitColor, UnitInterval};
 use crate::shading::texture::{Filter, Wrap};
 
 /// A texture: wherever a colour is expected.
@@ -59,10 +59,23 @@ pub enum MaterialDesc {
         /// Roughness; GGX α = roughness².
         roughness: Real,
     },
-    /// `Dielectric(ior)`.
+    /// `Dielectric(ior, roughness, attenuation_color, attenuation_distance)`: glass, smooth by
+    /// default; with both attenuation fields, tinted through its thickness (white light turns
+    /// `attenuation_color` after `attenuation_distance` inside, as `KHR_materials_volume`).
     Dielectric {
         /// Index of refraction.
         ior: Positive,
+        /// Perceptual roughness in [0, 1]; GGX α = roughness² (default 0: smooth).
+        #[serde(default = "unit_zero")]
+        roughness: UnitInterval,
+        /// The colour white light turns into after `attenuation_distance` inside, each channel
+        /// in [0, 1] (default white: no absorption).
+        #[serde(default)]
+        attenuation_color: Option<UnitColor>,
+        /// The distance at which light inside has `attenuation_color` (default: infinite, no
+        /// absorption).
+        #[serde(default)]
+        attenuation_distance: Option<Positive>,
     },
     /// `Light(emit, intensity, two_sided)`.
     Light {
@@ -140,6 +153,10 @@ fn black() -> TextureDesc {
 
 fn unit_one() -> UnitInterval {
     UnitInterval(1.0)
+}
+
+fn unit_zero() -> UnitInterval {
+    UnitInterval(0.0)
 }
 
 fn zero() -> Real {

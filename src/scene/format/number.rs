@@ -119,3 +119,9 @@ validated_vector! {
     #[derive(Clone, Copy, Debug, PartialEq)]
     Color of NonNegative
 }
+
+validated_vector! {
+    /// A colour `(r, g, b)` with each component in [0, 1] (a transmittance).
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    UnitColor of UnitInterval
+}

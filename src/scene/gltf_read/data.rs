@@ -234,6 +234,12 @@ pub struct GltfMaterial {
     pub transmission_texture: bool,
     /// Index of refraction (`KHR_materials_ior`; 1.5 without it).
     pub ior: f32,
+    /// `KHR_materials_volume`'s thickness factor (0 without it: a thin-walled surface).
+    pub thickness: f32,
+    /// `KHR_materials_volume`'s attenuation colour (white without it).
+    pub attenuation_color: Vec3,
+    /// `KHR_materials_volume`'s attenuation distance (infinite without it: no absorption).
+    pub attenuation_distance: f32,
 }
 
 /// Bytes of a glTF file's buffers: a range of one shared allocation, so that a source named by

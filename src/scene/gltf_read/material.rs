@@ -112,11 +112,30 @@ pub(super) fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> 
     }
     let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
     let field = "extensions.KHR_materials_transmission.transmissionFactor";
-    check_field(&what, field, transmission, unit)?;
+    check_field(&what, field, transmission, unit.clone())?;
     let ior = m.ior().unwrap_or(1.5);
     if !(ior.is_finite() && ior > 0.0) {
         return Err(format!(
             "{}: extensions.KHR_materials_ior.ior is {ior}, must be finite and above 0",
+            what()
+        ));
+    }
+    let volume = m.volume();
+    let thickness = volume.as_ref().map_or(0.0, |v| v.thickness_factor());
+    let field = "extensions.KHR_materials_volume.thicknessFactor";
+    check_field(&what, field, thickness, at_least_0.clone())?;
+    let attenuation_color = volume.as_ref().map_or([1.0; 3], |v| v.attenuation_color());
+    for (k, v) in attenuation_color.into_iter().enumerate() {
+        let field = format!("extensions.KHR_materials_volume.attenuationColor[{k}]");
+        check_field(&what, &field, v, unit.clone())?;
+    }
+    let attenuation_distance = volume
+        .as_ref()
+        .map_or(f32::INFINITY, |v| v.attenuation_distance());
+    // The spec's default is +∞ (no absorption), which JSON cannot write: only that is infinite.
+    if attenuation_distance.is_nan() || attenuation_distance <= 0.0 {
+        return Err(format!(
+            "{}: extensions.KHR_materials_volume.attenuationDistance is {attenuation_distance}, must be above 0",
             what()
         ));
     }
@@ -178,6 +197,9 @@ pub(super) fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> 
             .transmission()
             .is_some_and(|t| t.transmission_texture().is_some()),
         ior,
+        thickness,
+        attenuation_color: Vec3::from(attenuation_color),
+        attenuation_distance,
         name,
     })
 }

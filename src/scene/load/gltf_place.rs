@@ -13,6 +13,7 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Vec3};
 
+use super::gltf_glass::{Transmission, transmission};
 use super::{Anchor, Expander, Origin, Placed, Scope, SourceFile};
 use crate::model::{MeshRef, Shape, Transform};
 use crate::scene::assets::{Encoding, GltfAsset, inside_folder};
@@ -281,15 +282,15 @@ impl Expander<'_> {
         };
         let what = format!("material \"{label}\"");
         let factor = Vec3::from_slice(&m.base_color_factor[..3]);
-        if m.transmission > 0.0 && m.metallic < 1.0 {
-            self.warn(
-                path,
-                &format!(
-                    "{what}: transmission {} is imported as smooth clear glass of ior {} (rondo has no rough or tinted transmission)",
-                    m.transmission, m.ior
-                ),
-            );
-            return Ok(Material::Dielectric { ior: m.ior });
+        match transmission(m) {
+            Transmission::Glass(glass, notes) => {
+                for note in notes {
+                    self.warn(path, &format!("{what}: {note}"));
+                }
+                return Ok(glass);
+            }
+            Transmission::Opaque(Some(note)) => self.warn(path, &format!("{what}: {note}")),
+            Transmission::Opaque(None) => {}
         }
         for (field, t) in m.textures() {
             if m.uv_slot(t).is_none() {

@@ -7,7 +7,7 @@ use super::{Anchor, Expander, SourceFile};
 use crate::scene::assets::Encoding;
 use crate::scene::error::SceneError;
 use crate::scene::format::{MaterialDesc, NormalMapDesc, SettingsDesc, TextureDesc};
-use crate::shading::material::Material;
+use crate::shading::material::{Material, absorption_coefficient};
 use crate::shading::texture::{Sampling, Texture};
 use crate::sky::{EnvironmentLight, Sky, Sun};
 
@@ -75,7 +75,19 @@ impl Expander<'_> {
                     .0
                     .clamp(crate::shading::microfacet::MIN_ROUGHNESS, 1.0),
             },
-            MaterialDesc::Dielectric { ior } => Material::Dielectric { ior: ior.0 },
+            MaterialDesc::Dielectric {
+                ior,
+                roughness,
+                attenuation_color,
+                attenuation_distance,
+            } => Material::Dielectric {
+                ior: ior.0,
+                roughness: roughness.0,
+                absorption: absorption_coefficient(
+                    attenuation_color.map_or(glam::Vec3::ONE, |c| c.0),
+                    attenuation_distance.map_or(f32::INFINITY, |d| d.0),
+                ),
+            },
             MaterialDesc::Light {
                 emit,
                 intensity,

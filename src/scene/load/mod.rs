@@ -22,6 +22,7 @@ use crate::shading::material::Material;
 use crate::shading::texture::ImageTexture;
 use crate::sky::{Sky, Sun};
 
+mod gltf_glass;
 mod gltf_lights;
 mod gltf_place;
 mod materials;
