@@ -180,10 +180,12 @@ class Builder:
         elif k == "dielectric":
             b = tree.nodes.new("ShaderNodeBsdfGlass")
             b.distribution = "GGX"
-            b.inputs["Roughness"].default_value = 0.0
+            # Cycles squares its roughness into GGX's alpha, as rondo does.
+            b.inputs["Roughness"].default_value = m["roughness"]
             b.inputs["IOR"].default_value = m["ior"]
             b.inputs["Color"].default_value = (1, 1, 1, 1)
             shader = b.outputs[0]
+            self.absorption(tree, out, m["absorption"])
         elif k == "light":
             e = tree.nodes.new("ShaderNodeEmission")
             self.set_input(tree, e.inputs["Color"], m["emit"])
@@ -206,6 +208,19 @@ class Builder:
         tree.links.new(shader, out.inputs["Surface"])
         self.materials[key] = mat
         return mat
+
+    def absorption(self, tree, out, absorption):
+        """Beer–Lambert absorption inside glass: a Volume Absorption node, whose coefficient
+        is density × (1 − colour) per channel."""
+        # rondo writes an opaque (infinite) channel as null.
+        sigma = [1e6 if a is None else a for a in absorption]
+        density = max(sigma)
+        if density <= 0:
+            return
+        v = tree.nodes.new("ShaderNodeVolumeAbsorption")
+        v.inputs["Color"].default_value = tuple(1 - a / density for a in sigma) + (1,)
+        v.inputs["Density"].default_value = density
+        tree.links.new(v.outputs[0], out.inputs["Volume"])
 
     def pbr(self, tree, m):
         b = tree.nodes.new("ShaderNodeBsdfPrincipled")

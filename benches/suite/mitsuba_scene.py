@@ -22,6 +22,7 @@ class Converter:
         self.cache = cache_dir
         self.json = json.load(open(os.path.join(export_dir, "scene.json")))
         self.notes = set()
+        self.volumetric = False
 
     def T(self):
         return self.mi.ScalarTransform4f()
@@ -113,6 +114,9 @@ class Converter:
                 "type": "principled", "base_color": self.texture(m["albedo"]),
                 "metallic": 1.0, "roughness": max(m["roughness"], 0.01)}}
         if k == "dielectric":
+            if m["alpha"] > 0:
+                return {"type": "roughdielectric", "distribution": "ggx",
+                        "alpha": max(m["alpha"], 1e-3), "int_ior": m["ior"], "ext_ior": 1.0}
             return {"type": "dielectric", "int_ior": m["ior"], "ext_ior": 1.0}
         if k == "light":
             return {"type": "diffuse", "reflectance": _rgb((0, 0, 0))}
@@ -176,6 +180,22 @@ class Converter:
         return {"type": "area", "radiance": self.texture(
             {"kind": "scaled", "factor": [s] * 3, "texture": t})}
 
+    def interior(self, key):
+        """The absorbing medium inside a dielectric with Beer–Lambert absorption, if any."""
+        m = self.json["materials"][key]
+        if m["kind"] != "dielectric":
+            return None
+        # σa per unit length and channel; rondo writes an opaque (infinite) channel as null.
+        sigma = [1e6 if a is None else a for a in m["absorption"]]
+        if max(sigma) <= 0:
+            return None
+        self.volumetric = True
+        self.notes.add("absorbing glass as a purely absorbing homogeneous interior (volpath)")
+        # Mitsuba reads an RGB σt as a reflectance (each channel in [0, 1]) times `scale`.
+        scale = max(sigma)
+        return {"type": "homogeneous", "albedo": _rgb((0, 0, 0)),
+                "sigma_t": _rgb([a / scale for a in sigma]), "scale": scale}
+
     # Scene --------------------------------------------------------------------------------
     def scene(self, sampler, size=None, max_depth=None):
         j, mi = self.json, self.mi
@@ -221,6 +241,9 @@ class Converter:
                      "bsdf": self.bsdf(sp["material"])}
             if e is not None:
                 shape["emitter"] = e
+            medium = self.interior(sp["material"])
+            if medium is not None:
+                shape["interior"] = medium
             d["sphere%d" % i] = shape
         for i, mesh in enumerate(j["meshes"]):
             e, two = self.emitter(mesh["material"])
@@ -228,10 +251,16 @@ class Converter:
                      "face_normals": not mesh["normals"], "bsdf": self.bsdf(mesh["material"])}
             if e is not None:
                 shape["emitter"] = e
+            medium = self.interior(mesh["material"])
+            if medium is not None:
+                shape["interior"] = medium
             d["mesh%d" % i] = shape
             if e is not None and two:
                 back = dict(shape, flip_normals=True, emitter=dict(e))
                 d["mesh%d_back" % i] = back
+        if self.volumetric:
+            # Only the volumetric path tracer attenuates along rays inside a medium.
+            d["integrator"]["type"] = "volpath"
         return d
 
 
