@@ -146,6 +146,23 @@ fn an_hdr_environment_declaring_too_many_texels_is_refused_before_its_pixels_are
 }
 
 #[test]
+fn a_truncated_hdr_environment_is_refused_before_its_pixels_are_allocated() {
+    let _alone = alone();
+    // 8192 × 4096: exactly the largest map accepted, 400 MB of RGB floats, in 115 bytes.
+    let mut bytes = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 4096 +X 8192\n".to_vec();
+    bytes.extend([2, 2, 0x20, 0]);
+    bytes.resize(115, 0);
+    let (result, peak) =
+        peak_during(|| AssetCache::decode_environment_pixels(Path::new("x.hdr"), &bytes));
+    let e = result.expect_err("a truncated map is refused");
+    assert!(
+        e.contains("8192×4096 texels") && e.contains("truncated"),
+        "{e}"
+    );
+    assert!(peak < REFUSAL_BYTES, "{peak} bytes held while refusing");
+}
+
+#[test]
 fn an_image_embedded_in_a_glb_declaring_too_many_texels_is_refused_before_decoding() {
     let _alone = alone();
     let dir = temp_dir("bomb-glb");

@@ -636,6 +636,14 @@ fn decode_environment(path: &Path, bytes: &[u8]) -> Result<EnvironmentMap, Strin
     EnvironmentMap::from_linear_vec(width, height, pixels)
 }
 
+/// Most texels a byte of a Radiance `.hdr` file can stand for: a run-length encoded scanline
+/// spends at least 2 bytes per run of up to 127 equal values in each of its 4 components, so a
+/// scanline of `w` texels takes at least 8w/127 bytes (about 16 texels a byte). A file declaring
+/// more for its length is truncated, and is refused before its pixels are allocated (the
+/// decoder allocates them all first). Files in the obsolete repeat-count encoding that packs
+/// more are refused too.
+const HDR_TEXELS_PER_BYTE: u64 = 32;
+
 /// Decodes the environment map `path` from its `bytes` to its width, height and linear RGB
 /// floats (row-major from the top row). A map of more than
 /// [`crate::sky::environment::MAX_TEXELS`] texels is refused from its header, before any of its
@@ -650,6 +658,16 @@ fn decode_environment_pixels(path: &Path, bytes: &[u8]) -> Result<(u32, u32, Vec
     }
     // RGB f32, plus the decoder's own buffer.
     let decoder = sized_decoder(reader, MAX_TEXELS, 1 << 15, MAX_TEXELS * 28)?;
+    let (width, height) = image::ImageDecoder::dimensions(&decoder);
+    let texels = u64::from(width) * u64::from(height);
+    if texels > HDR_TEXELS_PER_BYTE * bytes.len() as u64 {
+        return Err(format!(
+            "the header declares {width}×{height} texels, more than {len} bytes of run-length \
+             encoded scanlines can hold (at most {HDR_TEXELS_PER_BYTE} texels a byte): the file \
+             is truncated",
+            len = bytes.len()
+        ));
+    }
     let decoded = image::DynamicImage::from_decoder(decoder)
         .map_err(|e| format!("cannot decode image: {e}"))?;
     Ok((
