@@ -171,7 +171,8 @@ class Builder:
             shader = b.outputs[0]
         elif k in ("glossy", "metal"):
             b = tree.nodes.new("ShaderNodeBsdfPrincipled")
-            b.distribution = "GGX"
+            # rondo's Glossy puts back GGX's multiple scattering; its Metal (fuzz) has none.
+            b.distribution = "MULTI_GGX" if k == "glossy" else "GGX"
             b.inputs["Metallic"].default_value = 1.0
             r = m["roughness"] if k == "glossy" else m["fuzz"]
             b.inputs["Roughness"].default_value = max(r, 0.01) if k == "glossy" else r
@@ -179,7 +180,8 @@ class Builder:
             shader = b.outputs[0]
         elif k == "dielectric":
             b = tree.nodes.new("ShaderNodeBsdfGlass")
-            b.distribution = "GGX"
+            # Energy-conserving rough glass, as rondo's compensated lobe.
+            b.distribution = "MULTI_GGX"
             # Cycles squares its roughness into GGX's alpha, as rondo does.
             b.inputs["Roughness"].default_value = m["roughness"]
             b.inputs["IOR"].default_value = m["ior"]
@@ -224,7 +226,8 @@ class Builder:
 
     def pbr(self, tree, m):
         b = tree.nodes.new("ShaderNodeBsdfPrincipled")
-        b.distribution = "GGX"
+        # Cycles' default, energy-conserving like rondo's Pbr.
+        b.distribution = "MULTI_GGX"
         b.inputs["IOR"].default_value = 1.5
         self.set_input(tree, b.inputs["Base Color"], m["base_color"])
         b.inputs["Metallic"].default_value = m["metallic"]

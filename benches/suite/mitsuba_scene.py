@@ -109,12 +109,14 @@ class Converter:
                          "specular_reflectance": self.texture(m["albedo"])}
             return {"type": "twosided", "bsdf": inner}
         if k == "glossy":
+            self.notes.add("Glossy: single-scattering GGX (rondo's puts multiple scattering back)")
             # Schlick's Fresnel with F0 = albedo: the principled BSDF's metallic lobe.
             return {"type": "twosided", "bsdf": {
                 "type": "principled", "base_color": self.texture(m["albedo"]),
                 "metallic": 1.0, "roughness": max(m["roughness"], 0.01)}}
         if k == "dielectric":
             if m["alpha"] > 0:
+                self.notes.add("rough glass: single-scattering GGX (rondo's is compensated)")
                 return {"type": "roughdielectric", "distribution": "ggx",
                         "alpha": max(m["alpha"], 1e-3), "int_ior": m["ior"], "ext_ior": 1.0}
             return {"type": "dielectric", "int_ior": m["ior"], "ext_ior": 1.0}

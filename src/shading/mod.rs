@@ -10,6 +10,7 @@ pub mod emission;
 pub mod energy;
 pub mod fresnel;
 pub mod fuzzed;
+pub mod glass_table;
 pub mod maps;
 pub mod material;
 pub mod microfacet;
