@@ -1,7 +1,7 @@
 //! Writes `src/shading/albedo_table/` (`mod.rs`, `conductor.rs`, `dielectric.rs`): the directional albedo E(μ, roughness) of rondo's
 //! single-scattering GGX reflection (height-correlated Smith, α = roughness²) with Fresnel 1 (the
-//! conductor's table) and with Schlick's Fresnel of F0 = 0.04 (the dielectric specular lobe of
-//! `Pbr`), and each row's cosine-weighted average E_avg = 2 ∫ E(μ) μ dμ (as 1 − E_avg).
+//! conductor's table) and with the exact Fresnel of a dielectric of ior 1.5 (the dielectric
+//! specular lobe of `Pbr`), and each row's cosine-weighted average E_avg = 2 ∫ E(μ) μ dμ (as 1 − E_avg).
 //!
 //! ```text
 //! cargo run --release --example make_albedo_tables -- src/shading/albedo_table
@@ -13,7 +13,7 @@
 //! surface) over a `GRID × GRID` midpoint grid of the unit square mapped to microfacet normals
 //! by Heitz's visible-normal sampling (JCGT 2018): that map carries the uniform measure to the
 //! density `G₁(wo) D(h) (wo·h) / cos θo`, under which `f cos θi / pdf` is exactly that
-//! integrand. Row 0 (roughness 0) is the mirror's limit: 1, and Schlick's F(μ). Nodes are
+//! integrand. Row 0 (roughness 0) is the mirror's limit: 1, and the dielectric's F(μ). Nodes are
 //! uniform in roughness and in √μ, which puts them close together at grazing angles, where E
 //! changes fastest. The averages are the exact integrals of the table as rondo interpolates it
 //! (linear in √μ between nodes), computed from the rounded values written out, so that
@@ -35,18 +35,39 @@ const COS: usize = 64;
 const GRID: usize = 512;
 /// The cosine used for the node μ = 0, where the view is in the surface's plane.
 const GRAZING: f64 = 1e-6;
-/// Reflectance at normal incidence of the dielectric lobe (ior 1.5).
-const DIELECTRIC_F0: f64 = 0.04;
+/// Index of refraction of the dielectric lobe.
+const DIELECTRIC_IOR: f64 = 1.5;
 
-/// Schlick's Fresnel of reflectance `f0` at cosine `c`.
-fn schlick(f0: f64, c: f64) -> f64 {
-    f0 + (1.0 - f0) * (1.0 - c.clamp(0.0, 1.0)).powi(5)
+/// The Fresnel factor a table is computed with.
+#[derive(Clone, Copy)]
+enum Fresnel {
+    /// 1 at every angle (the conductor's table, its colour applied by rondo).
+    One,
+    /// The exact reflectance of unpolarised light from outside a dielectric of ior 1.5.
+    Dielectric,
 }
 
-/// Directional albedo at view cosine `mu` of GGX `alpha` with Schlick's Fresnel of `f0`.
-fn albedo(mu: f64, roughness: f64, f0: f64) -> f64 {
+impl Fresnel {
+    /// The reflectance at cosine `c` (Born & Wolf §1.5.2 for the dielectric).
+    fn at(self, c: f64) -> f64 {
+        match self {
+            Self::One => 1.0,
+            Self::Dielectric => {
+                let c = c.clamp(0.0, 1.0);
+                let eta = DIELECTRIC_IOR;
+                let cos_t = (1.0 - (1.0 - c * c) / (eta * eta)).sqrt();
+                let rs = (c - eta * cos_t) / (c + eta * cos_t);
+                let rp = (eta * c - cos_t) / (eta * c + cos_t);
+                0.5 * (rs * rs + rp * rp)
+            }
+        }
+    }
+}
+
+/// Directional albedo at view cosine `mu` of GGX `alpha` with the Fresnel factor `fresnel`.
+fn albedo(mu: f64, roughness: f64, fresnel: Fresnel) -> f64 {
     if roughness == 0.0 {
-        return schlick(f0, mu);
+        return fresnel.at(mu);
     }
     let alpha = roughness * roughness;
     let mu = mu.max(GRAZING);
@@ -61,7 +82,7 @@ fn albedo(mu: f64, roughness: f64, f0: f64) -> f64 {
             let oh = wo[0] * h[0] + wo[1] * h[1] + wo[2] * h[2];
             let wi_z = 2.0 * oh * h[2] - wo[2];
             if wi_z > 0.0 {
-                sum += schlick(f0, oh) * (1.0 + lo) / (1.0 + lo + lambda(wi_z, alpha));
+                sum += fresnel.at(oh) * (1.0 + lo) / (1.0 + lo + lambda(wi_z, alpha));
             }
         }
     }
@@ -75,13 +96,13 @@ fn x_node(i: usize) -> f64 {
 
 /// A table over (roughness node, √μ node), rounded to the `f32` written out (in its shortest
 /// exact form).
-fn table(f0: f64) -> Vec<Vec<f32>> {
+fn table(fresnel: Fresnel) -> Vec<Vec<f32>> {
     (0..ROUGHNESS)
         .into_par_iter()
         .map(|j| {
             let r = j as f64 / (ROUGHNESS - 1) as f64;
             (0..COS)
-                .map(|i| albedo(x_node(i).powi(2), r, f0) as f32)
+                .map(|i| albedo(x_node(i).powi(2), r, fresnel) as f32)
                 .collect()
         })
         .collect()
@@ -115,8 +136,8 @@ fn interpolate(t: &[Vec<f32>], mu: f64, r: f64) -> f64 {
 
 /// Prints the largest error of the interpolated tables at the centres of their cells, of all
 /// and of those at most 88° from the normal.
-fn check(tables: &[(&str, f64, Vec<Vec<f32>>)]) {
-    for ((name, f0, t), min_mu) in tables
+fn check(tables: &[(&str, Fresnel, Vec<Vec<f32>>)]) {
+    for ((name, fresnel, t), min_mu) in tables
         .iter()
         .flat_map(|t| [(t, 0.0), (t, 88f64.to_radians().cos())])
     {
@@ -130,7 +151,7 @@ fn check(tables: &[(&str, f64, Vec<Vec<f32>>)]) {
                     if mu < min_mu {
                         continue;
                     }
-                    let e = (albedo(mu, r, *f0) - interpolate(t, mu, r)).abs();
+                    let e = (albedo(mu, r, *fresnel) - interpolate(t, mu, r)).abs();
                     if e > worst.0 {
                         worst = (e, mu, r);
                     }
@@ -179,12 +200,12 @@ fn write(out: &mut String, name: &str, what: &str, t: &[Vec<f32>]) {
 }
 
 fn main() {
-    let conductor = table(1.0);
-    let dielectric = table(DIELECTRIC_F0);
+    let conductor = table(Fresnel::One);
+    let dielectric = table(Fresnel::Dielectric);
     if std::env::args().any(|a| a == "--check") {
         check(&[
-            ("conductor", 1.0, conductor),
-            ("dielectric", DIELECTRIC_F0, dielectric),
+            ("conductor", Fresnel::One, conductor),
+            ("dielectric", Fresnel::Dielectric, dielectric),
         ]);
         return;
     }
@@ -228,7 +249,7 @@ fn main() {
         (
             "dielectric",
             "DIELECTRIC",
-            "single-scattering GGX with Schlick's Fresnel of F0 = 0.04",
+            "single-scattering GGX with the exact Fresnel of ior 1.5",
             &dielectric,
         ),
     ] {

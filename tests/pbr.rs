@@ -69,7 +69,7 @@ fn smooth_white_mirrors_are_exactly_one_in_a_white_furnace_under_every_method() 
 
 #[test]
 fn a_smooth_dielectric_pbr_mixes_its_mirror_and_diffuse_lobes_alike_under_every_method() {
-    // Roughness 0, metallic 0: a perfect mirror of Fresnel F(0.04) over a Lambertian base.
+    // Roughness 0, metallic 0: a perfect mirror of the Fresnel of ior 1.5 over a Lambertian base.
     // Next-event estimation and MIS evaluate the diffuse lobe alone, with the density of
     // sampling it, and leave the mirror to BSDF sampling: all three methods must agree.
     let dir = temp_dir("pbr-smooth-plastic");

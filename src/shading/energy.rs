@@ -86,13 +86,13 @@ impl AlbedoRow {
         self.lost(&CONDUCTOR_LOST)
     }
 
-    /// E(μ) of single-scattering GGX with Schlick's Fresnel of F0 = 0.04 (ior 1.5).
+    /// E(μ) of single-scattering GGX with the exact Fresnel of ior 1.5.
     #[inline]
     pub fn dielectric(&self, mu: f32) -> f32 {
         self.lookup(&DIELECTRIC, mu)
     }
 
-    /// 1 − E_avg of single-scattering GGX with Schlick's Fresnel of F0 = 0.04.
+    /// 1 − E_avg of single-scattering GGX with the exact Fresnel of ior 1.5.
     #[inline]
     pub fn dielectric_lost(&self) -> f32 {
         self.lost(&DIELECTRIC_LOST)
@@ -162,15 +162,32 @@ mod tests {
     }
 
     #[test]
-    fn the_mirror_row_is_one_and_schlicks_fresnel() {
+    fn the_mirror_row_is_one_and_the_exact_fresnel_of_ior_one_and_a_half() {
+        // The Fresnel equations' reflectance of unpolarised light from outside ior 1.5.
+        let fresnel = |c: f64| {
+            let eta = 1.5f64;
+            let cos_t = (1.0 - (1.0 - c * c) / (eta * eta)).sqrt();
+            let rs = (c - eta * cos_t) / (c + eta * cos_t);
+            let rp = (eta * c - cos_t) / (eta * c + cos_t);
+            0.5 * (rs * rs + rp * rp)
+        };
         let row = AlbedoRow::new(1e-4);
-        for mu in [0.0f32, 0.1, 0.5, 1.0] {
+        for mu in [0.0f32, 0.1, 0.5, 0.7, 1.0] {
             assert_eq!(row.conductor(mu), 1.0);
-            let f = 0.04 + 0.96 * (1.0 - mu).powi(5);
-            assert!((row.dielectric(mu) - f).abs() < 2e-3, "{mu}");
+            let f = fresnel(f64::from(mu));
+            assert!((f64::from(row.dielectric(mu)) - f).abs() < 2e-3, "{mu}");
         }
-        // 2 ∫ (0.04 + 0.96 (1 − μ)⁵) μ dμ = 0.04 + 0.96/21.
-        assert!((1.0 - row.dielectric_lost() - (0.04 + 0.96 / 21.0)).abs() < 1e-4);
+        // 2 ∫ F(μ) μ dμ by the midpoint rule (0.0918).
+        let n = 100_000;
+        let average = 2.0
+            * (0..n)
+                .map(|k| {
+                    let mu = (k as f64 + 0.5) / n as f64;
+                    fresnel(mu) * mu
+                })
+                .sum::<f64>()
+            / n as f64;
+        assert!((1.0 - f64::from(row.dielectric_lost()) - average).abs() < 1e-4);
         assert_eq!(compensation(0.5, 0.5, row.conductor_lost()), 0.0);
     }
 
