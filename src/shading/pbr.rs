@@ -5,9 +5,10 @@
 //! 1.5, [`fresnel_dielectric`], over a Lambertian base colour); α = roughness². Both Fresnel
 //! terms take `|V·H|`, so the two single-scattering lobes are one GGX lobe whose Fresnel is the
 //! mix by `metallic` of the two. The spec's sample code takes Schlick's F0 = 0.04 for the
-//! dielectric too; the exact curve reflects more at oblique views (0.089 against 0.070 at 60°),
-//! as Cycles' Principled BSDF does, which keeps dark non-metals as bright as there (about 3 %
-//! brighter than Schlick's under a sky at base colour 0.1). No ECS here.
+//! dielectric too; the exact curve, which Cycles' Principled BSDF uses, reflects more at
+//! oblique views (0.089 against 0.070 at 60°), so dark non-metals, whose look is mostly this
+//! lobe, come out 2–9 % brighter under a sky than with Schlick's (benches/gltf_models). No ECS
+//! here.
 //!
 //! How the dielectric differs from the spec's informative `fresnel_mix`: that weighs the base
 //! by `1 − F(V·H)`, the Fresnel at the half vector of the pair, not by what the specular lobe
