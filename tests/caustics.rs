@@ -129,7 +129,7 @@ fn the_caustic_scene_converges_to_what_the_plain_path_tracer_finds() {
 fn light_traced_images_are_the_same_on_any_thread_count() {
     let scene = scenes_dir().join("caustic.ron");
     let o = overrides(Method::Caustics, 4, 7, (40, 30));
-    let one = render(&scene, o.clone(), Some(1));
+    let one = render(&scene, o, Some(1));
     let two = render(&scene, o, Some(2));
     assert_eq!(one.film().sum, two.film().sum);
 }

@@ -61,6 +61,14 @@ fn emission_weight(
     }
 }
 
+/// Whether a vertex with `bsdf` on a primitive of `kind` is a perfect specular vertex of a
+/// light-traced path: a perfect mirror or smooth glass, not on an infinite plane (which no
+/// light path can be aimed at).
+#[inline(always)]
+pub(super) fn is_chain_vertex(bsdf: &Bsdf, kind: HitKind) -> bool {
+    bsdf.is_specular() && kind != HitKind::Plane
+}
+
 /// Absolute error bound of the hit point `s.p` of `hit`, per component (pbrt-v4, Section 6.8.5):
 /// the point is recomputed from the primitive, so its error scales with the primitive's own
 /// coordinates, not with the ray's travel. Public so tests can spawn rays exactly as the
@@ -212,11 +220,11 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     let mut features = (!collect).then(FeatureSample::default);
     // The medium the current ray travels through.
     let mut medium = Medium::CLEAR;
-    // Under `Method::Caustics`, light tracing owns the paths camera → D → S… → light (D the
-    // camera's first hit, continued from its non-delta part, S perfect mirrors or glass of
-    // finite shapes, see [`super::caustics`]): the perfect specular vertices after such a D so far, `None` once the
-    // path is not one of them. Its emission from a finite emitter or a distant light is then
-    // not counted here.
+    // Under `Method::Caustics`, light tracing (the `caustics` module) owns the paths camera →
+    // D → S… → light, D the camera's first hit continued by its non-delta part and each S a
+    // perfect specular vertex ([`is_chain_vertex`]): the number of S after such a D so far,
+    // `None` once the path is not one of them. Its emission from a finite emitter or a distant
+    // light is then not counted here.
     let mut caustic: Option<u32> = None;
     for depth in 0..view.max_depth {
         stats.rays += 1;
@@ -272,7 +280,7 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
                 normal: if ray.direction.dot(n) < 0.0 { n } else { -n },
             });
         }
-        let specular = super::caustics::is_chain_vertex(&bsdf, hit.kind);
+        let specular = is_chain_vertex(&bsdf, hit.kind);
         let light_traced = caustic.is_some_and(|k| k > 0) && hit.kind != HitKind::Plane;
         caustic = caustic.filter(|_| specular).map(|k| k + 1);
         if let Some(emitted) = bsdf.emitted().filter(|_| !light_traced) {

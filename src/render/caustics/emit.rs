@@ -13,7 +13,7 @@
 //!   inside it). Its density per steradian is `cones containing it / Σ Ω`.
 //!
 //! Infinite planes are neither targets nor sources: paths through a mirror plane, and light an
-//! emitting plane sends, stay with the path tracer (see [`super::is_chain_vertex`]).
+//! emitting plane sends, stay with the path tracer (see the integrator's `is_chain_vertex`).
 
 use std::f32::consts::PI;
 

@@ -2,7 +2,7 @@
 //!
 //! Path space is split between two estimators, without weights: light tracing takes exactly
 //! the paths light → S… → D → camera, where each S (at least one, at most `max_depth − 2`) is a
-//! perfect mirror or smooth glass of a finite shape ([`is_chain_vertex`]) and D, the camera's
+//! perfect mirror or smooth glass of a finite shape (the integrator's `is_chain_vertex`) and D, the camera's
 //! first hit, is anything else; the path tracer (`Mis`) takes every other path, and drops these
 //! ones: after the camera's first hit continued by its non-delta part, emission reached through
 //! perfect specular vertices only (from a finite emitter or a distant light) is not counted
@@ -34,16 +34,15 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::integrator::{point_error, spawn};
+use super::integrator::{is_chain_vertex, point_error, spawn};
 use super::medium::Medium;
 use super::{Cancelled, Method, SceneView, TraceStats};
 use crate::cpu::Sse;
 use crate::film::Film;
 use crate::geometry::layout::Layout;
-use crate::geometry::packed::{Hit, HitKind};
+use crate::geometry::packed::Hit;
 use crate::geometry::ray::Ray;
 use crate::geometry::surface::Surface;
-use crate::shading::bsdf::Bsdf;
 use crate::shading::material::Material;
 use crate::shading::rng::Rng;
 use crate::shading::sampler::Sampler;
@@ -58,14 +57,6 @@ const CHUNK: u64 = 4096;
 /// Work items whose splats are held at once before they are added to the film: bounds the
 /// memory of a pass to `BATCH · CHUNK` splats, whatever the image size.
 const BATCH: u64 = 64;
-
-/// Whether a vertex with `bsdf` on a primitive of `kind` is a perfect specular vertex of a
-/// light-traced path: a perfect mirror or smooth glass, not on an infinite plane (which no
-/// light path can be aimed at).
-#[inline(always)]
-pub fn is_chain_vertex(bsdf: &Bsdf, kind: HitKind) -> bool {
-    bsdf.is_specular() && kind != HitKind::Plane
-}
 
 /// Traces the light paths of samples `samples` and adds their splats to `film` (see the
 /// module's notes); nothing unless the view's method is `Caustics`, the scene has no alpha
