@@ -3,6 +3,7 @@
 
 pub mod albedo_table;
 pub mod bsdf;
+pub mod coat;
 pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
@@ -10,6 +11,7 @@ pub mod emission;
 pub mod energy;
 pub mod fresnel;
 pub mod fuzzed;
+pub mod layers;
 pub mod maps;
 pub mod material;
 pub mod microfacet;
@@ -19,4 +21,5 @@ pub mod rough_dielectric;
 pub mod sampler;
 pub mod sampling;
 pub mod scatter;
+pub mod specular;
 pub mod texture;
