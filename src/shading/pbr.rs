@@ -35,10 +35,9 @@ use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
 use super::energy::{AlbedoRow, compensation, multiple_scattering_fresnel};
-use super::microfacet::{
-    Terms, alpha_from_roughness, is_specular_alpha, sample_visible_normal, schlick_rgb,
-};
+use super::microfacet::{Terms, alpha_from_roughness, is_specular_alpha, sample_visible_normal};
 use super::sampling::{Frame, cosine_hemisphere};
+use super::specular::{Specular, schlick_f90};
 
 /// Reflectance at normal incidence of the dielectric part (ior 1.5).
 pub const DIELECTRIC_F0: f32 = 0.04;
@@ -52,6 +51,8 @@ pub struct Pbr {
     pub metallic: f32,
     /// GGX α = roughness², clamped as [`alpha_from_roughness`] does.
     pub alpha: f32,
+    /// Strength and colour of the dielectric specular lobe (`KHR_materials_specular`).
+    pub specular: Specular,
 }
 
 /// A sampled direction with its weight `f·cos / pdf` and its density.
@@ -74,7 +75,13 @@ impl Pbr {
             base_color,
             metallic: metallic.clamp(0.0, 1.0),
             alpha: alpha_from_roughness(roughness),
+            specular: Specular::PLAIN,
         }
+    }
+
+    /// This BRDF with the dielectric specular lobe `specular`.
+    pub fn with_specular(self, specular: Specular) -> Self {
+        Self { specular, ..self }
     }
 
     /// Whether the specular lobe is a perfect mirror (α below [`super::microfacet::SPECULAR_ALPHA`]).
@@ -90,11 +97,26 @@ impl Pbr {
         self.is_smooth() && self.diffuse().max_element() <= 0.0
     }
 
-    /// F0 of the combined specular lobe: mix(0.04, base colour, metallic) (Schlick's Fresnel is
-    /// linear in F0, so the two lobes' Fresnel-weighted GGX terms add up to this one).
+    /// F0 of the combined specular lobe: mix(dielectric F0, base colour, metallic) (Schlick's
+    /// Fresnel is linear in F0 and F90, so the two lobes' Fresnel-weighted GGX terms add up to
+    /// this one).
     #[inline]
     fn f0(&self) -> Vec3 {
-        Vec3::splat(DIELECTRIC_F0).lerp(self.base_color, self.metallic)
+        self.specular.normal().lerp(self.base_color, self.metallic)
+    }
+
+    /// F90 of the combined specular lobe: mix(dielectric F90, 1, metallic); 1 unless
+    /// `KHR_materials_specular` weakens the dielectric lobe.
+    #[inline]
+    fn f90(&self) -> f32 {
+        let g = self.specular.grazing();
+        g + (1.0 - g) * self.metallic
+    }
+
+    /// The combined specular lobe's Fresnel at cosine `cos`.
+    #[inline]
+    fn fresnel(&self, cos: f32) -> Vec3 {
+        schlick_f90(self.f0(), self.f90(), cos)
     }
 
     /// The base's reflectance: `(1 − metallic) · base colour`.
@@ -115,18 +137,39 @@ impl Pbr {
     /// [`Pbr::specular_probability`] with the tables' row already found.
     #[inline]
     fn probability(&self, row: &AlbedoRow, cos_o: f32) -> f32 {
-        let e = row.conductor(cos_o);
-        let spec = schlick_rgb(self.f0(), cos_o).element_sum() * e;
-        let base = self.diffuse().element_sum() * (1.0 - row.dielectric(cos_o));
-        let multiple = self.metallic
-            * multiple_scattering_fresnel(self.base_color, row.conductor_lost()).element_sum()
-            * (1.0 - e);
-        let rest = base + multiple;
+        let (spec, rest) = self.albedo_sums(row, cos_o);
         if rest <= 0.0 || !rest.is_finite() {
             1.0
         } else {
             (spec / (spec + rest)).clamp(0.0, 1.0)
         }
+    }
+
+    /// An estimate of the directional albedo at view cosine `cos_o`, the mean over the
+    /// channels: the specular lobe's F(μo) E(μo) plus what the cosine-sampled lobes reflect.
+    /// Layers above the BRDF weigh their sampling probability with it.
+    #[inline]
+    pub fn albedo_estimate(&self, cos_o: f32) -> f32 {
+        let (spec, rest) = self.albedo_sums(&AlbedoRow::new(self.alpha), cos_o);
+        (spec + rest) / 3.0
+    }
+
+    /// The channel sums of the specular lobe's albedo, F(μo) E(μo), and of the cosine-sampled
+    /// lobes', `(1 − metallic) base (1 − E_s(μo))` plus the compensation's
+    /// `metallic F_ms (1 − E(μo))`.
+    #[inline]
+    fn albedo_sums(&self, row: &AlbedoRow, cos_o: f32) -> (f32, f32) {
+        let e = row.conductor(cos_o);
+        let spec = self.fresnel(cos_o).element_sum() * e;
+        let base = if self.specular.is_plain() {
+            self.diffuse().element_sum() * (1.0 - row.dielectric(cos_o))
+        } else {
+            (self.diffuse() * (Vec3::ONE - self.specular.albedo(row, cos_o))).element_sum()
+        };
+        let multiple = self.metallic
+            * multiple_scattering_fresnel(self.base_color, row.conductor_lost()).element_sum()
+            * (1.0 - e);
+        (spec, base + multiple)
     }
 
     /// BRDF times `cos θi` and the density of `wi` under [`Pbr::sample`], for unit `wo` (towards
@@ -155,7 +198,7 @@ impl Pbr {
     /// sampling, G₁(wo) D / (4 cos θo).
     #[inline]
     fn specular(&self, t: &Terms, cos_o: f32) -> (Vec3, f32) {
-        let f = schlick_rgb(self.f0(), t.cos_oh.abs());
+        let f = self.fresnel(t.cos_oh.abs());
         let q = t.d / (4.0 * cos_o);
         (f * (q / (1.0 + t.lo + t.li)), q / (1.0 + t.lo))
     }
@@ -165,12 +208,26 @@ impl Pbr {
     /// conductor's multiple scattering, `metallic F_ms (1 − E(μo))(1 − E(μi)) / (π (1 − E_avg))`.
     #[inline]
     fn cosine_lobes(&self, row: &AlbedoRow, cos_o: f32, cos_i: f32) -> Vec3 {
-        let base = self.diffuse()
-            * compensation(
-                row.dielectric(cos_o),
-                row.dielectric(cos_i),
-                row.dielectric_lost(),
+        let base = if self.specular.is_plain() {
+            self.diffuse()
+                * compensation(
+                    row.dielectric(cos_o),
+                    row.dielectric(cos_i),
+                    row.dielectric_lost(),
+                )
+        } else {
+            let (e_o, e_i) = (
+                self.specular.albedo(row, cos_o),
+                self.specular.albedo(row, cos_i),
             );
+            let lost = self.specular.lost(row);
+            self.diffuse()
+                * Vec3::new(
+                    compensation(e_o.x, e_i.x, lost.x),
+                    compensation(e_o.y, e_i.y, lost.y),
+                    compensation(e_o.z, e_i.z, lost.z),
+                )
+        };
         if self.metallic <= 0.0 {
             return base;
         }
@@ -195,7 +252,7 @@ impl Pbr {
             // The mirror direction; F at wo · h = wo · n.
             return Some(PbrSample {
                 wi: (2.0 * cos_o * n - wo).normalize(),
-                weight: schlick_rgb(self.f0(), cos_o) / p_spec,
+                weight: self.fresnel(cos_o) / p_spec,
                 pdf: None,
             });
         }

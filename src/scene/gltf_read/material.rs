@@ -5,6 +5,7 @@ use std::ops::RangeInclusive;
 use glam::Vec3;
 
 use super::data::{AlphaMode, GltfMaterial, GltfTexture, Wrap};
+use super::layers::read_layers;
 use super::texture_transform;
 
 /// A texture reference with its sampler, and its `KHR_texture_transform` from the reference's
@@ -145,6 +146,7 @@ pub(super) fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> 
     if let Some(cutoff) = m.alpha_cutoff() {
         check_field(&what, "alphaCutoff", cutoff, at_least_0)?;
     }
+    let (layers, layer_notes) = read_layers(m, &what)?;
     let alpha_mode = match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
         gltf::material::AlphaMode::Mask => AlphaMode::Mask(m.alpha_cutoff().unwrap_or(0.5)),
@@ -200,6 +202,8 @@ pub(super) fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> 
         thickness,
         attenuation_color: Vec3::from(attenuation_color),
         attenuation_distance,
+        layers,
+        layer_notes,
         name,
     })
 }
