@@ -25,8 +25,9 @@ use glam::{Vec2, Vec3};
 
 use super::energy::AlbedoRow;
 use super::microfacet::{Terms, is_specular_alpha, sample_visible_normal};
-use super::pbr::{DIELECTRIC_F0, Pbr, PbrSample};
+use super::pbr::{Pbr, PbrSample};
 use super::sampling::Frame;
+use super::specular::DIELECTRIC_F0;
 use super::specular::schlick_f90;
 
 /// A clear coat over a metallic–roughness BRDF at one surface point (textures looked up).

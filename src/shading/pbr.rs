@@ -39,9 +39,6 @@ use super::microfacet::{Terms, alpha_from_roughness, is_specular_alpha, sample_v
 use super::sampling::{Frame, cosine_hemisphere};
 use super::specular::{Specular, schlick_f90};
 
-/// Reflectance at normal incidence of the dielectric part (ior 1.5).
-pub const DIELECTRIC_F0: f32 = 0.04;
-
 /// The metallic–roughness BRDF at one surface point (textures already looked up).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pbr {

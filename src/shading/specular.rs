@@ -14,7 +14,10 @@
 use glam::Vec3;
 
 use super::energy::AlbedoRow;
-use super::pbr::DIELECTRIC_F0;
+
+/// Reflectance at normal incidence of `Pbr`'s dielectric part (ior 1.5), before
+/// `KHR_materials_specular` scales and tints it.
+pub const DIELECTRIC_F0: f32 = 0.04;
 
 /// The dielectric specular lobe's Fresnel: `weight · (f0 + (1 − f0)(1 − μ)⁵)` per channel.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -8,7 +8,7 @@ use std::ops::RangeInclusive;
 use glam::Vec3;
 use gltf::json::Value;
 
-use super::material::check_field;
+use super::field::check_field;
 use crate::shading::layers::Layers;
 
 /// `KHR_materials_specular`.

@@ -1,10 +1,9 @@
 //! glTF metallic–roughness materials and their textures, each factor checked to be in range.
 
-use std::ops::RangeInclusive;
-
 use glam::Vec3;
 
 use super::data::{AlphaMode, GltfMaterial, GltfTexture, Wrap};
+use super::field::check_field;
 use super::layers::read_layers;
 use super::texture_transform;
 
@@ -44,28 +43,6 @@ fn info(
     ext: Option<&gltf::json::Value>,
 ) -> Result<GltfTexture, String> {
     texture(tex, texcoord, ext, &|| format!("{}: {field}", what()))
-}
-
-/// Checks that a material's field `field` holds `v`, a finite number within `range` (the
-/// spec's range for it; the RON loader refuses the same quantities out of range).
-pub(super) fn check_field(
-    what: &dyn Fn() -> String,
-    field: &str,
-    v: f32,
-    range: RangeInclusive<f32>,
-) -> Result<(), String> {
-    if v.is_finite() && range.contains(&v) {
-        return Ok(());
-    }
-    let (lo, hi) = (range.start(), range.end());
-    let within = if hi.is_finite() {
-        format!("in [{lo}, {hi}]")
-    } else if lo.is_finite() {
-        format!("finite and at least {lo}")
-    } else {
-        "finite".into()
-    };
-    Err(format!("{}: {field} is {v}, must be {within}", what()))
 }
 
 /// Reads a material, checking its factors against the spec's ranges.

@@ -39,6 +39,7 @@ use gltf::mesh::Mode;
 mod accessors;
 mod buffers;
 mod data;
+mod field;
 mod instancing;
 mod layers;
 mod lights;
