@@ -17,6 +17,7 @@ use common::{render, temp_dir, with, write_scene};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use rondo::scene::format::Method;
+use rondo::shading::layers::Layers;
 use rondo::shading::material::Material;
 use rondo::shading::texture::Texture;
 
@@ -37,6 +38,7 @@ fn pbr(base: Vec3, metallic: f32, roughness: f32) -> Material {
         emissive_strength: 1.0,
         normal_map: None,
         alpha: None,
+        layers: Layers::NONE,
     }
 }
 

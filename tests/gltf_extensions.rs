@@ -507,7 +507,7 @@ fn unsupported_extensions_warn_what_will_look_wrong() {
     let mut file = quad_file(material);
     file["extensionsUsed"] = json!([
         "KHR_materials_sheen",
-        "KHR_materials_clearcoat",
+        "KHR_materials_anisotropy",
         "KHR_texture_transform"
     ]);
     let path = write_quad(&dir, "w.gltf", &file);
@@ -521,7 +521,7 @@ fn unsupported_extensions_warn_what_will_look_wrong() {
             .clone()
     };
     assert!(warning("KHR_materials_sheen").contains("grazing"));
-    assert!(warning("KHR_materials_clearcoat").contains("top reflection"));
+    assert!(warning("KHR_materials_anisotropy").contains("brushed highlights"));
     assert!(
         scene
             .warnings

@@ -329,7 +329,7 @@ fn settings_values_are_named() {
         ),
         (
             "method: Fast",
-            "settings: unknown method \"Fast\" (expected Naive, Nee or Mis)",
+            "settings: unknown method \"Fast\" (expected Naive, Nee, Mis or Caustics)",
         ),
     ];
     for (setting, expected) in cases {

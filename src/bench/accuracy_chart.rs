@@ -20,6 +20,7 @@ fn colour(method: Method, sampler: SamplerKind) -> RGBColor {
         Method::Naive => RGBColor(214, 39, 40),
         Method::Nee => RGBColor(31, 119, 180),
         Method::Mis => RGBColor(44, 160, 44),
+        Method::Caustics => RGBColor(148, 103, 189),
     };
     let pale = |c: u8| ((u16::from(c) + 2 * 255) / 3) as u8;
     match sampler {

@@ -34,6 +34,7 @@ use crate::geometry::packed::Primitive;
 use crate::geometry::world::world_primitives;
 use crate::model::Shape;
 use crate::scene::load::LoadedScene;
+use crate::shading::layers::Layers;
 use crate::shading::material::Material;
 use crate::shading::texture::{Filter, Texture, Wrap};
 
@@ -173,6 +174,7 @@ fn material(m: &Material, images: &ImageFiles) -> Result<Value, ExportError> {
             emissive_strength,
             normal_map,
             alpha,
+            layers,
         } => {
             let alpha = match alpha {
                 None => Value::Null,
@@ -186,7 +188,7 @@ fn material(m: &Material, images: &ImageFiles) -> Result<Value, ExportError> {
                     json!({"cutoff": a.cutoff, "factor": a.factor, "image": image})
                 }
             };
-            json!({
+            let mut pbr = json!({
                 "kind": "pbr",
                 "base_color": texture(base_color, images)?,
                 "metallic": metallic,
@@ -202,7 +204,17 @@ fn material(m: &Material, images: &ImageFiles) -> Result<Value, ExportError> {
                     Some(n) => json!({"texture": texture(&n.texture, images)?, "scale": n.scale}),
                 },
                 "alpha_mask": alpha,
-            })
+            });
+            // Only a material with layers describes them, so other scenes export as before.
+            if *layers != Layers::NONE {
+                pbr["layers"] = json!({
+                    "specular": layers.specular,
+                    "specular_color": layers.specular_color.to_array(),
+                    "clearcoat": layers.clearcoat,
+                    "clearcoat_roughness": layers.clearcoat_roughness,
+                });
+            }
+            pbr
         }
     })
 }

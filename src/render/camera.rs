@@ -79,6 +79,54 @@ impl Camera {
         Ray::new(origin, (focus - origin).normalize())
     }
 
+    /// Where light leaving point `p` towards the lens reaches the film of a `width` × `height`
+    /// image, for light tracing's connection to the camera (pbrt-v4's `Camera::SampleWi`): the
+    /// lens point (the eye for a pinhole; for a thin lens the point `u` ∈ [0, 1)² maps to, as
+    /// in [`Camera::lens_ray`]), the continuous film position of the ray from that point
+    /// through `p`, and the camera's importance per steradian at the lens point for a pixel of
+    /// the film: `1 / (A cos³θ)`, A the area of one pixel on the plane at distance 1 and θ the
+    /// ray's angle to the view. A thin lens's own density (uniform over its area) cancels the
+    /// importance's `1 / lens area`, so the same value holds for both. `None` if `p` is behind
+    /// the lens or off the film.
+    #[inline]
+    pub fn importance(&self, p: Vec3, width: u32, height: u32, u: Vec2) -> Option<Importance> {
+        let lens = if self.has_lens() {
+            let disk = self.lens_radius * concentric_disk(u);
+            self.position + disk.x * self.right + disk.y * self.up
+        } else {
+            self.position
+        };
+        let to = p - lens;
+        let depth = to.dot(self.forward);
+        if !(depth > 0.0 && depth.is_finite()) {
+            return None;
+        }
+        // The pinhole direction of the film position: towards where the ray meets the plane
+        // of focus (the ray's own direction for a pinhole).
+        let d = if self.has_lens() {
+            lens + to * (self.focus_distance / depth) - self.position
+        } else {
+            to
+        };
+        let forward = d.dot(self.forward);
+        let (sx, sy) = (d.dot(self.right) / forward, d.dot(self.up) / forward);
+        let aspect = width as f32 / height as f32;
+        let x = (sx / (self.half_height * aspect) + 1.0) * 0.5 * width as f32;
+        let y = (1.0 - sy / self.half_height) * 0.5 * height as f32;
+        if !(x >= 0.0 && x < width as f32 && y >= 0.0 && y < height as f32) {
+            return None;
+        }
+        let distance = to.length();
+        let cos = depth / distance;
+        let pixel_area =
+            4.0 * self.half_height * self.half_height * aspect / (width as f32 * height as f32);
+        Some(Importance {
+            lens,
+            film: Vec2::new(x, y),
+            importance: 1.0 / (pixel_area * cos * cos * cos),
+        })
+    }
+
     /// The ray through film position `(x, y)` in pixels (continuous; (0,0) is the top-left corner
     /// of the top-left pixel) of a `width` × `height` image.
     #[inline]
@@ -89,6 +137,17 @@ impl Camera {
         let d = (self.forward + sx * self.right + sy * self.up).normalize();
         Ray::new(self.position, d)
     }
+}
+
+/// A point's connection to the camera ([`Camera::importance`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Importance {
+    /// The point on the lens (the eye of a pinhole).
+    pub lens: Vec3,
+    /// The film position, in pixels.
+    pub film: Vec2,
+    /// The importance per steradian at `lens`, for the pixel the position is in.
+    pub importance: f32,
 }
 
 #[cfg(test)]
@@ -126,6 +185,34 @@ mod tests {
             pinhole.lens_ray(3.0, 4.0, 10, 10, Vec2::splat(0.3)),
             pinhole.ray(3.0, 4.0, 10, 10)
         );
+    }
+
+    #[test]
+    fn importance_inverts_the_camera_rays() {
+        // A point on the ray through a film position lands back on that position, from the
+        // eye and from any lens point (which the ray through the film position and that lens
+        // point passes through).
+        for cam in [
+            Camera::new(Vec3::ZERO, Vec3::new(0.2, -0.1, 1.0), Vec3::Y, 40.0),
+            Camera::new(Vec3::ONE, Vec3::Z, Vec3::Y, 60.0).with_lens(0.3, 5.0),
+        ] {
+            let u = Vec2::new(0.8, 0.3);
+            let r = cam.lens_ray(37.25, 11.5, 64, 48, u);
+            let p = r.origin + 7.0 * r.direction;
+            let i = cam.importance(p, 64, 48, u).expect("in view");
+            assert!(
+                (i.film - Vec2::new(37.25, 11.5)).length() < 1e-3,
+                "{}",
+                i.film
+            );
+            assert!((i.lens - r.origin).length() < 1e-5);
+            assert!(cam.importance(r.origin - r.direction, 64, 48, u).is_none());
+        }
+        // At the centre, a pixel of a 90° square image of 2×2 pixels covers 1 on the plane at
+        // distance 1: importance 1.
+        let cam = Camera::new(Vec3::ZERO, Vec3::Z, Vec3::Y, 90.0);
+        let i = cam.importance(Vec3::Z, 2, 2, Vec2::ZERO).expect("in view");
+        assert!((i.importance - 1.0).abs() < 1e-6);
     }
 
     #[test]

@@ -61,6 +61,14 @@ fn emission_weight(
     }
 }
 
+/// Whether a vertex with `bsdf` on a primitive of `kind` is a perfect specular vertex of a
+/// light-traced path: a perfect mirror or smooth glass, not on an infinite plane (which no
+/// light path can be aimed at).
+#[inline(always)]
+pub(super) fn is_chain_vertex(bsdf: &Bsdf, kind: HitKind) -> bool {
+    bsdf.is_specular() && kind != HitKind::Plane
+}
+
 /// Absolute error bound of the hit point `s.p` of `hit`, per component (pbrt-v4, Section 6.8.5):
 /// the point is recomputed from the primitive, so its error scales with the primitive's own
 /// coordinates, not with the ray's travel. Public so tests can spawn rays exactly as the
@@ -212,6 +220,12 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     let mut features = (!collect).then(FeatureSample::default);
     // The medium the current ray travels through.
     let mut medium = Medium::CLEAR;
+    // Under `Method::Caustics`, light tracing (the `caustics` module) owns the paths camera →
+    // D → S… → light, D the camera's first hit continued by its non-delta part and each S a
+    // perfect specular vertex ([`is_chain_vertex`]): the number of S after such a D so far,
+    // `None` once the path is not one of them. Its emission from a finite emitter or a distant
+    // light is then not counted here.
+    let mut caustic: Option<u32> = None;
     for depth in 0..view.max_depth {
         stats.rays += 1;
         let start = ray.origin;
@@ -229,6 +243,7 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         let Some(hit) = found else {
             let mut seen = view.background;
             let mut light = view.background;
+            let lit = caustic.is_none_or(|k| k == 0);
             for k in 0..view.lights.distant().len() {
                 let (emitted, pdf_light) = view.lights.distant_lookup(k, ray.direction);
                 if emitted == Vec3::ZERO {
@@ -239,7 +254,9 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
                     emission_weight(view.method, previous.filter(|_| sample_lights), |_| {
                         pdf_light
                     });
-                light += emitted * weight;
+                if lit {
+                    light += emitted * weight;
+                }
             }
             radiance += throughput * light;
             features.get_or_insert(FeatureSample {
@@ -263,7 +280,10 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
                 normal: if ray.direction.dot(n) < 0.0 { n } else { -n },
             });
         }
-        if let Some(emitted) = bsdf.emitted() {
+        let specular = is_chain_vertex(&bsdf, hit.kind);
+        let light_traced = caustic.is_some_and(|k| k > 0) && hit.kind != HitKind::Plane;
+        caustic = caustic.filter(|_| specular).map(|k| k + 1);
+        if let Some(emitted) = bsdf.emitted().filter(|_| !light_traced) {
             let from = previous.filter(|_| sample_lights);
             let weight = emission_weight(view.method, from, |p_prev| {
                 view.lights
@@ -294,6 +314,9 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         let Some(scatter) = bsdf.sample(sampler) else {
             break;
         };
+        if depth == 0 && view.method == Method::Caustics && !view.masked && !specular {
+            caustic = scatter.pdf.map(|_| 0);
+        }
         previous = scatter.pdf.map(|pdf| (s.p, pdf));
         medium = medium.leaving(beyond, ray.direction, s.n, scatter.direction);
         throughput *= scatter.attenuation;
@@ -477,7 +500,7 @@ fn direct_light<L: Layout, W: Lanes>(
     if occluded {
         return Vec3::ZERO;
     }
-    let weight = if view.method == Method::Mis && !delta {
+    let weight = if matches!(view.method, Method::Mis | Method::Caustics) && !delta {
         power_heuristic(pdf_light, pdf_bsdf)
     } else {
         1.0

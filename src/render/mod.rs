@@ -4,6 +4,7 @@
 //! No ECS here.
 
 pub mod camera;
+pub mod caustics;
 pub mod integrator;
 pub mod medium;
 pub mod pass;
@@ -31,6 +32,21 @@ pub enum Method {
     /// NEE and BSDF sampling combined by the power heuristic (Veach 1997).
     #[default]
     Mis,
+    /// `Mis`, with the caustic paths camera → diffuse or glossy vertex → perfect mirrors and
+    /// glass → light left to light tracing ([`caustics`]): light paths from the emitters and
+    /// distant lights, aimed at the specular surfaces, connected to the camera and splatted.
+    Caustics,
+}
+
+impl Method {
+    /// The method whose estimate a light-tracing-free pass (the preview) uses: `Mis` for
+    /// `Caustics`, whose path tracer alone misses the caustic paths, itself otherwise.
+    pub fn path_traced(self) -> Self {
+        match self {
+            Self::Caustics => Self::Mis,
+            m => m,
+        }
+    }
 }
 
 /// Most rays a path may have, camera ray included: the sampler's dimensions are laid out for

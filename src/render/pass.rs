@@ -26,6 +26,8 @@ const BAND_ROWS: usize = 4;
 /// Each sample draws from its own generator (the view's [`SamplerKind`]) seeded by (seed,
 /// pixel, sample index) and is added to its pixel's sum in sample order, so the film is
 /// bit-identical whatever the thread count and however the samples are split into passes.
+/// Under `Method::Caustics` the light paths of the same sample indices are then traced and
+/// splatted ([`super::caustics::splat_pass`]), as exactly.
 /// `progress(rows)` is called as bands finish. If `cancel` becomes true, remaining bands are
 /// skipped and `Err(Cancelled)` is returned.
 pub fn render_pass<L: Layout>(
@@ -85,6 +87,7 @@ fn render_pass_with<L: Layout, S: PixelSampler>(
     if cancel.load(Ordering::Relaxed) {
         return Err(Cancelled);
     }
+    let stats = stats + super::caustics::splat_pass(view, film, seed, samples.clone(), cancel)?;
     film.samples = samples.end;
     let mut stats = stats;
     if let Some(slot) = LayoutKind::ALL.iter().position(|&k| k == L::KIND) {
@@ -169,6 +172,11 @@ pub fn render_preview<L: Layout>(
     block: usize,
     cancel: &AtomicBool,
 ) -> Result<TraceStats, Cancelled> {
+    // The preview traces no light paths: its paths keep what light tracing would add.
+    let view = &SceneView {
+        method: view.method.path_traced(),
+        ..*view
+    };
     let (width, height) = (film.width as usize, film.height as usize);
     let block = block.max(1);
     let fixed = film.fixed();

@@ -3,7 +3,8 @@
 //! it evaluates, samples and gives the density of its lobe, says whether it is a perfect
 //! specular one or can be light-sampled, and carries the surface's emission. The lobes live in
 //! their own files ([`super::diffuse`], [`super::fuzzed`], [`super::conductor`],
-//! [`super::dielectric`], [`super::rough_dielectric`], [`super::pbr`]). No ECS here.
+//! [`super::dielectric`], [`super::rough_dielectric`], [`super::pbr`], [`super::coat`]). No ECS
+//! here.
 //!
 //! Where the shading normal differs from the geometric one (a smooth mesh), the lobe sampled
 //! about the shading normal is folded onto the side of the geometric surface the ray came from:
@@ -17,6 +18,7 @@
 
 use glam::Vec3;
 
+use super::coat::Coated;
 use super::conductor::Conductor;
 use super::dielectric::Dielectric;
 use super::diffuse::Diffuse;
@@ -46,6 +48,8 @@ pub enum Lobe {
     RoughDielectric(RoughDielectric),
     /// The glTF metallic–roughness mix.
     MetallicRoughness(Pbr),
+    /// The metallic–roughness mix under a clear coat.
+    Coated(Coated),
 }
 
 impl Lobe {
@@ -60,6 +64,10 @@ impl Lobe {
             Self::Conductor(l) => l.eval(d, wi, n),
             Self::RoughDielectric(l) => Some(l.eval(d, wi, n)),
             Self::MetallicRoughness(l) => {
+                let facing = if d.dot(n) < 0.0 { n } else { -n };
+                (!l.is_delta()).then(|| l.eval(-d, wi, facing))
+            }
+            Self::Coated(l) => {
                 let facing = if d.dot(n) < 0.0 { n } else { -n };
                 (!l.is_delta()).then(|| l.eval(-d, wi, facing))
             }
@@ -87,6 +95,16 @@ impl Lobe {
                     radiance_scale: 1.0,
                 })
             }
+            Self::Coated(l) => {
+                let facing = if d.dot(n) < 0.0 { n } else { -n };
+                let s = l.sample(-d, facing, sampler.next_2d())?;
+                Some(Scatter {
+                    direction: s.wi,
+                    attenuation: s.weight,
+                    pdf: s.pdf,
+                    radiance_scale: 1.0,
+                })
+            }
             Self::None => None,
         }
     }
@@ -100,6 +118,7 @@ impl Lobe {
             Self::Fuzzed(l) => l.roughness == 0.0,
             Self::Conductor(l) => l.is_specular(),
             Self::MetallicRoughness(l) => l.is_delta(),
+            Self::Coated(l) => l.is_delta(),
             Self::Diffuse(_) | Self::RoughDielectric(_) | Self::None => false,
         }
     }
@@ -113,6 +132,7 @@ impl Lobe {
             Self::Fuzzed(l) => l.albedo,
             Self::Conductor(l) => l.f0,
             Self::MetallicRoughness(l) => l.base_color,
+            Self::Coated(l) => l.base.base_color,
             Self::Dielectric(_) | Self::RoughDielectric(_) => Vec3::ONE,
             Self::None => Vec3::ZERO,
         }

@@ -5,17 +5,20 @@
 use glam::{Vec2, Vec3};
 
 use super::bsdf::{Bsdf, Lobe};
+use super::coat::Coated;
 use super::conductor::Conductor;
 use super::dielectric::Dielectric;
 use super::diffuse::Diffuse;
 use super::emission::Emission;
 use super::fuzzed::Fuzzed;
+use super::layers::Layers;
 use super::maps::{AlphaMask, NormalMap};
 use super::microfacet::{alpha_from_roughness, is_specular_alpha};
 use super::pbr::Pbr;
 use super::rough_dielectric::RoughDielectric;
 use super::sampler::Sampler;
 use super::scatter::Scatter;
+use super::specular::Specular;
 use super::texture::{TexCoords, Texture};
 
 /// A surface material.
@@ -93,6 +96,8 @@ pub enum Material {
         normal_map: Option<NormalMap>,
         /// Alpha mask: where the surface is absent.
         alpha: Option<AlphaMask>,
+        /// Specular strength and colour, and a clear coat ([`Layers::NONE`]: none).
+        layers: Layers,
     },
 }
 
@@ -235,6 +240,7 @@ impl Material {
                 roughness,
                 metallic_roughness,
                 normal_map,
+                layers,
                 ..
             } => {
                 let ns = match normal_map {
@@ -250,9 +256,22 @@ impl Material {
                 };
                 // Light sampling is decided per material, not per point: a textured mix may
                 // be evaluable at some points and a perfect mirror at others.
+                let coat_alpha = alpha_from_roughness(layers.clearcoat_roughness);
+                let coated = layers.clearcoat > 0.0;
                 let samples_lights = metallic_roughness.is_some()
-                    || !Pbr::new(Vec3::ONE, *metallic, *roughness).is_delta();
-                let lobe = Lobe::MetallicRoughness(Pbr::new(base_color.eval(uv), m, r));
+                    || !Pbr::new(Vec3::ONE, *metallic, *roughness).is_delta()
+                    || (coated && !is_specular_alpha(coat_alpha));
+                let specular = Specular::new(layers.specular, layers.specular_color);
+                let base = Pbr::new(base_color.eval(uv), m, r).with_specular(specular);
+                let lobe = if coated {
+                    Lobe::Coated(Coated {
+                        base,
+                        weight: layers.clearcoat.min(1.0),
+                        alpha: coat_alpha,
+                    })
+                } else {
+                    Lobe::MetallicRoughness(base)
+                };
                 (lobe, ns, samples_lights)
             }
         };

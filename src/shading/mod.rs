@@ -3,6 +3,7 @@
 
 pub mod albedo_table;
 pub mod bsdf;
+pub mod coat;
 pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
@@ -11,6 +12,7 @@ pub mod energy;
 pub mod fresnel;
 pub mod fuzzed;
 pub mod glass_table;
+pub mod layers;
 pub mod maps;
 pub mod material;
 pub mod microfacet;
@@ -20,4 +22,5 @@ pub mod rough_dielectric;
 pub mod sampler;
 pub mod sampling;
 pub mod scatter;
+pub mod specular;
 pub mod texture;

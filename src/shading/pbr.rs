@@ -2,7 +2,7 @@
 //! conserving: a mix by `metallic` of a conductor (GGX, height-correlated Smith, Schlick's
 //! Fresnel with F0 = base colour, plus Kulla & Conty's multiple-scattering lobe as
 //! [`super::conductor`] has it) and a dielectric (GGX specular with the exact Fresnel of ior
-//! 1.5, [`fresnel_dielectric`], over a Lambertian base colour); α = roughness². Both Fresnel
+//! 1.5, [`super::fresnel::fresnel_dielectric`], over a Lambertian base colour); α = roughness². Both Fresnel
 //! terms take `|V·H|`, so the two single-scattering lobes are one GGX lobe whose Fresnel is the
 //! mix by `metallic` of the two. The spec's sample code takes Schlick's F0 = 0.04 for the
 //! dielectric too; the exact curve, which Cycles' Principled BSDF uses, reflects more at
@@ -39,14 +39,11 @@ use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
 use super::energy::{AlbedoRow, compensation, multiple_scattering_fresnel};
-use super::fresnel::fresnel_dielectric;
 use super::microfacet::{
     Terms, alpha_from_roughness, is_specular_alpha, sample_visible_normal, schlick_rgb,
 };
 use super::sampling::{Frame, cosine_hemisphere};
-
-/// Index of refraction of the dielectric part (reflectance 0.04 at normal incidence).
-pub const DIELECTRIC_IOR: f32 = 1.5;
+use super::specular::Specular;
 
 /// The metallic–roughness BRDF at one surface point (textures already looked up).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,6 +54,8 @@ pub struct Pbr {
     pub metallic: f32,
     /// GGX α = roughness², clamped as [`alpha_from_roughness`] does.
     pub alpha: f32,
+    /// Strength and colour of the dielectric specular lobe (`KHR_materials_specular`).
+    pub specular: Specular,
 }
 
 /// A sampled direction with its weight `f·cos / pdf` and its density.
@@ -79,7 +78,13 @@ impl Pbr {
             base_color,
             metallic: metallic.clamp(0.0, 1.0),
             alpha: alpha_from_roughness(roughness),
+            specular: Specular::PLAIN,
         }
+    }
+
+    /// This BRDF with the dielectric specular lobe `specular`.
+    pub fn with_specular(self, specular: Specular) -> Self {
+        Self { specular, ..self }
     }
 
     /// Whether the specular lobe is a perfect mirror (α below [`super::microfacet::SPECULAR_ALPHA`]).
@@ -96,11 +101,13 @@ impl Pbr {
     }
 
     /// Fresnel factor of the combined specular lobe at cosine `c`: mix by `metallic` of the
-    /// dielectric's exact Fresnel (ior 1.5) and Schlick's of F0 = base colour (the two lobes
-    /// share GGX's D and G, so their Fresnel-weighted terms add up to this one).
+    /// dielectric lobe's ([`Specular::fresnel`], the exact Fresnel of ior 1.5 unless
+    /// `KHR_materials_specular` scales or tints it) and Schlick's of F0 = base colour (the two
+    /// lobes share GGX's D and G, so their Fresnel-weighted terms add up to this one).
     #[inline]
     fn fresnel(&self, c: f32) -> Vec3 {
-        Vec3::splat(fresnel_dielectric(c, DIELECTRIC_IOR))
+        self.specular
+            .fresnel(c)
             .lerp(schlick_rgb(self.base_color, c), self.metallic)
     }
 
@@ -122,18 +129,39 @@ impl Pbr {
     /// [`Pbr::specular_probability`] with the tables' row already found.
     #[inline]
     fn probability(&self, row: &AlbedoRow, cos_o: f32) -> f32 {
-        let e = row.conductor(cos_o);
-        let spec = self.fresnel(cos_o).element_sum() * e;
-        let base = self.diffuse().element_sum() * (1.0 - row.dielectric(cos_o));
-        let multiple = self.metallic
-            * multiple_scattering_fresnel(self.base_color, row.conductor_lost()).element_sum()
-            * (1.0 - e);
-        let rest = base + multiple;
+        let (spec, rest) = self.albedo_sums(row, cos_o);
         if rest <= 0.0 || !rest.is_finite() {
             1.0
         } else {
             (spec / (spec + rest)).clamp(0.0, 1.0)
         }
+    }
+
+    /// An estimate of the directional albedo at view cosine `cos_o`, the mean over the
+    /// channels: the specular lobe's F(μo) E(μo) plus what the cosine-sampled lobes reflect.
+    /// Layers above the BRDF weigh their sampling probability with it.
+    #[inline]
+    pub fn albedo_estimate(&self, cos_o: f32) -> f32 {
+        let (spec, rest) = self.albedo_sums(&AlbedoRow::new(self.alpha), cos_o);
+        (spec + rest) / 3.0
+    }
+
+    /// The channel sums of the specular lobe's albedo, F(μo) E(μo), and of the cosine-sampled
+    /// lobes', `(1 − metallic) base (1 − E_s(μo))` plus the compensation's
+    /// `metallic F_ms (1 − E(μo))`.
+    #[inline]
+    fn albedo_sums(&self, row: &AlbedoRow, cos_o: f32) -> (f32, f32) {
+        let e = row.conductor(cos_o);
+        let spec = self.fresnel(cos_o).element_sum() * e;
+        let base = if self.specular.is_plain() {
+            self.diffuse().element_sum() * (1.0 - row.dielectric(cos_o))
+        } else {
+            (self.diffuse() * (Vec3::ONE - self.specular.albedo(row, cos_o))).element_sum()
+        };
+        let multiple = self.metallic
+            * multiple_scattering_fresnel(self.base_color, row.conductor_lost()).element_sum()
+            * (1.0 - e);
+        (spec, base + multiple)
     }
 
     /// BRDF times `cos θi` and the density of `wi` under [`Pbr::sample`], for unit `wo` (towards
@@ -172,12 +200,26 @@ impl Pbr {
     /// conductor's multiple scattering, `metallic F_ms (1 − E(μo))(1 − E(μi)) / (π (1 − E_avg))`.
     #[inline]
     fn cosine_lobes(&self, row: &AlbedoRow, cos_o: f32, cos_i: f32) -> Vec3 {
-        let base = self.diffuse()
-            * compensation(
-                row.dielectric(cos_o),
-                row.dielectric(cos_i),
-                row.dielectric_lost(),
+        let base = if self.specular.is_plain() {
+            self.diffuse()
+                * compensation(
+                    row.dielectric(cos_o),
+                    row.dielectric(cos_i),
+                    row.dielectric_lost(),
+                )
+        } else {
+            let (e_o, e_i) = (
+                self.specular.albedo(row, cos_o),
+                self.specular.albedo(row, cos_i),
             );
+            let lost = self.specular.lost(row);
+            self.diffuse()
+                * Vec3::new(
+                    compensation(e_o.x, e_i.x, lost.x),
+                    compensation(e_o.y, e_i.y, lost.y),
+                    compensation(e_o.z, e_i.z, lost.z),
+                )
+        };
         if self.metallic <= 0.0 {
             return base;
         }

@@ -46,6 +46,7 @@ pub fn method(m: format::Method) -> Method {
         format::Method::Naive => Method::Naive,
         format::Method::Nee => Method::Nee,
         format::Method::Mis => Method::Mis,
+        format::Method::Caustics => Method::Caustics,
     }
 }
 

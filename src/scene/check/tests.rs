@@ -392,6 +392,7 @@ fn a_pbr_base_colour_above_one_is_reported() {
         emissive_strength: 1.0,
         normal_map: None,
         alpha: None,
+        layers: crate::shading::layers::Layers::NONE,
     };
     let sphere = Shape::Sphere {
         center: Vec3::ZERO,

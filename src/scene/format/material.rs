@@ -88,9 +88,11 @@ pub enum MaterialDesc {
         #[serde(default)]
         two_sided: bool,
     },
-    /// `Pbr(base_color, metallic, roughness, emissive, emissive_strength, normal_map)`: the
-    /// glTF 2.0 metallic–roughness material, with glTF's defaults (base colour 1, metallic 1,
-    /// roughness 1, no emission, strength 1, no normal map).
+    /// `Pbr(base_color, metallic, roughness, emissive, emissive_strength, normal_map,
+    /// alpha_cutoff, specular, specular_color, clearcoat, clearcoat_roughness)`: the glTF 2.0
+    /// metallic–roughness material, with glTF's defaults (base colour 1, metallic 1, roughness
+    /// 1, no emission, strength 1, no normal map, no mask, specular 1 and white, no clear
+    /// coat).
     Pbr {
         /// Base colour.
         #[serde(default = "white")]
@@ -114,6 +116,21 @@ pub enum MaterialDesc {
         /// below this cutoff the surface is absent and rays pass through it. No mask by default.
         #[serde(default)]
         alpha_cutoff: Option<NonNegative>,
+        /// Strength of the dielectric specular lobe in [0, 1] (`KHR_materials_specular`'s
+        /// `specularFactor`; default 1).
+        #[serde(default = "unit_one")]
+        specular: UnitInterval,
+        /// Colour of the dielectric specular lobe: its reflectance at normal incidence is
+        /// `min(0.04 · colour, 1)` (`specularColorFactor`; default white).
+        #[serde(default = "white_color")]
+        specular_color: Color,
+        /// Strength of a clear coat in [0, 1] (`KHR_materials_clearcoat`'s `clearcoatFactor`;
+        /// default 0: none).
+        #[serde(default = "unit_zero")]
+        clearcoat: UnitInterval,
+        /// Perceptual roughness of the clear coat in [0, 1] (default 0: a mirror).
+        #[serde(default = "unit_zero")]
+        clearcoat_roughness: UnitInterval,
     },
 }
 
@@ -145,6 +162,10 @@ fn one_real() -> Real {
 
 fn white() -> TextureDesc {
     TextureDesc::Constant(Color(Vec3::ONE))
+}
+
+fn white_color() -> Color {
+    Color(Vec3::ONE)
 }
 
 fn black() -> TextureDesc {

@@ -37,6 +37,10 @@ pub enum Method {
     #[default]
     #[serde(alias = "mis")]
     Mis,
+    /// `Mis` with the caustics (camera → diffuse → perfect mirrors and glass → light) found by
+    /// light tracing instead.
+    #[serde(alias = "caustics")]
+    Caustics,
 }
 
 impl std::str::FromStr for Method {
@@ -46,7 +50,10 @@ impl std::str::FromStr for Method {
             "naive" => Ok(Self::Naive),
             "nee" => Ok(Self::Nee),
             "mis" => Ok(Self::Mis),
-            _ => Err(format!("unknown method {s:?} (naive, nee or mis)")),
+            "caustics" => Ok(Self::Caustics),
+            _ => Err(format!(
+                "unknown method {s:?} (naive, nee, mis or caustics)"
+            )),
         }
     }
 }
@@ -57,6 +64,7 @@ impl std::fmt::Display for Method {
             Self::Naive => "naive",
             Self::Nee => "nee",
             Self::Mis => "mis",
+            Self::Caustics => "caustics",
         })
     }
 }

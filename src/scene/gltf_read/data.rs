@@ -7,6 +7,7 @@ use std::sync::Arc;
 use glam::{Affine2, Affine3A, Vec3};
 
 use crate::model::MeshData;
+use crate::shading::layers::Layers;
 
 /// Most triangles (all primitives together) one file may produce.
 pub const MAX_TRIANGLES: usize = 1 << 26;
@@ -240,6 +241,11 @@ pub struct GltfMaterial {
     pub attenuation_color: Vec3,
     /// `KHR_materials_volume`'s attenuation distance (infinite without it: no absorption).
     pub attenuation_distance: f32,
+    /// `KHR_materials_specular`'s and `KHR_materials_clearcoat`'s factors ([`Layers::NONE`]
+    /// without them).
+    pub layers: Layers,
+    /// What of those extensions is not read (their textures), one sentence each.
+    pub layer_notes: Vec<String>,
 }
 
 /// Bytes of a glTF file's buffers: a range of one shared allocation, so that a source named by

@@ -1,10 +1,10 @@
 //! glTF metallic–roughness materials and their textures, each factor checked to be in range.
 
-use std::ops::RangeInclusive;
-
 use glam::Vec3;
 
 use super::data::{AlphaMode, GltfMaterial, GltfTexture, Wrap};
+use super::field::check_field;
+use super::layers::read_layers;
 use super::texture_transform;
 
 /// A texture reference with its sampler, and its `KHR_texture_transform` from the reference's
@@ -43,28 +43,6 @@ fn info(
     ext: Option<&gltf::json::Value>,
 ) -> Result<GltfTexture, String> {
     texture(tex, texcoord, ext, &|| format!("{}: {field}", what()))
-}
-
-/// Checks that a material's field `field` holds `v`, a finite number within `range` (the
-/// spec's range for it; the RON loader refuses the same quantities out of range).
-pub(super) fn check_field(
-    what: &dyn Fn() -> String,
-    field: &str,
-    v: f32,
-    range: RangeInclusive<f32>,
-) -> Result<(), String> {
-    if v.is_finite() && range.contains(&v) {
-        return Ok(());
-    }
-    let (lo, hi) = (range.start(), range.end());
-    let within = if hi.is_finite() {
-        format!("in [{lo}, {hi}]")
-    } else if lo.is_finite() {
-        format!("finite and at least {lo}")
-    } else {
-        "finite".into()
-    };
-    Err(format!("{}: {field} is {v}, must be {within}", what()))
 }
 
 /// Reads a material, checking its factors against the spec's ranges.
@@ -145,6 +123,7 @@ pub(super) fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> 
     if let Some(cutoff) = m.alpha_cutoff() {
         check_field(&what, "alphaCutoff", cutoff, at_least_0)?;
     }
+    let (layers, layer_notes) = read_layers(m, &what)?;
     let alpha_mode = match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
         gltf::material::AlphaMode::Mask => AlphaMode::Mask(m.alpha_cutoff().unwrap_or(0.5)),
@@ -200,6 +179,8 @@ pub(super) fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> 
         thickness,
         attenuation_color: Vec3::from(attenuation_color),
         attenuation_distance,
+        layers,
+        layer_notes,
         name,
     })
 }

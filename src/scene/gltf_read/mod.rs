@@ -17,6 +17,8 @@
 //! `EXT_mesh_gpu_instancing` (`instancing.rs`), the metallic–roughness material with its
 //! textures and their `KHR_texture_transform` (`texture_transform.rs`),
 //! `KHR_materials_emissive_strength`, `KHR_materials_transmission`, `KHR_materials_ior`,
+//! the factors of `KHR_materials_specular` and `KHR_materials_clearcoat` (`layers.rs`; their
+//! textures are named in a warning),
 //! `KHR_mesh_quantization`, the nodes' cameras and `KHR_lights_punctual` lights (`lights.rs`;
 //! the scene loader decides what becomes of them). Skipped with a warning: points and lines,
 //! morph targets, skins, and every other extension the file uses (the warning says what will
@@ -37,7 +39,9 @@ use gltf::mesh::Mode;
 mod accessors;
 mod buffers;
 mod data;
+mod field;
 mod instancing;
+mod layers;
 mod lights;
 mod material;
 mod nodes;
@@ -64,8 +68,10 @@ pub use self::uv_sets::MAX_UV_SETS;
 const SUPPORTED_REQUIRED: &[&str] = &[
     "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
+    "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
+    "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_materials_volume",
     "KHR_mesh_quantization",

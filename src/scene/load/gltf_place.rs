@@ -22,6 +22,7 @@ use crate::scene::format::EntityDesc;
 use crate::scene::gltf_read::{
     AlphaMode, GltfImage, GltfMaterial, GltfTexture, MAX_UV_SETS, Wrap as GltfWrap,
 };
+use crate::shading::layers::Layers;
 use crate::shading::maps::{AlphaMask, NormalMap};
 use crate::shading::material::Material;
 use crate::shading::texture::{Filter, ImageTexture, Sampling, Texture, UvMap, Wrap};
@@ -278,6 +279,7 @@ impl Expander<'_> {
                 emissive_strength: 1.0,
                 normal_map: None,
                 alpha: None,
+                layers: Layers::NONE,
             });
         };
         let what = format!("material \"{label}\"");
@@ -291,6 +293,9 @@ impl Expander<'_> {
             }
             Transmission::Opaque(Some(note)) => self.warn(path, &format!("{what}: {note}")),
             Transmission::Opaque(None) => {}
+        }
+        for note in &m.layer_notes {
+            self.warn(path, &format!("{what}: {note}"));
         }
         for (field, t) in m.textures() {
             if m.uv_slot(t).is_none() {
@@ -361,6 +366,7 @@ impl Expander<'_> {
             emissive_strength: 1.0,
             normal_map,
             alpha,
+            layers: m.layers,
         })
     }
 

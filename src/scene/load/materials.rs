@@ -7,6 +7,7 @@ use super::{Anchor, Expander, SourceFile};
 use crate::scene::assets::Encoding;
 use crate::scene::error::SceneError;
 use crate::scene::format::{MaterialDesc, NormalMapDesc, SettingsDesc, TextureDesc};
+use crate::shading::layers::Layers;
 use crate::shading::material::{Material, absorption_coefficient};
 use crate::shading::texture::{Sampling, Texture};
 use crate::sky::{EnvironmentLight, Sky, Sun};
@@ -105,6 +106,10 @@ impl Expander<'_> {
                 emissive_strength,
                 normal_map,
                 alpha_cutoff,
+                specular,
+                specular_color,
+                clearcoat,
+                clearcoat_roughness,
             } => {
                 let base_color = texture(base_color)?;
                 Material::Pbr {
@@ -127,6 +132,12 @@ impl Expander<'_> {
                                 )
                             })?)
                         }
+                    },
+                    layers: Layers {
+                        specular: specular.0,
+                        specular_color: specular_color.0,
+                        clearcoat: clearcoat.0,
+                        clearcoat_roughness: clearcoat_roughness.0,
                     },
                 }
             }

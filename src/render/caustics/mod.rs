@@ -1,0 +1,240 @@
+//! Light tracing for caustics (`Method::Caustics`). No ECS here.
+//!
+//! Path space is split between two estimators, without weights: light tracing takes exactly
+//! the paths light → S… → D → camera, where each S (at least one, at most `max_depth − 2`) is a
+//! perfect mirror or smooth glass of a finite shape (the integrator's `is_chain_vertex`) and D, the camera's
+//! first hit, is anything else; the path tracer (`Mis`) takes every other path, and drops these
+//! ones: after the camera's first hit continued by its non-delta part, emission reached through
+//! perfect specular vertices only (from a finite emitter or a distant light) is not counted
+//! (see [`super::integrator`]). Both sides decide by the same tests, so their sum converges to
+//! what `Mis` converges to, with the caustics sampled from the light, where they are easy.
+//!
+//! A light path starts at a light aimed at the specular surfaces ([`emit`]), follows the
+//! specular vertices by their BSDF sampling (the (n1/n2)² compression of radiance at
+//! refractions left out: light paths carry flux, pbrt-v4's `TransportMode::Importance`), and at
+//! the first other vertex D is connected to the camera ([`super::camera::Camera::importance`],
+//! a lens point sampled on a thin lens) and splatted to the pixel it lands in.
+//!
+//! Each pass traces one light path per pixel and sample index: light path `k` of sample `s` draws from
+//! `Rng::for_sample(seed ⊕ LIGHT_SEED, k, s)` alone, and splats are added to the film's exact
+//! sums, so images are bit-identical for any thread count and any split of the samples.
+//! Splats are weighted `1 / (width · height)`: the film divides by the sample count.
+//!
+//! Not light-traced (left to the path tracer): D seen through a mirror or glass, D deeper than
+//! the camera's first hit, glossy (not perfect) specular chains, point and spot lights (which
+//! no path tracer's path reaches through specular surfaces), emitting or mirror planes, the
+//! constant background, scenes with alpha masks (there `Caustics` is `Mis`), and light leaving
+//! an emitter inside tinted glass is not attenuated before its first hit.
+
+pub mod emit;
+
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::integrator::{is_chain_vertex, point_error, spawn};
+use super::medium::Medium;
+use super::{Cancelled, Method, SceneView, TraceStats};
+use crate::cpu::Sse;
+use crate::film::Film;
+use crate::geometry::layout::Layout;
+use crate::geometry::packed::Hit;
+use crate::geometry::ray::Ray;
+use crate::geometry::surface::Surface;
+use crate::shading::material::Material;
+use crate::shading::rng::Rng;
+use crate::shading::sampler::Sampler;
+use emit::Sources;
+
+/// Mixed into the seed of light paths, so their streams are not those of the pixels' samples.
+const LIGHT_SEED: u64 = 0x6c69_6768_7420_7061;
+
+/// Light paths traced per work item.
+const CHUNK: u64 = 4096;
+
+/// Work items whose splats are held at once before they are added to the film: bounds the
+/// memory of a pass to `BATCH · CHUNK` splats, whatever the image size.
+const BATCH: u64 = 64;
+
+/// Traces the light paths of samples `samples` and adds their splats to `film` (see the
+/// module's notes); nothing unless the view's method is `Caustics`, the scene has no alpha
+/// masks, and it has a finite surface that may be perfect specular and a light.
+pub fn splat_pass<L: Layout>(
+    view: &SceneView<L>,
+    film: &mut Film,
+    seed: u64,
+    samples: Range<u32>,
+    cancel: &AtomicBool,
+) -> Result<TraceStats, Cancelled> {
+    let mut stats = TraceStats::default();
+    if view.method != Method::Caustics || view.masked {
+        return Ok(stats);
+    }
+    let sources = Sources::new(
+        view.geometry,
+        view.materials,
+        view.owner_material,
+        view.lights,
+    );
+    if sources.is_empty() {
+        return Ok(stats);
+    }
+    let size = (film.width, film.height);
+    let paths = u64::from(size.0) * u64::from(size.1);
+    let scale = 1.0 / paths as f32;
+    let fixed = film.fixed();
+    let chunks = paths.div_ceil(CHUNK);
+    let seed = seed ^ LIGHT_SEED;
+    for sample in samples {
+        for batch in (0..chunks).step_by(BATCH as usize) {
+            if cancel.load(Ordering::Relaxed) {
+                return Err(Cancelled);
+            }
+            let done: Vec<(Vec<(usize, Vec3)>, TraceStats)> = (batch..(batch + BATCH).min(chunks))
+                .into_par_iter()
+                .map(|chunk| {
+                    let mut stats = TraceStats::default();
+                    let mut splats = Vec::new();
+                    for k in chunk * CHUNK..((chunk + 1) * CHUNK).min(paths) {
+                        let mut rng = Rng::for_sample(seed, k, u64::from(sample));
+                        if let Some(splat) = light_path(view, &sources, size, &mut rng, &mut stats)
+                        {
+                            splats.push(splat);
+                        }
+                    }
+                    (splats, stats)
+                })
+                .collect();
+            for (splats, s) in done {
+                stats = stats + s;
+                for (pixel, l) in splats {
+                    let l = l * scale;
+                    if !l.is_finite() {
+                        stats.nonfinite += 1;
+                    } else if film.sum[pixel].add(l, fixed) {
+                        stats.clamped += 1;
+                    }
+                }
+            }
+        }
+    }
+    Ok(stats)
+}
+
+/// One light path: its splat (pixel index, value before the `1 / (width · height)` weight), if
+/// it reaches a non-specular vertex the camera sees after at least one specular one.
+fn light_path<L: Layout>(
+    view: &SceneView<L>,
+    sources: &Sources,
+    size: (u32, u32),
+    sampler: &mut Rng,
+    stats: &mut TraceStats,
+) -> Option<(usize, Vec3)> {
+    let emitted = sources.emit(view.geometry, view.materials, view.lights, sampler)?;
+    let (mut ray, mut beta) = (emitted.ray, emitted.beta);
+    let mut medium = Medium::CLEAR;
+    let mut specular = 0u32;
+    loop {
+        stats.rays += 1;
+        let hit = view.geometry.intersect_with(Sse, &ray, f32::INFINITY)?;
+        let s = view.geometry.surface(&ray, &hit);
+        if !medium.is_clear() {
+            beta *= medium.transmittance((s.p - ray.origin).length());
+        }
+        let material = view
+            .materials
+            .get(*view.owner_material.get(s.owner as usize)? as usize)?;
+        let bsdf = material.bsdf(ray.direction, s.n, s.ns, s.tex_coords(), || {
+            view.geometry.uv_tangent(&hit).map(|t| (t.tangent, t.sign))
+        });
+        if !is_chain_vertex(&bsdf, hit.kind) {
+            if specular == 0 {
+                return None;
+            }
+            let at = Arrival {
+                hit: &hit,
+                surface: &s,
+                material,
+                direction: ray.direction,
+            };
+            return connect(view, at, beta, size, sampler, stats);
+        }
+        // The path tracer reaches a light through at most `max_depth − 2` specular vertices.
+        if specular + 2 >= view.max_depth {
+            return None;
+        }
+        let err = point_error(view.geometry, &hit, s.p);
+        let beyond = medium.beyond(material, ray.direction, s.n);
+        let scatter = bsdf.sample(sampler)?;
+        medium = medium.leaving(beyond, ray.direction, s.n, scatter.direction);
+        beta *= scatter.attenuation / scatter.radiance_scale;
+        if beta == Vec3::ZERO {
+            return None;
+        }
+        specular += 1;
+        ray = spawn(s.p, s.n, err, scatter.direction);
+    }
+}
+
+/// A light path's arrival at its non-specular vertex.
+struct Arrival<'a> {
+    hit: &'a Hit,
+    surface: &'a Surface,
+    material: &'a Material,
+    /// Direction of the light path's ray that hit it.
+    direction: Vec3,
+}
+
+/// The splat of a light path of weight `beta` arriving at `at`, connected to the camera: the
+/// BSDF is built as for the camera's ray arriving there, so its value (with the cosine of the
+/// light's side, about the shading normal, folded as the path tracer folds it) is the one the
+/// path tracer samples, and the geometric cosines convert the light path's density at the
+/// point into the camera's.
+fn connect<L: Layout>(
+    view: &SceneView<L>,
+    at: Arrival,
+    beta: Vec3,
+    (width, height): (u32, u32),
+    sampler: &mut Rng,
+    stats: &mut TraceStats,
+) -> Option<(usize, Vec3)> {
+    let s = at.surface;
+    let camera = view
+        .camera
+        .importance(s.p, width, height, sampler.next_2d())?;
+    let to = camera.lens - s.p;
+    let dist2 = to.length_squared();
+    let wo = to / dist2.sqrt();
+    let cos_in = s.n.dot(at.direction).abs();
+    if !(dist2 > 0.0 && cos_in > 0.0) {
+        return None;
+    }
+    let bsdf = at.material.bsdf(-wo, s.n, s.ns, s.tex_coords(), || {
+        view.geometry
+            .uv_tangent(at.hit)
+            .map(|t| (t.tangent, t.sign))
+    });
+    let (f_cos, _) = bsdf.eval(-at.direction)?;
+    if f_cos == Vec3::ZERO {
+        return None;
+    }
+    let err = point_error(view.geometry, at.hit, s.p);
+    let from = spawn(s.p, s.n, err, wo).origin;
+    let span = camera.lens - from;
+    let length = span.length();
+    if !(length > 0.0 && length.is_finite()) {
+        return None;
+    }
+    stats.rays += 1;
+    if view
+        .geometry
+        .occluded_with(Sse, &Ray::new(from, span / length), length)
+    {
+        return None;
+    }
+    let value = beta * f_cos * (s.n.dot(wo).abs() / cos_in) * (camera.importance / dist2);
+    let (x, y) = (camera.film.x as usize, camera.film.y as usize);
+    Some((y * width as usize + x, value))
+}

@@ -1,0 +1,209 @@
+//! `Method::Caustics` (light tracing of camera → diffuse → perfect specular → light paths)
+//! against independent truth: a closed-form caustic, the plain path tracer that finds every
+//! path, determinism over threads and sample splits, and scenes it must leave alone.
+
+mod common;
+
+use std::f64::consts::PI;
+use std::path::Path;
+use std::process::Command;
+
+use common::{exr_channels, render, scenes_dir, temp_dir, write_scene};
+use rondo::Overrides;
+use rondo::scene::format::Method;
+
+fn overrides(method: Method, spp: u32, seed: u64, size: (u32, u32)) -> Overrides {
+    Overrides {
+        method: Some(method),
+        spp: Some(spp),
+        seed: Some(seed),
+        width: Some(size.0),
+        height: Some(size.1),
+        ..Overrides::default()
+    }
+}
+
+/// The mean red value of the pixels in rows `rows` and columns `cols` of a render.
+fn region_mean(
+    path: &Path,
+    o: Overrides,
+    rows: std::ops::Range<usize>,
+    cols: std::ops::Range<usize>,
+) -> f64 {
+    let r = render(path, o, None);
+    assert_eq!(r.stats().nonfinite, 0);
+    let film = r.film();
+    let px = film.mean();
+    let w = film.width as usize;
+    let n = (rows.len() * cols.len()) as f64;
+    rows.flat_map(|y| cols.clone().map(move |x| (y, x)))
+        .map(|(y, x)| f64::from(px[y * w + x].x))
+        .sum::<f64>()
+        / n
+}
+
+/// Mean and standard error of `f(seed)` over `seeds`.
+fn over_seeds(seeds: u64, f: impl Fn(u64) -> f64) -> (f64, f64) {
+    let v: Vec<f64> = (0..seeds).map(|s| f(100 + s)).collect();
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+#[test]
+fn a_mirrored_sun_lights_a_ceiling_as_the_closed_form_says() {
+    // A sun of irradiance E = 3 from 45° (direction (1, 1, 0)) falls on a perfect white mirror
+    // at y = 0 and is reflected onto a diffuse ceiling (albedo ρ = 0.5) at y = 2, which the
+    // camera sees from below. Nothing else lights it (black sky, paths of at most 3 rays), so
+    // its radiance is ρ/π · E cos 45°, found only through the mirror: by light tracing, or by
+    // BSDF samples hitting the 0.53° sun (the path tracer, nearly never).
+    let dir = temp_dir("caustics-mirror");
+    let scene = write_scene(
+        dir.path(),
+        "mirror.ron",
+        r#"Scene(
+    camera: Camera(position: (-3, 0.2, 0), look_at: (-3, 2, 0), up: (0, 0, 1), fov: 30),
+    settings: Settings(width: 24, height: 24, spp: 256, max_depth: 3, background: (0, 0, 0),
+        sun: Sun(direction: (1, 1, 0), angular_diameter: 0.53, irradiance: 3.0, colour: (1, 1, 1))),
+    materials: {
+        "ceiling": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
+        "mirror": Metal(albedo: Constant((1, 1, 1)), roughness: 0),
+    },
+    entities: [
+        Entity(name: "ceiling", material: "ceiling", shape: Quad(a: (-4, 2, -1), b: (-2, 2, -1), c: (-2, 2, 1), d: (-4, 2, 1))),
+        Entity(name: "mirror", material: "mirror", shape: Quad(a: (-2, 0, -1.5), b: (0, 0, -1.5), c: (0, 0, 1.5), d: (-2, 0, 1.5))),
+    ],
+)"#,
+    );
+    let expected = 0.5 / PI * 3.0 * std::f64::consts::FRAC_1_SQRT_2;
+    let r = render(
+        &scene,
+        Overrides {
+            method: Some(Method::Caustics),
+            ..Overrides::default()
+        },
+        None,
+    );
+    let px: Vec<f64> = r.film().mean().iter().map(|p| f64::from(p.x)).collect();
+    let n = px.len() as f64;
+    let mean = px.iter().sum::<f64>() / n;
+    let se = (px.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+    assert!(
+        (mean - expected).abs() <= 3.5 * se && se < 0.02 * expected,
+        "ceiling {mean} ± {se}, expected {expected}"
+    );
+}
+
+#[test]
+fn the_caustic_scene_converges_to_what_the_plain_path_tracer_finds() {
+    // scenes/caustic.ron at 64×48: a lamp focused by a glass ball onto the floor. The plain
+    // path tracer (BSDF sampling only) finds every path, so its mean over independent seeds is
+    // the truth; light tracing must agree on the caustic (a box around the focus) and the
+    // whole image, within 4 combined standard errors (8 seeds each: Student's t, 7 degrees).
+    let scene = scenes_dir().join("caustic.ron");
+    let size = (64, 48);
+    for (what, rows, cols) in [("caustic", 22..34, 28..42), ("image", 0..48, 0..64)] {
+        let truth = over_seeds(8, |seed| {
+            let o = overrides(Method::Naive, 1024, seed, size);
+            region_mean(&scene, o, rows.clone(), cols.clone())
+        });
+        let light = over_seeds(8, |seed| {
+            let o = overrides(Method::Caustics, 64, seed, size);
+            region_mean(&scene, o, rows.clone(), cols.clone())
+        });
+        let se = (truth.1 * truth.1 + light.1 * light.1).sqrt();
+        assert!(
+            (truth.0 - light.0).abs() <= 4.0 * se,
+            "{what}: naive {} ± {}, caustics {} ± {}",
+            truth.0,
+            truth.1,
+            light.0,
+            light.1
+        );
+        eprintln!("{what}: naive {truth:?}, caustics {light:?}");
+    }
+}
+
+#[test]
+fn light_traced_images_are_the_same_on_any_thread_count() {
+    let scene = scenes_dir().join("caustic.ron");
+    let o = overrides(Method::Caustics, 4, 7, (40, 30));
+    let one = render(&scene, o, Some(1));
+    let two = render(&scene, o, Some(2));
+    assert_eq!(one.film().sum, two.film().sum);
+}
+
+fn rondo(args: &[&str]) {
+    let out = Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .args(args)
+        .output()
+        .expect("run rondo");
+    assert!(
+        out.status.success(),
+        "rondo {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn split_and_merged_light_tracing_is_bit_exact_and_partials_name_the_method() {
+    let dir = temp_dir("caustics-split");
+    let scene = scenes_dir().join("caustic.ron");
+    let s = |p: &Path| p.to_str().expect("utf-8 path").to_string();
+    let scene = s(&scene);
+    let common = [
+        "--method", "caustics", "--width", "40", "--height", "30", "--seed", "3",
+    ];
+    let whole = dir.path().join("whole.exr");
+    let (a, b) = (dir.path().join("a.exr"), dir.path().join("b.exr"));
+    let merged = dir.path().join("merged.exr");
+    let mut args = vec!["render", scene.as_str()];
+    args.extend(common);
+    let run = |extra: &[&str]| {
+        let mut v = args.clone();
+        v.extend(extra);
+        rondo(&v);
+    };
+    run(&["--samples", "0..6", "-o", &s(&whole)]);
+    run(&["--samples", "0..2", "-o", &s(&a)]);
+    run(&["--samples", "2..6", "-o", &s(&b)]);
+    rondo(&["merge", &s(&b), &s(&a), "-o", &s(&merged)]);
+    let (w, m) = (exr_channels(&whole), exr_channels(&merged));
+    assert!(!w.is_empty());
+    assert_eq!(w, m, "split and merged differ from the whole range");
+    // A partial of `mis` does not merge with one of `caustics`.
+    let other = dir.path().join("other.exr");
+    let mut v = vec!["render", scene.as_str(), "--method", "mis"];
+    v.extend(&common[2..]);
+    v.extend(["--samples", "6..8", "-o"]);
+    let other_s = s(&other);
+    v.push(&other_s);
+    rondo(&v);
+    let out = Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .args([
+            "merge",
+            &s(&whole),
+            &other_s,
+            "-o",
+            &s(&dir.path().join("x.exr")),
+        ])
+        .output()
+        .expect("run rondo");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("method"), "{err}");
+}
+
+#[test]
+fn scenes_without_perfect_specular_surfaces_render_as_mis() {
+    // sunlit.ron's gold ball is glossy (roughness 0.3), not a perfect mirror: nothing to light
+    // trace, and the path tracer drops nothing, so the sums are `mis`'s exactly. The caustic
+    // scene, with its glass ball, differs.
+    let size = (48, 32);
+    for (scene, same) in [("sunlit.ron", true), ("caustic.ron", false)] {
+        let path = scenes_dir().join(scene);
+        let mis = render(&path, overrides(Method::Mis, 2, 1, size), None);
+        let light = render(&path, overrides(Method::Caustics, 2, 1, size), None);
+        assert_eq!(mis.film().sum == light.film().sum, same, "{scene}");
+    }
+}
