@@ -23,10 +23,10 @@
 use glam::{Vec2, Vec3};
 
 use super::energy::AlbedoRow;
+use super::fresnel::fresnel_dielectric;
 use super::microfacet::{Terms, is_specular_alpha, sample_visible_normal};
 use super::pbr::{Pbr, PbrSample};
 use super::sampling::Frame;
-use super::fresnel::fresnel_dielectric;
 use super::specular::DIELECTRIC_IOR;
 
 /// A clear coat over a metallic–roughness BRDF at one surface point (textures looked up).
