@@ -1,5 +1,6 @@
 //! A clear coat over the metallic–roughness BRDF (`KHR_materials_clearcoat`): a colourless GGX
-//! dielectric layer (ior 1.5: the exact Fresnel, height-correlated Smith, its own roughness) of strength `weight` over the whole [`Pbr`]. No ECS here.
+//! dielectric layer (ior 1.5: the exact Fresnel, height-correlated Smith, its own roughness) of
+//! strength `weight` over the whole [`Pbr`]. No ECS here.
 //!
 //! The BRDF is `weight f_coat(wo, wi) + (1 − weight E_c(μo)) f_base(wo, wi)`, E_c the coat
 //! lobe's directional albedo (the dielectric table of [`super::albedo_table`]: the same lobe).
