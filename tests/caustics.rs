@@ -98,7 +98,8 @@ fn a_mirrored_sun_lights_a_ceiling_as_the_closed_form_says() {
 #[test]
 fn a_mirrored_spot_lights_a_ceiling_as_the_inverse_square_law_says() {
     // A spot of intensity I = 4 at height 1 shines down (full within 80° of straight down, none
-    // beyond 85°) onto a perfect white mirror at y = 0, which reflects it onto a diffuse
+    // beyond 85°) onto a small perfect white mirror at y = 0 (the part of it the camera's view
+    // reflects from, |x|, |z| ≤ 0.09, and a margin), which reflects it onto a diffuse
     // ceiling (albedo ρ = 0.5) at y = 2; no light reaches the ceiling directly (it is above
     // the spot's cone). Seen from the mirror's image of the spot, (0, −1, 0), a ceiling point
     // (x, 2, z) is at distance d = √(x² + 9 + z²), its normal at cosine 3 / d: its radiance is
@@ -111,7 +112,7 @@ fn a_mirrored_spot_lights_a_ceiling_as_the_inverse_square_law_says() {
         "spot.ron",
         r#"Scene(
     camera: Camera(position: (0, 0.5, 0), look_at: (0, 2, 0), up: (0, 0, 1), fov: 20),
-    settings: Settings(width: 16, height: 16, spp: 256, max_depth: 3, background: (0, 0, 0)),
+    settings: Settings(width: 16, height: 16, spp: 1024, max_depth: 3, background: (0, 0, 0)),
     lights: [Spot(position: (0, 1, 0), direction: (0, -1, 0), intensity: 4, inner_angle: 80, outer_angle: 85)],
     materials: {
         "ceiling": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
@@ -119,7 +120,7 @@ fn a_mirrored_spot_lights_a_ceiling_as_the_inverse_square_law_says() {
     },
     entities: [
         Entity(name: "ceiling", material: "ceiling", shape: Quad(a: (-3, 2, -3), b: (3, 2, -3), c: (3, 2, 3), d: (-3, 2, 3))),
-        Entity(name: "mirror", material: "mirror", shape: Quad(a: (-3, 0, -3), b: (3, 0, -3), c: (3, 0, 3), d: (-3, 0, 3))),
+        Entity(name: "mirror", material: "mirror", shape: Quad(a: (-0.2, 0, -0.2), b: (0.2, 0, -0.2), c: (0.2, 0, 0.2), d: (-0.2, 0, 0.2))),
     ],
 )"#,
     );
