@@ -198,6 +198,34 @@ pub fn lamp_out_rmse(a: &Image, r: &Image) -> Option<f64> {
     Some((se / n as f64).sqrt())
 }
 
+/// Brightness above which a pixel is a firefly: [`FIREFLY_FACTOR`] times its reference's.
+pub const FIREFLY_FACTOR: f32 = 4.0;
+
+/// Least excess over the reference, in the channel mean, for a firefly: a dark pixel a
+/// little brighter than its near-black reference is noise, not a speckle.
+pub const FIREFLY_EXCESS: f32 = 0.1;
+
+/// Fireflies of `a` against `r`: pixels whose channel mean exceeds [`FIREFLY_FACTOR`] times
+/// the reference's and the reference's by more than [`FIREFLY_EXCESS`] (the bright speckles
+/// rare paths leave, which the "pixels more than 4× their reference" counts). `None`
+/// if the sizes differ.
+pub fn fireflies(a: &Image, r: &Image) -> Option<usize> {
+    if (a.width, a.height) != (r.width, r.height) || a.data.len() != r.data.len() {
+        return None;
+    }
+    let mean = |p: &[f32]| (p[0] + p[1] + p[2]) / 3.0;
+    Some(
+        a.data
+            .chunks_exact(3)
+            .zip(r.data.chunks_exact(3))
+            .filter(|(x, y)| {
+                let (x, y) = (mean(x), mean(y));
+                x > FIREFLY_FACTOR * y && x - y > FIREFLY_EXCESS
+            })
+            .count(),
+    )
+}
+
 /// What [`diff_files`] found.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Diff {
@@ -323,6 +351,33 @@ mod tests {
             data: vec![0.1, 2.0, 0.0, 5.0, 0.3, 0.7],
         };
         assert_eq!(compare(&a, &a), Some(ErrorMetrics::default()));
+    }
+
+    #[test]
+    fn fireflies_are_pixels_far_above_their_reference() {
+        // Reference 0.1 grey everywhere; pixels at 0.5 (5×, +0.4: a firefly), 0.3 (3×: not),
+        // 0.41 in one channel only (mean 0.17: not), and against a black reference 0.05 (+0.05:
+        // not) and 0.2 (a firefly).
+        let grey = |v: f32, n: u32| Image {
+            width: n,
+            height: 1,
+            data: vec![v; 3 * n as usize],
+        };
+        let r = grey(0.1, 4);
+        let a = Image {
+            data: vec![
+                0.5, 0.5, 0.5, 0.3, 0.3, 0.3, 0.41, 0.05, 0.05, 0.1, 0.1, 0.1,
+            ],
+            ..r.clone()
+        };
+        assert_eq!(fireflies(&a, &r), Some(1));
+        let black = grey(0.0, 2);
+        let b = Image {
+            data: vec![0.05, 0.05, 0.05, 0.2, 0.2, 0.2],
+            ..black.clone()
+        };
+        assert_eq!(fireflies(&b, &black), Some(1));
+        assert_eq!(fireflies(&a, &black), None);
     }
 
     #[test]

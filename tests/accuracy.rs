@@ -175,7 +175,9 @@ fn bench_accuracy_smoke_run_writes_its_csv_chart_and_summary() {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next(),
-        Some("method,spp,seed,seconds,rmse,rel_mse,mae,sampler,denoised,lamp_out_rmse,image")
+        Some(
+            "method,spp,seed,seconds,rmse,rel_mse,mae,sampler,denoised,lamp_out_rmse,image,fireflies"
+        )
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 6, "{csv}");

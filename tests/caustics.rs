@@ -96,6 +96,68 @@ fn a_mirrored_sun_lights_a_ceiling_as_the_closed_form_says() {
 }
 
 #[test]
+fn a_mirrored_spot_lights_a_ceiling_as_the_inverse_square_law_says() {
+    // A spot of intensity I = 4 at height 1 shines down (full within 80° of straight down, none
+    // beyond 85°) onto a small perfect white mirror at y = 0 (the part of it the camera's view
+    // reflects from, |x|, |z| ≤ 0.09, and a margin), which reflects it onto a diffuse
+    // ceiling (albedo ρ = 0.5) at y = 2; no light reaches the ceiling directly (it is above
+    // the spot's cone). Seen from the mirror's image of the spot, (0, −1, 0), a ceiling point
+    // (x, 2, z) is at distance d = √(x² + 9 + z²), its normal at cosine 3 / d: its radiance is
+    // ρ/π · I · 3 / d³. The camera, at height 0.5 looking straight up with a 20° field of view,
+    // sees the square |x|, |z| ≤ 1.5 tan 10° of the ceiling, evenly (a plane parallel to the
+    // film). No path tracer's path reaches a punctual light through a mirror: `mis` is black.
+    let dir = temp_dir("caustics-spot");
+    let scene = write_scene(
+        dir.path(),
+        "spot.ron",
+        r#"Scene(
+    camera: Camera(position: (0, 0.5, 0), look_at: (0, 2, 0), up: (0, 0, 1), fov: 20),
+    settings: Settings(width: 16, height: 16, spp: 1024, max_depth: 3, background: (0, 0, 0)),
+    lights: [Spot(position: (0, 1, 0), direction: (0, -1, 0), intensity: 4, inner_angle: 80, outer_angle: 85)],
+    materials: {
+        "ceiling": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
+        "mirror": Metal(albedo: Constant((1, 1, 1)), roughness: 0),
+    },
+    entities: [
+        Entity(name: "ceiling", material: "ceiling", shape: Quad(a: (-3, 2, -3), b: (3, 2, -3), c: (3, 2, 3), d: (-3, 2, 3))),
+        Entity(name: "mirror", material: "mirror", shape: Quad(a: (-0.2, 0, -0.2), b: (0.2, 0, -0.2), c: (0.2, 0, 0.2), d: (-0.2, 0, 0.2))),
+    ],
+)"#,
+    );
+    let half = 1.5 * (10.0f64).to_radians().tan();
+    let n = 200;
+    let expected = (0..n * n)
+        .map(|i| {
+            let x = half * (2.0 * ((i % n) as f64 + 0.5) / n as f64 - 1.0);
+            let z = half * (2.0 * ((i / n) as f64 + 0.5) / n as f64 - 1.0);
+            0.5 / PI * 4.0 * 3.0 / (x * x + 9.0 + z * z).powf(1.5)
+        })
+        .sum::<f64>()
+        / (n * n) as f64;
+    let mean_and_error = |method| {
+        let r = render(
+            &scene,
+            Overrides {
+                method: Some(method),
+                ..Overrides::default()
+            },
+            None,
+        );
+        let px: Vec<f64> = r.film().mean().iter().map(|p| f64::from(p.x)).collect();
+        let n = px.len() as f64;
+        let mean = px.iter().sum::<f64>() / n;
+        let se = (px.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+        (mean, se)
+    };
+    let (mean, se) = mean_and_error(Method::Caustics);
+    assert!(
+        (mean - expected).abs() <= 3.5 * se && se < 0.02 * expected,
+        "ceiling {mean} ± {se}, expected {expected}"
+    );
+    assert_eq!(mean_and_error(Method::Mis).0, 0.0);
+}
+
+#[test]
 fn the_caustic_scene_converges_to_what_the_plain_path_tracer_finds() {
     // scenes/caustic.ron at 64×48: a lamp focused by a glass ball onto the floor. The plain
     // path tracer (BSDF sampling only) finds every path, so its mean over independent seeds is

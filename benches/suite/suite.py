@@ -40,6 +40,7 @@ OWN_REFERENCE = {"gltf", "veach_mis", "envmap", "dof", "bigmesh"}
 
 
 def scene_path(name, out):
+    """The scene file of a suite scene, or scenes/NAME.ron for a name outside ALL."""
     gen = os.path.join(out, "generated")
     if name == "bigmesh":
         path = os.path.join(gen, "bigmesh.ron")
@@ -92,12 +93,15 @@ def means(img, ref):
     return float(raw), float(clamped)
 
 
-def rondo_render(rondo, scene, spp, size, seed, out, threads, denoise=False):
+def rondo_render(rondo, scene, spp, size, seed, out, threads, denoise=False, method=None):
     """Renders and reads rondo's log: t is the render time without the BVH build (Mitsuba
     builds its BVH when the scene loads, Cycles when it synchronises it: neither is timed),
-    samples/s and rays/s over that time, the BVH build and the denoiser's time."""
+    samples/s and rays/s over that time, the BVH build and the denoiser's time. `method`
+    overrides the scene's light-transport method (`--method`)."""
     cmd = [rondo, "render", scene, "-o", out, "--spp", str(spp), "--seed", str(seed),
            "--width", str(size[0]), "--height", str(size[1])]
+    if method:
+        cmd += ["--method", method]
     if threads:
         cmd += ["--threads", str(threads)]
     if denoise:
@@ -181,7 +185,9 @@ def rondo_denoised(args, scene, size, budgets, raw, ref, own_ref, mi, out_img):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--scenes", default=",".join(ALL))
+    ap.add_argument("--scenes", default=",".join(ALL),
+                    help="comma-separated; besides the suite's own, any scenes/NAME.ron "
+                    "(e.g. caustic, sun_caustics)")
     ap.add_argument("--quick", action="store_true",
                     help="smoke test: images at most 96 wide, 2 and 8 spp, 64-spp reference, "
                     "denoised at 0.2 and 1 s")
@@ -195,6 +201,11 @@ def main():
     ap.add_argument("--cycles-python", default=None, help="Python of the Cycles venv")
     ap.add_argument("--no-cycles", action="store_true")
     ap.add_argument("--threads", type=int, default=0, help="render threads (0: all)")
+    ap.add_argument("--rondo-methods", default="",
+                    help="rondo's light-transport methods, comma-separated (default: the "
+                    "scene's own): the first is the curve the peers are matched to in time; "
+                    "each other one (e.g. caustics) gets its own curve and the table's column "
+                    "`E <method>` = t_first err_first^2 / (t err^2)")
     ap.add_argument("--out", default=os.path.join(ROOT, "bench", "suite"))
     args = ap.parse_args()
     if args.quick:
@@ -206,11 +217,13 @@ def main():
     import mitsuba_scene
 
     spps = [int(s) for s in args.spp_list.split(",")]
+    # None: the scene's own method (no --method).
+    methods = [m for m in args.rondo_methods.split(",") if m] or [None]
     budgets = [float(s) for s in args.denoise_times.split(",") if s]
     rows = []
     for name in args.scenes.split(","):
-        if name not in ALL:
-            sys.exit("unknown scene %r (%s)" % (name, ", ".join(ALL)))
+        if name not in ALL and not os.path.isfile(scene_path(name, args.out)):
+            sys.exit("unknown scene %r (%s, or a scenes/NAME.ron)" % (name, ", ".join(ALL)))
         work = os.path.join(args.out, name)
         export = os.path.join(work, "export")
         os.makedirs(work, exist_ok=True)
@@ -248,7 +261,8 @@ def main():
         out_img = os.path.join(work, "rondo.exr")
         rondo_pts = []
         for k, spp in enumerate(spps):
-            r = rondo_render(args.rondo, scene, spp, size, 300 + k, out_img, args.threads)
+            r = rondo_render(args.rondo, scene, spp, size, 300 + k, out_img, args.threads,
+                             method=methods[0])
             img = read_exr(mi, out_img)
             rondo_pts.append({"spp": spp, "t": r["t"], "bvh": r["bvh"],
                               "err": err(img, refs.get("rondo", ref)),
@@ -257,13 +271,24 @@ def main():
                   "  (BVH %.3f s, not timed)" % (spp, r["t"], rondo_pts[-1]["err"], r["msps"],
                                                  r["mrps"], r["bvh"]), flush=True)
         curves["rondo"] = rondo_pts
+        for method in methods[1:]:
+            pts = []
+            for k, spp in enumerate(spps):
+                r = rondo_render(args.rondo, scene, spp, size, 300 + k, out_img, args.threads,
+                                 method=method)
+                img = read_exr(mi, out_img)
+                pts.append({"spp": spp, "t": r["t"], "err": err(img, refs.get("rondo", ref)),
+                            "msps": r["msps"], "mrps": r["mrps"], "mean": means(img, ref)})
+                print("  rondo/%-9s %5d spp %8.3f s err %.4e" % (method, spp, r["t"],
+                                                                 pts[-1]["err"]), flush=True)
+            curves["rondo " + method] = pts
         denoised = {}
         if budgets:
             denoised["rondo"] = rondo_denoised(args, scene, size, budgets, rondo_pts[-1], ref,
                                                refs.get("rondo", ref), mi,
                                                os.path.join(work, "rondo_denoised.exr"))
 
-        for sampler in dict.fromkeys(["independent", BEST[name]]):
+        for sampler in dict.fromkeys(["independent", BEST.get(name, "multijitter")]):
             sc, notes = mitsuba_scene.load(mi, export, sampler, work, size)
 
             def render(n, seed):
@@ -345,7 +370,14 @@ def summarise(name, size, args, curves, denoised):
     row = {"scene": name, "size": "%dx%d" % size, "rondo_spp": r["spp"], "rondo_t": r["t"],
            "rondo_err": r["err"], "msps": r["msps"], "mrps": r["mrps"],
            "means": {"rondo": r["mean"]}, "E": {}, "peer_msps": {}, "denoised": denoised}
-    for peer in [k for k in curves if k != "rondo" and not k.endswith("notes")]:
+    row["methods"] = {}
+    for who in [k for k in curves if k.startswith("rondo ")]:
+        p = curves[who][-1]
+        row["methods"][who[len("rondo "):]] = {
+            "spp": p["spp"], "t": p["t"], "err": p["err"],
+            "E": r["t"] * r["err"] ** 2 / (p["t"] * p["err"] ** 2)}
+    for peer in [k for k in curves if k != "rondo" and not k.startswith("rondo ")
+                 and not k.endswith("notes")]:
         p = curves[peer][-1]
         row["E"][peer] = p["t"] * p["err"] ** 2 / (r["t"] * r["err"] ** 2)
         row["peer_msps"][peer] = p["msps"]
@@ -379,11 +411,14 @@ def chart(path, name, size, curves, denoised):
 
 
 def table(rows, args):
-    peers = []
+    peers, extra = [], []
     for r in rows:
         for p in r["E"]:
             if p not in peers:
                 peers.append(p)
+        for m in r["methods"]:
+            if m not in extra:
+                extra.append(m)
     argv = sys.argv[1:]
     if "--cycles-python" in argv:
         k = argv.index("--cycles-python")
@@ -392,24 +427,31 @@ def table(rows, args):
              "Reference: Mitsuba 3 `%s`, %d spp. E = t_peer err_peer^2 / (t_rondo err_rondo^2) "
              "at rondo's largest spp (peers at equal time); err = clamped RMSE; mean = relative "
              "difference of the image mean from the reference's, clamped to [0, 1] (raw in "
-             "brackets). Times: rondo's render without its BVH build, Mitsuba's `mi.render` (its BVH "
+             "brackets); E <method> = t err^2 of rondo's first method over that of the method "
+             "named (above 1: the named one wins at equal time). Times: rondo's render without its BVH build, Mitsuba's `mi.render` (its BVH "
              "is built at load), Cycles' own `render_time` (no scene synchronisation; see "
              "benches/suite/README.md). On %s each renderer's err is against its own converged "
              "image at the same spp (their materials differ; the mean column gives what that "
              "costs against Mitsuba's)." % (args.reference_sampler, args.reference_spp,
                                            ", ".join(sorted(OWN_REFERENCE))), "",
              "| scene | size | rondo spp, s, err | rondo M samples/s, M rays/s | "
+             + "".join("rondo %s spp, s, err | E %s | " % (m, m) for m in extra)
              + " | ".join("E vs %s" % p for p in peers) + " | "
              + " | ".join("%s M samples/s" % p for p in peers) + " | mean: rondo | "
              + " | ".join("mean: %s" % p for p in peers) + " |",
-             "|" + "---|" * (5 + 2 * len(peers) + len(peers))]
+             "|" + "---|" * (5 + 2 * len(extra) + 2 * len(peers) + len(peers))]
     for r in rows:
         def m(who):
             v = r["means"].get(who)
             return "%+.1f %% (%+.1f %%)" % (100 * v[1], 100 * v[0]) if v else ""
-        lines.append("| %s | %s | %d, %.2f, %.4f | %.2f, %.2f | %s | %s | %s | %s |" % (
+        def x(m):
+            v = r["methods"].get(m)
+            return "%d, %.2f, %.4f | %.2f | " % (v["spp"], v["t"], v["err"], v["E"]) if v \
+                else " | | "
+        lines.append("| %s | %s | %d, %.2f, %.4f | %.2f, %.2f | %s%s | %s | %s | %s |" % (
             r["scene"], r["size"], r["rondo_spp"], r["rondo_t"], r["rondo_err"], r["msps"],
-            r["mrps"], " | ".join("%.2f" % r["E"][p] if p in r["E"] else "" for p in peers),
+            r["mrps"], "".join(x(m) for m in extra),
+            " | ".join("%.2f" % r["E"][p] if p in r["E"] else "" for p in peers),
             " | ".join("%.2f" % r["peer_msps"][p] if p in r["peer_msps"] else "" for p in peers),
             m("rondo"), " | ".join(m(p) for p in peers)))
     lines += denoised_table(rows)

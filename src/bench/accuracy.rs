@@ -5,6 +5,9 @@
 //! `accuracy_lamp_out.svg` (the same for √relMSE and the lamp-out RMSE) and `summary.md` (the
 //! equal-time comparison in every metric).
 //!
+//! Each row also counts its fireflies ([`crate::metrics::fireflies`]: pixels above 4× their
+//! reference), where rare paths (caustics) fail; `summary.md` tabulates them per spp.
+//!
 //! Why three metrics: RMSE weighs every pixel by its brightness, so a directly visible lamp of
 //! radiance 1500 (whose edge pixels are noisy by antialiasing alone, the same for every method)
 //! or a few caustic fireflies can decide it. √relMSE (relative MSE with ε = 0.01, see
@@ -49,7 +52,7 @@ pub use super::accuracy_summary::{Crossover, crossover, raw_line, summary_markdo
 use crate::denoise::FilmImages;
 use crate::denoise::{Denoiser, Quality};
 use crate::film::{Durability, Layer, OutputImage, write_output};
-use crate::metrics::{Image, MetricsError, compare, lamp_out_rmse};
+use crate::metrics::{Image, MetricsError, compare, fireflies, lamp_out_rmse};
 use crate::scene::format::Method;
 use crate::shading::sampler::SamplerKind;
 use crate::{Overrides, PassPlan, Renderer};
@@ -189,6 +192,7 @@ pub fn measure(
                     seconds,
                     metrics: compare(&image, &reference).ok_or_else(mismatch)?,
                     lamp_out_rmse: lamp_out_rmse(&image, &reference).ok_or_else(mismatch)?,
+                    fireflies: fireflies(&image, &reference).ok_or_else(mismatch)?,
                     denoised: pass.is_some(),
                 };
                 if let Some(dir) = &options.keep_images {
@@ -275,11 +279,11 @@ pub fn write_csv(path: &Path, rows: &[AccuracyRow], images: bool) -> Result<(), 
 pub fn csv_text(rows: &[AccuracyRow], images: bool) -> String {
     // New columns come last, so the columns of files written before them keep their places.
     let mut text = String::from(
-        "method,spp,seed,seconds,rmse,rel_mse,mae,sampler,denoised,lamp_out_rmse,image\n",
+        "method,spp,seed,seconds,rmse,rel_mse,mae,sampler,denoised,lamp_out_rmse,image,fireflies\n",
     );
     for r in rows {
         text += &format!(
-            "{},{},{},{:.6},{:.6e},{:.6e},{:.6e},{},{},{:.6e},{}\n",
+            "{},{},{},{:.6},{:.6e},{:.6e},{:.6e},{},{},{:.6e},{},{}\n",
             r.method,
             r.spp,
             r.seed,
@@ -294,7 +298,8 @@ pub fn csv_text(rows: &[AccuracyRow], images: bool) -> String {
                 r.image_name()
             } else {
                 String::new()
-            }
+            },
+            r.fireflies
         );
     }
     text
@@ -361,11 +366,12 @@ mod tests {
     use crate::bench::accuracy_rows::test_method_row as row;
 
     #[test]
-    fn the_csv_keeps_its_old_columns_and_adds_denoised_lamp_out_and_image_at_the_end() {
+    fn the_csv_keeps_its_old_columns_and_adds_denoised_lamp_out_image_and_fireflies_at_the_end() {
         let raw = AccuracyRow {
             spp: 4,
             seed: 7,
             lamp_out_rmse: 0.25,
+            fireflies: 3,
             ..row(Method::Mis, 1.5, 0.5)
         };
         let denoised = AccuracyRow {
@@ -377,13 +383,13 @@ mod tests {
         assert_eq!(
             lines,
             [
-                "method,spp,seed,seconds,rmse,rel_mse,mae,sampler,denoised,lamp_out_rmse,image",
-                "mis,4,7,1.500000,5.000000e-1,0.000000e0,0.000000e0,sobol,false,2.500000e-1,mis_sobol_4spp.exr",
-                "mis,4,7,1.500000,5.000000e-1,0.000000e0,0.000000e0,sobol,true,2.500000e-1,mis_sobol_4spp_denoised.exr",
+                "method,spp,seed,seconds,rmse,rel_mse,mae,sampler,denoised,lamp_out_rmse,image,fireflies",
+                "mis,4,7,1.500000,5.000000e-1,0.000000e0,0.000000e0,sobol,false,2.500000e-1,mis_sobol_4spp.exr,3",
+                "mis,4,7,1.500000,5.000000e-1,0.000000e0,0.000000e0,sobol,true,2.500000e-1,mis_sobol_4spp_denoised.exr,3",
             ]
         );
         // Without kept images the column is there but empty.
-        assert!(csv_text(&[raw], false).ends_with(",false,2.500000e-1,\n"));
+        assert!(csv_text(&[raw], false).ends_with(",false,2.500000e-1,,3\n"));
     }
 
     #[test]

@@ -30,6 +30,8 @@ pub struct AccuracyRow {
     /// Lamp-out clamped RMSE against the reference
     /// ([`lamp_out_rmse`](crate::metrics::lamp_out_rmse)).
     pub lamp_out_rmse: f64,
+    /// Pixels far brighter than the reference's ([`fireflies`](crate::metrics::fireflies)).
+    pub fireflies: usize,
     /// Whether the image measured is the denoised one.
     pub denoised: bool,
 }
@@ -251,6 +253,7 @@ pub(crate) fn test_row(denoised: bool, spp: u32, seconds: f64, rmse: f64) -> Acc
             ..Default::default()
         },
         lamp_out_rmse: rmse,
+        fireflies: 0,
         denoised,
     }
 }

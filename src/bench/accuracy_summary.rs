@@ -150,10 +150,48 @@ pub fn summary_markdown(report: &AccuracyReport) -> String {
         }
         s += "\n";
     }
+    s += &fireflies_markdown(report);
     if report.rows.iter().any(|r| r.denoised) {
         s += &denoised_markdown(report);
     }
     s
+}
+
+/// The fireflies of the raw renders ([`crate::metrics::fireflies`]) as a Markdown table: a
+/// row per method and sampler, a column per spp.
+fn fireflies_markdown(report: &AccuracyReport) -> String {
+    let raw = || report.rows.iter().filter(|r| !r.denoised);
+    let mut spps: Vec<u32> = raw().map(|r| r.spp).collect();
+    spps.sort_unstable();
+    spps.dedup();
+    let mut curves: Vec<(Method, SamplerKind)> = Vec::new();
+    for r in raw() {
+        if !curves.contains(&(r.method, r.sampler)) {
+            curves.push((r.method, r.sampler));
+        }
+    }
+    if curves.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from(
+        "Fireflies: pixels whose channel mean exceeds 4× the reference's (and it by more than \
+         0.1).\n\n| method, sampler |",
+    );
+    for spp in &spps {
+        s += &format!(" {spp} spp |");
+    }
+    s += &format!("\n|---|{}\n", "---|".repeat(spps.len()));
+    for (m, sampler) in curves {
+        s += &format!("| {} |", curve_name(m, sampler));
+        for &spp in &spps {
+            match raw().find(|r| (r.method, r.sampler, r.spp) == (m, sampler, spp)) {
+                Some(r) => s += &format!(" {} |", r.fireflies),
+                None => s += " – |",
+            }
+        }
+        s += "\n";
+    }
+    s + "\n"
 }
 
 /// The denoised part of [`summary_markdown`].
@@ -341,5 +379,36 @@ mod tests {
             md.contains("| mis sobol | -0.50 | 1.0000e-1 | 1.00 | 1.0 |"),
             "{md}"
         );
+    }
+
+    #[test]
+    fn the_summary_counts_each_curves_fireflies_per_spp() {
+        // mis at 1 and 4 spp with 9 and 2 fireflies; caustics at 4 spp only, with none; a
+        // denoised row (its 50 not counted).
+        let mis = |spp, fireflies| AccuracyRow {
+            fireflies,
+            ..row(false, spp, 1.0, 0.1)
+        };
+        let rows = vec![
+            mis(1, 9),
+            mis(4, 2),
+            AccuracyRow {
+                method: Method::Caustics,
+                ..mis(4, 0)
+            },
+            AccuracyRow {
+                fireflies: 50,
+                ..row(true, 4, 1.0, 0.1)
+            },
+        ];
+        let md = summary_markdown(&AccuracyReport {
+            width: 1,
+            height: 1,
+            rows,
+            fits: Vec::new(),
+        });
+        assert!(md.contains("| method, sampler | 1 spp | 4 spp |"), "{md}");
+        assert!(md.contains("| mis sobol | 9 | 2 |"), "{md}");
+        assert!(md.contains("| caustics sobol | – | 0 |"), "{md}");
     }
 }
