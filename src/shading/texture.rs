@@ -301,9 +301,14 @@ impl PartialEq for Texture {
 impl Texture {
     /// The colour at `uv` (a single set, or a hit's [`TexCoords`]; textures other than
     /// [`Texture::Mapped`] read set 0).
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, uv: impl Into<TexCoords>) -> Vec3 {
-        self.eval_at(uv.into())
+        // A constant, the most common texture, is read here: `eval_at` recurses, so it is
+        // never inlined, and a call per lookup would cost more than the lookup.
+        match self {
+            Self::Constant(c) => *c,
+            _ => self.eval_at(uv.into()),
+        }
     }
 
     #[inline]
@@ -321,6 +326,16 @@ impl Texture {
             Self::Image(image, sampling) => image.sample(uv, *sampling),
             Self::Scaled(texture, factor) => texture.eval_at(tc) * *factor,
             Self::Mapped(texture, map) => texture.eval(map.apply(tc)),
+        }
+    }
+
+    /// Whether the colour depends on the texture coordinates: false for a constant colour
+    /// (scaled or mapped), whose lookups need no coordinates computed.
+    pub fn reads_uv(&self) -> bool {
+        match self {
+            Self::Constant(_) => false,
+            Self::Checker { .. } | Self::Image(..) => true,
+            Self::Scaled(texture, _) | Self::Mapped(texture, _) => texture.reads_uv(),
         }
     }
 
