@@ -366,11 +366,16 @@ impl InstanceSet {
                         &mut t_object,
                         #[inline(always)]
                         |tris: Range<usize>, t_object: &mut f32| {
-                            blocked = tris.into_iter().any(|k| {
+                            // A loop, not `Iterator::any`, whose `try_fold` would stay out
+                            // of line (see `simd::any_sphere`).
+                            for k in tris {
                                 let [a, b, c] = inst.blas.triangles[k];
-                                intersect_triangle(&q, a, b, c, *t_object).is_some()
-                            });
-                            !blocked
+                                if intersect_triangle(&q, a, b, c, *t_object).is_some() {
+                                    blocked = true;
+                                    return false;
+                                }
+                            }
+                            true
                         },
                     );
                     if blocked {

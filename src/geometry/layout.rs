@@ -145,9 +145,14 @@ pub trait Layout: Copy + Default + fmt::Debug + Send + Sync + 'static {
     /// Whether `ray` hits any sphere in `slots` before `t_max`.
     #[inline(always)]
     fn any_sphere(spheres: &Self::Spheres, ray: &Ray, slots: Range<usize>, t_max: f32) -> bool {
-        spheres
-            .leaf(slots)
-            .any(|(c, r)| intersect_sphere(ray, c, r, t_max).is_some())
+        // A loop, not `Iterator::any`, whose `try_fold` would stay out of line
+        // (see `simd::any_sphere`).
+        for (c, r) in spheres.leaf(slots) {
+            if intersect_sphere(ray, c, r, t_max).is_some() {
+                return true;
+            }
+        }
+        false
     }
 
     /// The triangle in `slots` that the ray of `q` hits first before `*t_max`: returns its slot

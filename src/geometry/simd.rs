@@ -273,13 +273,19 @@ pub fn closest_sphere(
     best
 }
 
-/// Whether `ray` hits any sphere in `slots` before `t_max`, [`LANES`] at a time.
+/// Whether `ray` hits any sphere in `slots` before `t_max`, [`LANES`] at a time. A `for` loop
+/// rather than `Iterator::any`: `any` goes through `try_fold`, which the compiler keeps out of
+/// line, compiled for the baseline instead of inlined into the dispatched render loop.
 #[inline(always)]
 pub fn any_sphere(spheres: &SphereSoa, ray: &Ray, slots: Range<usize>, t_max: f32) -> bool {
-    chunks(slots).any(|(first, live)| {
-        sphere_roots(ray, spheres, first, live)
-            .is_some_and(|(t0, t1)| sphere_hits(t0, t1, t_max).and(M::first(live)).any())
-    })
+    for (first, live) in chunks(slots) {
+        if let Some((t0, t1)) = sphere_roots(ray, spheres, first, live)
+            && sphere_hits(t0, t1, t_max).and(M::first(live)).any()
+        {
+            return true;
+        }
+    }
+    false
 }
 
 /// The watertight test per lane, up to the point where `t_max` enters.

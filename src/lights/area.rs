@@ -46,6 +46,8 @@ pub struct Emitter {
     /// A sphere's centre, or the centroid of a triangle's world-space vertices: where the
     /// choice of strategy measures the distance from.
     centroid: Vec3,
+    /// Whether the material reads texture coordinates ([`Emitter::reading_uv`]).
+    reads_uv: bool,
 }
 
 /// A point sampled on an emitter.
@@ -113,6 +115,7 @@ impl Emitter {
             area: 4.0 * std::f32::consts::PI * r * r,
             material,
             centroid: c,
+            reads_uv: true,
         }
     }
 
@@ -124,7 +127,16 @@ impl Emitter {
             area: triangle_area(v),
             material,
             centroid: (v[0] + v[1] + v[2]) * (1.0 / 3.0),
+            reads_uv: true,
         }
+    }
+
+    /// The emitter, told whether its material reads texture coordinates
+    /// ([`Material::reads_tex_coords`](crate::shading::material::Material::reads_tex_coords)):
+    /// a sphere's samples of a material that reads none carry zero coordinates instead of
+    /// computing them (an `atan2` and an `acos`). Emitters read them by default.
+    pub fn reading_uv(self, reads_uv: bool) -> Self {
+        Self { reads_uv, ..self }
     }
 
     /// The emitter's area.
@@ -216,7 +228,11 @@ impl Emitter {
                     Strategy::Cone { .. } => sample_sphere_cone(c, r, p_ref, u).1,
                     _ => sample_sphere_area(u),
                 };
-                let uv = sphere_uv(geometry.sphere_frame[i].transpose() * n);
+                let uv = if self.reads_uv {
+                    sphere_uv(geometry.sphere_frame[i].transpose() * n)
+                } else {
+                    Vec2::ZERO
+                };
                 (c + r * n, n, uv.into(), sphere_point_error(c, r))
             }
             HitKind::Triangle | HitKind::Instance { .. } => {

@@ -99,6 +99,11 @@ impl LightSet {
             let emission = materials.get(m as usize)?.emission()?;
             Some((m, radiance_scale(&emission)))
         };
+        let reads_uv = |material: u32| {
+            materials
+                .get(material as usize)
+                .is_some_and(Material::reads_tex_coords)
+        };
         let mut set = Self {
             sphere_emitter: vec![NONE; geometry.sphere_owner.len()],
             triangle_emitter: vec![NONE; geometry.triangle_owner.len()],
@@ -128,7 +133,7 @@ impl LightSet {
         for (i, &owner) in geometry.sphere_owner.iter().enumerate() {
             if let Some((material, power)) = power_of(owner) {
                 let (c, r) = geometry.spheres.get(i);
-                let emitter = Emitter::sphere(i, c, r, material);
+                let emitter = Emitter::sphere(i, c, r, material).reading_uv(reads_uv(material));
                 set.sphere_emitter[i] = add(&mut set, emitter, power, owner);
             }
         }

@@ -127,7 +127,7 @@ fn first_present<L: Layout, W: Lanes>(
     let mut u: Option<f32> = None;
     for _ in 0..MAX_PASS_THROUGHS {
         let hit = view.geometry.intersect_with(lanes, ray, t_max)?;
-        let s = view.geometry.surface(ray, &hit);
+        let s = view.surface(ray, &hit);
         let material = &view.materials[view.owner_material[s.owner as usize] as usize];
         let c = material.coverage(s.tex_coords());
         if c >= 1.0 {
@@ -265,7 +265,7 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
             });
             break;
         };
-        let s = view.geometry.surface(&ray, &hit);
+        let s = view.surface(&ray, &hit);
         if !medium.is_clear() {
             throughput *= medium.transmittance((s.p - start).length());
         }

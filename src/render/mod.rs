@@ -12,7 +12,9 @@ pub mod pass;
 use glam::Vec3;
 
 use crate::geometry::layout::{DefaultLayout, Layout};
-use crate::geometry::packed::Geometry;
+use crate::geometry::packed::{Geometry, Hit};
+use crate::geometry::ray::Ray;
+use crate::geometry::surface::Surface;
 use crate::lights::LightSet;
 use crate::shading::material::Material;
 use crate::shading::sampler::SamplerKind;
@@ -80,6 +82,22 @@ pub struct SceneView<'a, L: Layout = DefaultLayout> {
     /// Whether some material has an alpha mask ([`has_masks`] of `materials`): only then are
     /// hits tested for presence, so that scenes without masks pay nothing for them.
     pub masked: bool,
+}
+
+impl<L: Layout> SceneView<'_, L> {
+    /// The material of owner slot `owner`.
+    #[inline(always)]
+    pub fn material_of(&self, owner: u32) -> &Material {
+        &self.materials[self.owner_material[owner as usize] as usize]
+    }
+
+    /// The local geometry at `hit` ([`Geometry::surface_reading`]), texture coordinates
+    /// computed only where the material there reads them ([`Material::reads_tex_coords`]).
+    #[inline(always)]
+    pub fn surface(&self, ray: &Ray, hit: &Hit) -> Surface {
+        self.geometry
+            .surface_reading(ray, hit, |owner| self.material_of(owner).reads_tex_coords())
+    }
 }
 
 /// Whether any of `materials` has an alpha mask ([`Material::is_masked`]): the value of

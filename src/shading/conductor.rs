@@ -43,16 +43,10 @@ impl Conductor {
         is_specular_alpha(self.alpha)
     }
 
-    /// The probability of sampling the single-scattering lobe for a view at cosine `cos_o`:
-    /// its share of the lobes' albedos (mean over the channels), F(μo) E(μo) against
-    /// F_ms (1 − E(μo)). 1 where nothing is compensated.
-    #[inline]
-    pub fn single_probability(&self, cos_o: f32) -> f32 {
-        self.probability(&AlbedoRow::new(self.alpha), cos_o)
-    }
-
-    /// [`Conductor::single_probability`] with the tables' row already found.
-    #[inline]
+    /// The probability of sampling the single-scattering lobe for a view at cosine `cos_o`
+    /// (`row`: the tables' row of the lobe's α): its share of the lobes' albedos (mean over
+    /// the channels), F(μo) E(μo) against F_ms (1 − E(μo)). 1 where nothing is compensated.
+    #[inline(always)]
     fn probability(&self, row: &AlbedoRow, cos_o: f32) -> f32 {
         let e = row.conductor(cos_o);
         let single = schlick_rgb(self.f0, cos_o).element_sum() * e;
@@ -78,20 +72,29 @@ impl Conductor {
         if cos_i <= 0.0 || cos_o <= 0.0 {
             return Some((Vec3::ZERO, 0.0));
         }
+        let row = AlbedoRow::new(self.alpha);
+        let p = self.probability(&row, cos_o);
+        Some(self.eval_above(wo, wi, facing, &row, p))
+    }
+
+    /// [`Conductor::eval`] of `wo` → `wi` about the normal `facing` on their side (both
+    /// cosines positive), with the tables' row and the single-scattering lobe's probability `p`
+    /// for `wo` already found: [`Conductor::sample`] has them from choosing the lobe.
+    #[inline(always)]
+    fn eval_above(&self, wo: Vec3, wi: Vec3, facing: Vec3, row: &AlbedoRow, p: f32) -> (Vec3, f32) {
+        let (cos_o, cos_i) = (wo.dot(facing), wi.dot(facing));
         let t = Terms::new(wo, wi, facing, self.alpha);
         // Single scattering, f·cos θi = F D G₂ / (4 cos θo cos θi) · cos θi, and its density
         // under visible-normal sampling, G₁(wo) D(h) / (4 cos θo).
         let q = t.d / (4.0 * cos_o);
         let single = schlick_rgb(self.f0, t.cos_oh) * (q / (1.0 + t.lo + t.li));
-        let row = AlbedoRow::new(self.alpha);
         let lost = row.conductor_lost();
         let multiple = multiple_scattering_fresnel(self.f0, lost)
             * (compensation(row.conductor(cos_o), row.conductor(cos_i), lost) * cos_i);
-        let p = self.probability(&row, cos_o);
-        Some((
+        (
             single + multiple,
             p * (q / (1.0 + t.lo)) + (1.0 - p) * cos_i * FRAC_1_PI,
-        ))
+        )
     }
 
     /// A reflection of a ray along `d` about a visible normal or from the cosine (one 2D
@@ -116,7 +119,8 @@ impl Conductor {
         }
         let frame = Frame::from_normal(facing);
         let u = sampler.next_2d();
-        let p = self.single_probability(cos_o);
+        let row = AlbedoRow::new(self.alpha);
+        let p = self.probability(&row, cos_o);
         let direction = if u.x < p {
             let u = Vec2::new((u.x / p).min(1.0), u.y);
             let wo_local = Vec3::new(wo.dot(frame.s), wo.dot(frame.t), cos_o.max(1e-6)).normalize();
@@ -129,8 +133,8 @@ impl Conductor {
         if direction.dot(facing) <= 0.0 {
             return None;
         }
-        // Value and density from `eval` itself, so that the two agree to rounding.
-        let (f_cos, pdf) = self.eval(d, direction, n)?;
+        // Value and density from `eval`'s own arithmetic, so that the two agree to rounding.
+        let (f_cos, pdf) = self.eval_above(wo, direction, facing, &row, p);
         (pdf > 0.0 && pdf.is_finite()).then(|| Scatter {
             direction,
             attenuation: f_cos / pdf,

@@ -166,6 +166,34 @@ impl Material {
         self.emission().map_or(Vec3::ZERO, |e| e.radiance(d, n, uv))
     }
 
+    /// Whether any lookup of the material ([`Material::bsdf`], [`Material::emitted`],
+    /// [`Material::coverage`]) reads texture coordinates: false when every texture is a
+    /// constant and there is no normal map nor alpha mask. A hit on a material that reads none
+    /// need not compute them (a sphere's cost an `atan2` and an `acos`).
+    pub fn reads_tex_coords(&self) -> bool {
+        match self {
+            Self::Diffuse { albedo } | Self::Metal { albedo, .. } | Self::Glossy { albedo, .. } => {
+                albedo.reads_uv()
+            }
+            Self::Dielectric { .. } => false,
+            Self::Light { emit, .. } => emit.reads_uv(),
+            Self::Pbr {
+                base_color,
+                metallic_roughness,
+                emissive,
+                normal_map,
+                alpha,
+                ..
+            } => {
+                base_color.reads_uv()
+                    || metallic_roughness.is_some()
+                    || emissive.reads_uv()
+                    || normal_map.is_some()
+                    || alpha.is_some()
+            }
+        }
+    }
+
     /// Whether the material has an alpha mask (a `Pbr` with `alpha`): only then may
     /// [`Material::coverage`] be below 1.
     pub fn is_masked(&self) -> bool {
@@ -488,5 +516,82 @@ mod tests {
             two_sided: true,
         };
         assert_eq!(two.emitted(Vec3::Y, Vec3::Y, Vec2::ZERO), Vec3::splat(2.0));
+    }
+
+    /// Every material kind with `texture` in each of its colour slots.
+    fn every_kind(texture: &Texture) -> Vec<Material> {
+        vec![
+            Material::Diffuse {
+                albedo: texture.clone(),
+            },
+            Material::Metal {
+                albedo: texture.clone(),
+                roughness: 0.3,
+            },
+            Material::Glossy {
+                albedo: texture.clone(),
+                roughness: 0.4,
+            },
+            Material::Light {
+                emit: texture.clone(),
+                intensity: 3.0,
+                two_sided: true,
+            },
+            Material::Pbr {
+                base_color: texture.clone(),
+                metallic: 0.5,
+                roughness: 0.5,
+                metallic_roughness: None,
+                emissive: texture.clone(),
+                emissive_strength: 1.0,
+                normal_map: None,
+                alpha: None,
+                layers: Layers::NONE,
+            },
+        ]
+    }
+
+    #[test]
+    fn a_material_that_reads_no_coordinates_looks_the_same_at_every_point() {
+        // What a hit reads of the material at `uv`: the BSDF's value, density and a sample,
+        // the emission and the coverage.
+        let look = |m: &Material, uv: Vec2| {
+            let d = Vec3::new(0.3, 0.1, -1.0).normalize();
+            let bsdf = m.bsdf(d, Vec3::Z, Vec3::Z, uv, || None);
+            let sample = bsdf
+                .sample(&mut Rng::new(5, 6))
+                .map(|s| (s.direction, s.attenuation, s.pdf));
+            let wi = Vec3::new(-0.2, 0.4, 0.8).normalize();
+            (bsdf.eval(wi), sample, bsdf.emitted(), m.coverage(uv))
+        };
+        // The checker is odd at (0, 0) (sin 0 = 0) and even at the other two points.
+        let uvs = [Vec2::ZERO, Vec2::new(0.15, 0.05), Vec2::new(0.05, 0.25)];
+        let constant = Texture::Mapped(
+            Box::new(Texture::Scaled(
+                Box::new(Texture::Constant(Vec3::splat(0.6))),
+                Vec3::new(1.0, 0.5, 0.25),
+            )),
+            Box::default(),
+        );
+        let mut plain = every_kind(&constant);
+        plain.push(Material::glass(1.5));
+        for m in &plain {
+            assert!(!m.reads_tex_coords(), "{m:?}");
+            for uv in uvs {
+                assert_eq!(look(m, uv), look(m, uvs[0]), "{m:?} at {uv}");
+            }
+        }
+        let checker = Texture::Checker {
+            scale: 10.0,
+            even: Box::new(Texture::Constant(Vec3::splat(0.9))),
+            odd: Box::new(Texture::Constant(Vec3::splat(0.1))),
+        };
+        for m in every_kind(&checker) {
+            assert!(m.reads_tex_coords(), "{m:?}");
+            assert!(
+                uvs.iter().any(|&uv| look(&m, uv) != look(&m, uvs[0])),
+                "{m:?}"
+            );
+        }
     }
 }

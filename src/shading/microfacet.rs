@@ -14,6 +14,8 @@
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
+use super::sampling::unit_circle;
+
 /// Smallest accepted roughness; α = roughness² = 10⁻⁴ keeps D's peak (1/πα² ≈ 3·10⁷) and the
 /// power-heuristic weights (pdf² ≈ 10¹⁴) well inside `f32`.
 pub const MIN_ROUGHNESS: f32 = 0.01;
@@ -93,10 +95,10 @@ pub fn sample_visible_normal(wo: Vec3, alpha: f32, u: Vec2) -> Vec3 {
     };
     let t2 = vh.cross(t1);
     let r = u.x.sqrt();
-    let phi = 2.0 * PI * u.y;
-    let p1 = r * phi.cos();
+    let phi = unit_circle(u.y);
+    let p1 = r * phi.x;
     let s = 0.5 * (1.0 + vh.z);
-    let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
+    let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.y;
     let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
     Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(0.0)).normalize()
 }

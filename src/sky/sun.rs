@@ -5,6 +5,8 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
+use crate::shading::sampling::unit_circle;
+
 /// A distant disk seen under a small cone.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sun {
@@ -90,8 +92,8 @@ impl Sun {
         let a = u.x * self.one_minus_cos;
         let cos_theta = 1.0 - a;
         let sin_theta = (a * (2.0 - a)).max(0.0).sqrt();
-        let (s, c) = (2.0 * PI * u.y).sin_cos();
-        (sin_theta * (c * self.tangent + s * self.bitangent) + cos_theta * self.direction)
+        let phi = unit_circle(u.y);
+        (sin_theta * (phi.x * self.tangent + phi.y * self.bitangent) + cos_theta * self.direction)
             .normalize()
     }
 }

@@ -3,6 +3,8 @@
 
 use std::ops::Range;
 
+use glam::Vec2;
+
 use super::hit::{Hit, HitKind};
 use super::pack::Geometry;
 use crate::cpu::{Lanes, Sse};
@@ -214,6 +216,19 @@ impl<L: Layout> Geometry<L> {
     /// Local geometry at `hit`.
     #[inline(always)]
     pub fn surface(&self, ray: &Ray, hit: &Hit) -> Surface {
+        self.surface_reading(ray, hit, |_| true)
+    }
+
+    /// [`Geometry::surface`], where a sphere's texture coordinates (an `atan2` and an `acos`)
+    /// are computed only if `reads_uv(owner)` says its owner's material reads them, and are
+    /// zero otherwise. Every other primitive's are interpolated as always (a few products).
+    #[inline(always)]
+    pub fn surface_reading(
+        &self,
+        ray: &Ray,
+        hit: &Hit,
+        reads_uv: impl FnOnce(u32) -> bool,
+    ) -> Surface {
         let i = hit.index as usize;
         match hit.kind {
             HitKind::Sphere => {
@@ -221,14 +236,19 @@ impl<L: Layout> Geometry<L> {
                 // (o − c) + t·d keeps the digits o + t·d − c would cancel far from the origin;
                 // the point is then re-projected onto the sphere.
                 let n = ((ray.origin - c) + hit.t * ray.direction).normalize();
-                let uv = sphere_uv(self.sphere_frame[i].transpose() * n);
+                let owner = self.sphere_owner[i];
+                let uv = if reads_uv(owner) {
+                    sphere_uv(self.sphere_frame[i].transpose() * n)
+                } else {
+                    Vec2::ZERO
+                };
                 Surface {
                     p: c + r * n,
                     n,
                     ns: n,
                     uv,
                     uv1: uv,
-                    owner: self.sphere_owner[i],
+                    owner,
                 }
             }
             HitKind::Triangle => {
