@@ -59,10 +59,7 @@ mod tests {
     fn paths_survive_the_round_trip() {
         for p in ["/a/b c/é.ron", "/x%y/#1?.ron", "/plain/scene.ron"] {
             let uri = from_path(Path::new(p));
-            assert!(
-                !uri[7..].contains([' ', '#', '?', '%']) || uri.contains("%25"),
-                "{uri}"
-            );
+            assert!(!uri[7..].contains([' ', '#', '?']), "{uri}");
             assert_eq!(to_path(&uri), Some(PathBuf::from(p)), "{uri}");
         }
         assert_eq!(
