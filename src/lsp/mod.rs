@@ -13,7 +13,7 @@
 //!
 //! The protocol: [`transport`] (bounded framing), [`server`] (lifecycle and dispatch),
 //! [`stdio`] (the loop); the buffers: [`documents`]; reading them while they are typed:
-//! [`syntax`], [`outline`], [`reference`], [`probe`]; [`uri`] maps URIs to paths.
+//! [`syntax`], [`outline`], [`reference`](mod@reference), [`probe`]; [`uri`] maps URIs to paths.
 
 pub mod completion;
 pub mod definition;
