@@ -17,6 +17,7 @@ pub mod farm;
 pub mod film;
 pub mod geometry;
 pub mod lights;
+pub mod lsp;
 pub mod metrics;
 pub mod model;
 pub mod output_file;

@@ -130,6 +130,11 @@ enum Command {
               value_parser = clap::value_parser!(u64).range(1..=rondo::export::MAX_TRIANGLES))]
         max_triangles: u64,
     },
+    /// Serve the Language Server Protocol on standard input and output, for editors: diagnostics
+    /// as you type (the loader's errors, `check`'s warnings), completion, hover, go to
+    /// definition and the outline of scene and prefab files. Exit status 0 after the client's
+    /// `shutdown` and `exit`.
+    Lsp,
     /// Measure rendering speed.
     Bench {
         #[command(subcommand)]
@@ -184,6 +189,7 @@ fn main() {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Check { scene } => check::run(&scene),
+        Command::Lsp => std::process::exit(rondo::lsp::serve_stdio()),
         Command::Export {
             scene,
             output,

@@ -14,3 +14,4 @@ pub mod load;
 pub mod load_watch;
 pub mod load_watch_table;
 pub mod load_watch_time;
+pub mod lsp;

@@ -313,3 +313,15 @@ pub fn accuracy(options: &rondo::bench::accuracy::AccuracyOptions) -> Result<()>
     ))?;
     Ok(())
 }
+
+/// `rondo bench lsp`: the language server's latencies on a generated scene, as a Markdown table.
+pub fn lsp(entities: usize, edits: usize) -> Result<()> {
+    let temp = tempfile::Builder::new()
+        .prefix("rondo-bench-lsp-")
+        .tempdir()
+        .context("cannot create a temporary directory")?;
+    let timings =
+        rondo::bench::lsp::run(entities, edits, temp.path()).map_err(anyhow::Error::msg)?;
+    print_line(rondo::bench::lsp::markdown(entities, &timings))?;
+    Ok(())
+}

@@ -153,6 +153,16 @@ pub enum BenchCommand {
         #[arg(long)]
         no_load: bool,
     },
+    /// Latency of `rondo lsp` on a generated scene of N spheres: diagnostics after a keystroke
+    /// and after a typo, completion of material names (the server driven in process).
+    Lsp {
+        /// Entities of the generated scene.
+        #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(2..=1_000_000))]
+        entities: u64,
+        /// Keystrokes, typos and completions timed.
+        #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..=10_000))]
+        edits: u64,
+    },
     /// Latency of `watch`: from a saved edit to the first and to the full-quality image, for
     /// each kind of edit the scene has a target for: a material colour (colour), a small sphere
     /// moved, or an entity if there is no sphere (move-small), the biggest mesh moved
@@ -252,6 +262,9 @@ pub fn run(what: BenchCommand) -> Result<()> {
             denoise,
             keep_images,
         }),
+        BenchCommand::Lsp { entities, edits } => {
+            super::bench::lsp(entities as usize, edits as usize)
+        }
         BenchCommand::Watch {
             scene,
             runs,

@@ -262,9 +262,22 @@ struct Expander<'a> {
 /// Each call is one load of the cache ([`AssetCache::begin_load`]): a file read by an earlier
 /// call is read again, unless a watcher reports changes to the cache.
 pub fn load_scene(path: &Path, assets: &mut AssetCache) -> Result<LoadedScene, SceneError> {
+    // A scene that cannot be read still starts a load: it asked for no file.
     assets.begin_load();
     let source = std::fs::read_to_string(path)
         .map_err(|e| SceneError::at(path, None, format!("cannot read scene: {e}")))?;
+    load_scene_source(path, source, assets)
+}
+
+/// [`load_scene`] of `source`, the text of the scene file `path` as an editor holds it (not
+/// necessarily what is on disk): prefabs, meshes and textures are read from their files,
+/// relative to `path`, and errors name `path`.
+pub fn load_scene_source(
+    path: &Path,
+    source: String,
+    assets: &mut AssetCache,
+) -> Result<LoadedScene, SceneError> {
+    assets.begin_load();
     let text: Arc<str> = source.as_str().into();
     // The parse is kept whatever the expansion finds, and a failed parse keeps the last good
     // one: the next edit starts from it.
