@@ -506,7 +506,7 @@ fn unsupported_extensions_warn_what_will_look_wrong() {
     let material = json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}});
     let mut file = quad_file(material);
     file["extensionsUsed"] = json!([
-        "KHR_materials_sheen",
+        "KHR_materials_iridescence",
         "KHR_materials_anisotropy",
         "KHR_texture_transform"
     ]);
@@ -520,7 +520,7 @@ fn unsupported_extensions_warn_what_will_look_wrong() {
             .unwrap_or_else(|| panic!("no warning for {ext}: {:?}", scene.warnings))
             .clone()
     };
-    assert!(warning("KHR_materials_sheen").contains("grazing"));
+    assert!(warning("KHR_materials_iridescence").contains("thin-film"));
     assert!(warning("KHR_materials_anisotropy").contains("brushed highlights"));
     assert!(
         scene

@@ -481,7 +481,7 @@ fn load(dir: &Path, file: &Value) -> Result<rondo::scene::load::LoadedScene, Str
 }
 
 #[test]
-fn gltf_specular_and_clearcoat_load_to_the_material_and_only_what_is_not_read_warns() {
+fn gltf_specular_sheen_and_clearcoat_load_to_the_material_and_only_what_is_not_read_warns() {
     let dir = temp_dir("pbr-layers-gltf");
     let material = json!({
         "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0},
@@ -489,7 +489,8 @@ fn gltf_specular_and_clearcoat_load_to_the_material_and_only_what_is_not_read_wa
             "KHR_materials_specular": {"specularFactor": 0.25, "specularColorFactor": [2, 1, 0.5]},
             "KHR_materials_clearcoat": {"clearcoatFactor": 0.75, "clearcoatRoughnessFactor": 0.125,
                                         "clearcoatNormalTexture": {"index": 0}},
-            "KHR_materials_sheen": {"sheenColorFactor": [1, 1, 1]},
+            "KHR_materials_sheen": {"sheenColorFactor": [1, 0.5, 0.25], "sheenRoughnessFactor": 0.375,
+                                    "sheenColorTexture": {"index": 0}},
         },
     });
     let exts = [
@@ -497,7 +498,7 @@ fn gltf_specular_and_clearcoat_load_to_the_material_and_only_what_is_not_read_wa
         "KHR_materials_clearcoat",
         "KHR_materials_sheen",
     ];
-    let scene = load(&dir, &triangle_file(material.clone(), &exts, &exts[..2]))
+    let scene = load(&dir, &triangle_file(material.clone(), &exts, &exts))
         .unwrap_or_else(|e| panic!("{e}"));
     let m = &scene.materials[&scene.entities[0].material];
     let Material::Pbr { layers, .. } = m else {
@@ -508,6 +509,8 @@ fn gltf_specular_and_clearcoat_load_to_the_material_and_only_what_is_not_read_wa
         Layers {
             specular: 0.25,
             specular_color: Vec3::new(2.0, 1.0, 0.5),
+            sheen_color: Vec3::new(1.0, 0.5, 0.25),
+            sheen_roughness: 0.375,
             clearcoat: 0.75,
             clearcoat_roughness: 0.125,
         }
@@ -516,12 +519,14 @@ fn gltf_specular_and_clearcoat_load_to_the_material_and_only_what_is_not_read_wa
     assert!(
         !w.iter()
             .any(|w| w.contains("extension KHR_materials_specular")
+                || w.contains("extension KHR_materials_sheen")
                 || w.contains("extension KHR_materials_clearcoat")),
         "{w:?}"
     );
     assert!(
         w.iter()
-            .any(|w| w.contains("KHR_materials_sheen") && w.contains("grazing"))
+            .any(|w| w.contains("sheenColorTexture is ignored") && w.contains("colour")),
+        "{w:?}"
     );
     assert!(
         w.iter()
@@ -556,6 +561,16 @@ fn gltf_specular_and_clearcoat_load_to_the_material_and_only_what_is_not_read_wa
             "KHR_materials_specular",
             json!({"specularColorFactor": [1, 1]}),
             "specularColorFactor",
+        ),
+        (
+            "KHR_materials_sheen",
+            json!({"sheenColorFactor": [1, 1.5, 0]}),
+            "sheenColorFactor[1]",
+        ),
+        (
+            "KHR_materials_sheen",
+            json!({"sheenRoughnessFactor": -0.5}),
+            "sheenRoughnessFactor",
         ),
     ] {
         let mut m = json!({"pbrMetallicRoughness": {}});

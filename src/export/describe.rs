@@ -210,6 +210,8 @@ fn material(m: &Material, images: &ImageFiles) -> Result<Value, ExportError> {
                 pbr["layers"] = json!({
                     "specular": layers.specular,
                     "specular_color": layers.specular_color.to_array(),
+                    "sheen_color": layers.sheen_color.to_array(),
+                    "sheen_roughness": layers.sheen_roughness,
                     "clearcoat": layers.clearcoat,
                     "clearcoat_roughness": layers.clearcoat_roughness,
                 });

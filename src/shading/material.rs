@@ -18,6 +18,7 @@ use super::pbr::Pbr;
 use super::rough_dielectric::RoughDielectric;
 use super::sampler::Sampler;
 use super::scatter::Scatter;
+use super::sheen::Sheen;
 use super::specular::Specular;
 use super::texture::{TexCoords, Texture};
 
@@ -96,7 +97,7 @@ pub enum Material {
         normal_map: Option<NormalMap>,
         /// Alpha mask: where the surface is absent.
         alpha: Option<AlphaMask>,
-        /// Specular strength and colour, and a clear coat ([`Layers::NONE`]: none).
+        /// Specular strength and colour, a sheen and a clear coat ([`Layers::NONE`]: none).
         layers: Layers,
     },
 }
@@ -286,11 +287,15 @@ impl Material {
                 // be evaluable at some points and a perfect mirror at others.
                 let coat_alpha = alpha_from_roughness(layers.clearcoat_roughness);
                 let coated = layers.clearcoat > 0.0;
+                let sheen = Sheen::new(layers.sheen_color, layers.sheen_roughness);
                 let samples_lights = metallic_roughness.is_some()
                     || !Pbr::new(Vec3::ONE, *metallic, *roughness).is_delta()
+                    || !sheen.is_off()
                     || (coated && !is_specular_alpha(coat_alpha));
                 let specular = Specular::new(layers.specular, layers.specular_color);
-                let base = Pbr::new(base_color.eval(uv), m, r).with_specular(specular);
+                let base = Pbr::new(base_color.eval(uv), m, r)
+                    .with_specular(specular)
+                    .with_sheen(sheen);
                 let lobe = if coated {
                     Lobe::Coated(Coated {
                         base,

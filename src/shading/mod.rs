@@ -22,5 +22,7 @@ pub mod rough_dielectric;
 pub mod sampler;
 pub mod sampling;
 pub mod scatter;
+pub mod sheen;
+pub mod sheen_table;
 pub mod specular;
 pub mod texture;

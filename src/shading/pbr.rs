@@ -34,6 +34,17 @@
 //! limit of F G₂/G₁ as α → 0) over that probability, and it has no density, so [`Pbr::eval`] and
 //! [`Pbr::sample`]'s densities cover the base alone, weighted by the mirror's albedo, the
 //! Fresnel factor F(μ) (the tables' first row).
+//!
+//! A sheen layer (`KHR_materials_sheen`, [`super::sheen`]) goes over all of this by the spec's
+//! albedo scaling: `f = f_sheen + (1 − max(sheen colour) E_sh(μo)) f_base`, E_sh the white
+//! sheen lobe's directional albedo. The base keeps what the sheen does not reflect towards the
+//! view, so a white base under a white sheen reflects `E_sh + (1 − E_sh) · 1 = 1` and any other
+//! less. The weight depends on the view alone (as the clear coat's, [`super::coat`]): the layered
+//! BRDF is not exactly reciprocal, which the spec's informative text accepts; its symmetric
+//! alternative, the smaller of the two directions' weights, loses light for every base.
+//! Sampling picks the sheen lobe (uniform over the hemisphere: it lives towards the horizon,
+//! where a cosine density would starve it) with its share of the albedo, else the base, and the
+//! density is that mixture.
 
 use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
@@ -42,7 +53,8 @@ use super::energy::{AlbedoRow, compensation, multiple_scattering_fresnel};
 use super::microfacet::{
     Terms, alpha_from_roughness, is_specular_alpha, sample_visible_normal, schlick_rgb,
 };
-use super::sampling::{Frame, cosine_hemisphere};
+use super::sampling::{Frame, cosine_hemisphere, uniform_hemisphere};
+use super::sheen::{Sheen, UNIFORM_PDF};
 use super::specular::Specular;
 
 /// The metallic–roughness BRDF at one surface point (textures already looked up).
@@ -56,6 +68,8 @@ pub struct Pbr {
     pub alpha: f32,
     /// Strength and colour of the dielectric specular lobe (`KHR_materials_specular`).
     pub specular: Specular,
+    /// The sheen layer over it all (`KHR_materials_sheen`; [`Sheen::NONE`]: none).
+    pub sheen: Sheen,
 }
 
 /// A sampled direction with its weight `f·cos / pdf` and its density.
@@ -79,6 +93,7 @@ impl Pbr {
             metallic: metallic.clamp(0.0, 1.0),
             alpha: alpha_from_roughness(roughness),
             specular: Specular::PLAIN,
+            sheen: Sheen::NONE,
         }
     }
 
@@ -87,17 +102,22 @@ impl Pbr {
         Self { specular, ..self }
     }
 
+    /// This BRDF under the sheen layer `sheen`.
+    pub fn with_sheen(self, sheen: Sheen) -> Self {
+        Self { sheen, ..self }
+    }
+
     /// Whether the specular lobe is a perfect mirror (α below [`super::microfacet::SPECULAR_ALPHA`]).
     #[inline]
     pub fn is_smooth(&self) -> bool {
         is_specular_alpha(self.alpha)
     }
 
-    /// Whether the whole BRDF is a perfect mirror: a smooth specular lobe and no diffuse lobe (a
-    /// conductor, or a black base). Nothing of it can be evaluated.
+    /// Whether the whole BRDF is a perfect mirror: a smooth specular lobe, no diffuse lobe (a
+    /// conductor, or a black base) and no sheen. Nothing of it can be evaluated.
     #[inline]
     pub fn is_delta(&self) -> bool {
-        self.is_smooth() && self.diffuse().max_element() <= 0.0
+        self.is_smooth() && self.diffuse().max_element() <= 0.0 && self.sheen.is_off()
     }
 
     /// Fresnel factor of the combined specular lobe at cosine `c`: mix by `metallic` of the
@@ -138,12 +158,48 @@ impl Pbr {
     }
 
     /// An estimate of the directional albedo at view cosine `cos_o`, the mean over the
-    /// channels: the specular lobe's F(μo) E(μo) plus what the cosine-sampled lobes reflect.
-    /// Layers above the BRDF weigh their sampling probability with it.
+    /// channels: the specular lobe's F(μo) E(μo) plus what the cosine-sampled lobes reflect,
+    /// under the sheen's albedo scaling, plus the sheen's. Layers above the BRDF weigh their
+    /// sampling probability with it.
     #[inline]
     pub fn albedo_estimate(&self, cos_o: f32) -> f32 {
+        if self.sheen.is_off() {
+            return self.base_albedo_estimate(cos_o);
+        }
+        let split = self.sheen_split(cos_o);
+        split.sheen + split.keep * split.base
+    }
+
+    /// [`Pbr::albedo_estimate`] of the BRDF under the sheen.
+    #[inline]
+    fn base_albedo_estimate(&self, cos_o: f32) -> f32 {
         let (spec, rest) = self.albedo_sums(&AlbedoRow::new(self.alpha), cos_o);
         (spec + rest) / 3.0
+    }
+
+    /// The sheen layer's share of the light from a view at cosine `cos_o` and what it leaves
+    /// to the base, and the probability of sampling it.
+    #[inline]
+    fn sheen_split(&self, cos_o: f32) -> SheenSplit {
+        let e = self.sheen.albedo(cos_o);
+        let keep = self.sheen.base_weight(e);
+        // The floor keeps a density wherever the lobe is not exactly zero (a table entry may
+        // round to 0 where the lobe is 10⁻³⁰), so that no direction it reflects goes unsampled.
+        let sheen = self.sheen.color.element_sum() / 3.0 * Sheen::reflected(e).max(1e-6);
+        let base = self.base_albedo_estimate(cos_o);
+        let total = sheen + keep * base;
+        let probability = if total > 0.0 && total.is_finite() {
+            (sheen / total).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        SheenSplit {
+            e,
+            sheen,
+            keep,
+            base,
+            probability,
+        }
     }
 
     /// The channel sums of the specular lobe's albedo, F(μo) E(μo), and of the cosine-sampled
@@ -167,9 +223,29 @@ impl Pbr {
     /// BRDF times `cos θi` and the density of `wi` under [`Pbr::sample`], for unit `wo` (towards
     /// the viewer) and `wi` (towards the light) about unit normal `n` on the viewer's side. Zero
     /// when either is below the surface. Of a smooth material ([`Pbr::is_smooth`]) only the
-    /// diffuse lobe, with the density of sampling it.
+    /// diffuse lobe and the sheen, with the density of sampling them.
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3, n: Vec3) -> (Vec3, f32) {
+        if self.sheen.is_off() {
+            return self.eval_base(wo, wi, n);
+        }
+        let (cos_o, cos_i) = (wo.dot(n), wi.dot(n));
+        if cos_o <= 0.0 || cos_i <= 0.0 {
+            return (Vec3::ZERO, 0.0);
+        }
+        let split = self.sheen_split(cos_o);
+        let (f_base, pdf_base) = self.eval_base(wo, wi, n);
+        let sin2_h = (wo + wi).normalize().cross(n).length_squared();
+        let q = split.probability;
+        (
+            self.sheen.eval(cos_o, cos_i, sin2_h, split.e) + split.keep * f_base,
+            q * UNIFORM_PDF + (1.0 - q) * pdf_base,
+        )
+    }
+
+    /// [`Pbr::eval`] of the BRDF under the sheen.
+    #[inline]
+    fn eval_base(&self, wo: Vec3, wi: Vec3, n: Vec3) -> (Vec3, f32) {
         let (cos_o, cos_i) = (wo.dot(n), wi.dot(n));
         if cos_o <= 0.0 || cos_i <= 0.0 {
             return (Vec3::ZERO, 0.0);
@@ -234,6 +310,46 @@ impl Pbr {
     /// no density.
     #[inline]
     pub fn sample(&self, wo: Vec3, n: Vec3, u: Vec2) -> Option<PbrSample> {
+        if self.sheen.is_off() {
+            return self.sample_base(wo, n, u);
+        }
+        let cos_o = wo.dot(n);
+        if cos_o <= 0.0 {
+            return None;
+        }
+        let split = self.sheen_split(cos_o);
+        let q = split.probability;
+        let wi = if u.x < q {
+            let u = Vec2::new((u.x / q).min(1.0), u.y);
+            Frame::from_normal(n)
+                .to_world(uniform_hemisphere(u))
+                .normalize()
+        } else {
+            let u = Vec2::new(((u.x - q) / (1.0 - q)).clamp(0.0, 1.0), u.y);
+            let s = self.sample_base(wo, n, u)?;
+            if s.pdf.is_none() {
+                // The base's mirror: its weight, under the sheen, over this choice's probability.
+                return Some(PbrSample {
+                    weight: split.keep * s.weight / (1.0 - q),
+                    ..s
+                });
+            }
+            s.wi
+        };
+        if wi.dot(n) <= 0.0 {
+            return None;
+        }
+        let (f_cos, pdf) = self.eval(wo, wi, n);
+        (pdf > 0.0 && pdf.is_finite()).then(|| PbrSample {
+            wi,
+            weight: f_cos / pdf,
+            pdf: Some(pdf),
+        })
+    }
+
+    /// [`Pbr::sample`] of the BRDF under the sheen.
+    #[inline]
+    fn sample_base(&self, wo: Vec3, n: Vec3, u: Vec2) -> Option<PbrSample> {
         let cos_o = wo.dot(n);
         if cos_o <= 0.0 {
             return None;
@@ -260,13 +376,26 @@ impl Pbr {
         if wi.dot(n) <= 0.0 {
             return None;
         }
-        let (f_cos, pdf) = self.eval(wo, wi, n);
+        let (f_cos, pdf) = self.eval_base(wo, wi, n);
         (pdf > 0.0 && pdf.is_finite()).then(|| PbrSample {
             wi,
             weight: f_cos / pdf,
             pdf: Some(pdf),
         })
     }
+}
+
+/// How the sheen layer splits the light from one view ([`Pbr::sheen_split`]): the white lobe's
+/// tabulated albedo E_sh(μo), the means over the channels of what the sheen reflects and of the
+/// base's albedo (before scaling), the base's weight
+/// `1 − max(colour) E_sh(μo)` and the probability of sampling the sheen.
+#[derive(Clone, Copy, Debug)]
+struct SheenSplit {
+    e: f32,
+    sheen: f32,
+    keep: f32,
+    base: f32,
+    probability: f32,
 }
 
 #[cfg(test)]

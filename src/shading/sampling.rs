@@ -71,6 +71,15 @@ pub fn cosine_hemisphere(u: Vec2) -> Vec3 {
     Vec3::new(d.x, d.y, z)
 }
 
+/// A uniformly distributed direction about +z (pdf 1/2π): z = u.x, so z ≥ 0.
+#[inline]
+pub fn uniform_hemisphere(u: Vec2) -> Vec3 {
+    let z = u.x.clamp(0.0, 1.0);
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
 /// Mirror reflection of `d` about `n`.
 #[inline]
 pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {

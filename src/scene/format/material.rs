@@ -89,10 +89,10 @@ pub enum MaterialDesc {
         two_sided: bool,
     },
     /// `Pbr(base_color, metallic, roughness, emissive, emissive_strength, normal_map,
-    /// alpha_cutoff, specular, specular_color, clearcoat, clearcoat_roughness)`: the glTF 2.0
-    /// metallic–roughness material, with glTF's defaults (base colour 1, metallic 1, roughness
-    /// 1, no emission, strength 1, no normal map, no mask, specular 1 and white, no clear
-    /// coat).
+    /// alpha_cutoff, specular, specular_color, sheen_color, sheen_roughness, clearcoat,
+    /// clearcoat_roughness)`: the glTF 2.0 metallic–roughness material, with glTF's defaults
+    /// (base colour 1, metallic 1, roughness 1, no emission, strength 1, no normal map, no mask,
+    /// specular 1 and white, no sheen, no clear coat).
     Pbr {
         /// Base colour.
         #[serde(default = "white")]
@@ -124,6 +124,14 @@ pub enum MaterialDesc {
         /// `min(0.04 · colour, 1)` (`specularColorFactor`; default white).
         #[serde(default = "white_color")]
         specular_color: Color,
+        /// Colour of a sheen layer over the material, each channel in [0, 1]
+        /// (`KHR_materials_sheen`'s `sheenColorFactor`; default black: none).
+        #[serde(default = "black_color")]
+        sheen_color: UnitColor,
+        /// Perceptual roughness of the sheen in [0, 1] (`sheenRoughnessFactor`; default 0, taken
+        /// as the lobe's smallest, 0.05).
+        #[serde(default = "unit_zero")]
+        sheen_roughness: UnitInterval,
         /// Strength of a clear coat in [0, 1] (`KHR_materials_clearcoat`'s `clearcoatFactor`;
         /// default 0: none).
         #[serde(default = "unit_zero")]
@@ -166,6 +174,10 @@ fn white() -> TextureDesc {
 
 fn white_color() -> Color {
     Color(Vec3::ONE)
+}
+
+fn black_color() -> UnitColor {
+    UnitColor(Vec3::ZERO)
 }
 
 fn black() -> TextureDesc {

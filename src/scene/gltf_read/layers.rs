@@ -1,7 +1,7 @@
-//! The material extensions that add to the metallic–roughness model: `KHR_materials_specular`
-//! and `KHR_materials_clearcoat` read into [`Layers`] (their factors; their textures are not
-//! read, each named in a note saying what will look wrong), each value checked against the
-//! spec's range, a value of the wrong type an error naming its field.
+//! The material extensions that add to the metallic–roughness model: `KHR_materials_specular`,
+//! `KHR_materials_sheen` and `KHR_materials_clearcoat` read into [`Layers`] (their factors;
+//! their textures are not read, each named in a note saying what will look wrong), each value
+//! checked against the spec's range, a value of the wrong type an error naming its field.
 
 use std::ops::RangeInclusive;
 
@@ -13,6 +13,8 @@ use crate::shading::layers::Layers;
 
 /// `KHR_materials_specular`.
 pub(super) const SPECULAR: &str = "KHR_materials_specular";
+/// `KHR_materials_sheen`.
+pub(super) const SHEEN: &str = "KHR_materials_sheen";
 /// `KHR_materials_clearcoat`.
 pub(super) const CLEARCOAT: &str = "KHR_materials_clearcoat";
 
@@ -94,8 +96,8 @@ fn extension<'a>(
         .transpose()
 }
 
-/// The specular and clear coat layers of material `m` (`what` names it in errors), and a note
-/// for each of their textures, which are not read.
+/// The specular, sheen and clear coat layers of material `m` (`what` names it in errors), and a
+/// note for each of their textures, which are not read.
 pub(super) fn read_layers(
     m: &gltf::Material,
     what: &dyn Fn() -> String,
@@ -115,6 +117,20 @@ pub(super) fn read_layers(
         ext.unread_texture(
             "specularColorTexture",
             "the specular colour is its factor everywhere",
+            &mut notes,
+        );
+    }
+    if let Some(ext) = extension(m, what, SHEEN)? {
+        layers.sheen_color = ext.vec3(what, "sheenColorFactor", Vec3::ZERO, unit.clone())?;
+        layers.sheen_roughness = ext.number(what, "sheenRoughnessFactor", 0.0, unit.clone())?;
+        ext.unread_texture(
+            "sheenColorTexture",
+            "the sheen has its factor's colour everywhere",
+            &mut notes,
+        );
+        ext.unread_texture(
+            "sheenRoughnessTexture",
+            "the sheen has its factor's roughness everywhere",
             &mut notes,
         );
     }

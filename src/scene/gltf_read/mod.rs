@@ -17,8 +17,8 @@
 //! `EXT_mesh_gpu_instancing` (`instancing.rs`), the metallic–roughness material with its
 //! textures and their `KHR_texture_transform` (`texture_transform.rs`),
 //! `KHR_materials_emissive_strength`, `KHR_materials_transmission`, `KHR_materials_ior`,
-//! the factors of `KHR_materials_specular` and `KHR_materials_clearcoat` (`layers.rs`; their
-//! textures are named in a warning),
+//! the factors of `KHR_materials_specular`, `KHR_materials_sheen` and `KHR_materials_clearcoat`
+//! (`layers.rs`; their textures are named in a warning),
 //! `KHR_mesh_quantization`, the nodes' cameras and `KHR_lights_punctual` lights (`lights.rs`;
 //! the scene loader decides what becomes of them). Skipped with a warning: points and lines,
 //! morph targets, skins, and every other extension the file uses (the warning says what will
@@ -71,6 +71,7 @@ const SUPPORTED_REQUIRED: &[&str] = &[
     "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
+    "KHR_materials_sheen",
     "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_materials_volume",

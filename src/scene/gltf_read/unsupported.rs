@@ -7,9 +7,6 @@ fn consequence(ext: &str) -> &'static str {
         "KHR_materials_clearcoat" => {
             "the clear coat is ignored: coated surfaces lose their sharp top reflection and show the base alone"
         }
-        "KHR_materials_sheen" => {
-            "sheen is ignored: cloth and velvet lose their bright grazing-angle rim and look flatter and darker"
-        }
         "KHR_materials_specular" => {
             "specular strength and colour are ignored: dielectric highlights keep the default 4 % white reflectance"
         }
@@ -60,7 +57,7 @@ mod tests {
     fn every_warning_names_its_extension_and_a_consequence() {
         for ext in [
             "KHR_materials_clearcoat",
-            "KHR_materials_sheen",
+            "KHR_materials_anisotropy",
             "EXT_unknown",
         ] {
             let w = warning(ext);
@@ -70,6 +67,6 @@ mod tests {
             );
             assert!(w.len() > format!("extension {ext} is ignored; ").len() + 10);
         }
-        assert!(warning("KHR_materials_sheen").contains("grazing"));
+        assert!(warning("KHR_materials_anisotropy").contains("brushed"));
     }
 }

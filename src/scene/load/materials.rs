@@ -108,6 +108,8 @@ impl Expander<'_> {
                 alpha_cutoff,
                 specular,
                 specular_color,
+                sheen_color,
+                sheen_roughness,
                 clearcoat,
                 clearcoat_roughness,
             } => {
@@ -136,6 +138,8 @@ impl Expander<'_> {
                     layers: Layers {
                         specular: specular.0,
                         specular_color: specular_color.0,
+                        sheen_color: sheen_color.0,
+                        sheen_roughness: sheen_roughness.0,
                         clearcoat: clearcoat.0,
                         clearcoat_roughness: clearcoat_roughness.0,
                     },
