@@ -76,8 +76,8 @@ pub fn cosine_hemisphere(u: Vec2) -> Vec3 {
 pub fn uniform_hemisphere(u: Vec2) -> Vec3 {
     let z = u.x.clamp(0.0, 1.0);
     let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * PI * u.y;
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    let d = r * unit_circle(u.y);
+    Vec3::new(d.x, d.y, z)
 }
 
 /// Mirror reflection of `d` about `n`.
