@@ -3,8 +3,8 @@
 //! it evaluates, samples and gives the density of its lobe, says whether it is a perfect
 //! specular one or can be light-sampled, and carries the surface's emission. The lobes live in
 //! their own files ([`super::diffuse`], [`super::fuzzed`], [`super::conductor`],
-//! [`super::dielectric`], [`super::rough_dielectric`], [`super::pbr`], [`super::coat`]). No ECS
-//! here.
+//! [`super::dielectric`], [`super::rough_dielectric`], [`super::pbr`] with its layers
+//! [`super::specular`], [`super::sheen`] and [`super::coat`]). No ECS here.
 //!
 //! Where the shading normal differs from the geometric one (a smooth mesh), the lobe sampled
 //! about the shading normal is folded onto the side of the geometric surface the ray came from:
