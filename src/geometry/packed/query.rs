@@ -52,6 +52,40 @@ impl<L: Layout> Leaf for AnyTriangle<'_, L> {
     }
 }
 
+/// The closest-hit leaf test over spheres, as a [`Leaf`] (a struct, not a closure, so that it is
+/// inlined into the traversal as the triangles' is): records the closest sphere hit in `best`.
+struct ClosestSphere<'a, L: Layout> {
+    spheres: &'a L::Spheres,
+    ray: &'a Ray,
+    best: &'a mut Option<Hit>,
+}
+
+impl<L: Layout> Leaf for ClosestSphere<'_, L> {
+    #[inline(always)]
+    fn visit(&mut self, slots: Range<usize>, t_max: &mut f32) -> bool {
+        if let Some(i) = L::closest_sphere(self.spheres, self.ray, slots, t_max) {
+            *self.best = Some(Hit::at(HitKind::Sphere, i, *t_max));
+        }
+        true
+    }
+}
+
+/// The any-hit leaf test over spheres, as a [`Leaf`]: sets `blocked` and stops the traversal at
+/// the first sphere hit.
+struct AnySphere<'a, L: Layout> {
+    spheres: &'a L::Spheres,
+    ray: &'a Ray,
+    blocked: &'a mut bool,
+}
+
+impl<L: Layout> Leaf for AnySphere<'_, L> {
+    #[inline(always)]
+    fn visit(&mut self, slots: Range<usize>, t_max: &mut f32) -> bool {
+        *self.blocked = L::any_sphere(self.spheres, self.ray, slots, *t_max);
+        !*self.blocked
+    }
+}
+
 impl<L: Layout> Geometry<L> {
     /// Owner slot (scene entity) of the primitive `hit` refers to.
     #[inline]
@@ -78,13 +112,16 @@ impl<L: Layout> Geometry<L> {
         let mut best: Option<Hit> = None;
         let mut t_best = t_max;
         if !self.sphere_owner.is_empty() {
-            self.sphere_bvh
-                .traverse_leaves(lanes, &q, &mut t_best, |slots, t_best: &mut f32| {
-                    if let Some(i) = L::closest_sphere(&self.spheres, ray, slots, t_best) {
-                        best = Some(Hit::at(HitKind::Sphere, i, *t_best));
-                    }
-                    true
-                });
+            self.sphere_bvh.traverse_leaves(
+                lanes,
+                &q,
+                &mut t_best,
+                ClosestSphere::<L> {
+                    spheres: &self.spheres,
+                    ray,
+                    best: &mut best,
+                },
+            );
         }
         if !self.triangle_owner.is_empty() {
             let mut closest = None;
@@ -148,11 +185,16 @@ impl<L: Layout> Geometry<L> {
         let q = RayQuery::new(*ray);
         let mut blocked = false;
         let mut t = t_max;
-        self.sphere_bvh
-            .traverse_any_leaves(lanes, &q, &mut t, |slots, t: &mut f32| {
-                blocked = L::any_sphere(&self.spheres, ray, slots, *t);
-                !blocked
-            });
+        self.sphere_bvh.traverse_any_leaves(
+            lanes,
+            &q,
+            &mut t,
+            AnySphere::<L> {
+                spheres: &self.spheres,
+                ray,
+                blocked: &mut blocked,
+            },
+        );
         if blocked {
             return true;
         }
