@@ -14,7 +14,7 @@ use std::path::Path;
 use crate::Shape;
 use crate::scene::format::{EntityDesc, SceneDesc, ShapeDesc};
 use crate::scene::load::parse_scene;
-use crate::scene::locate::Locator;
+use crate::scene::locate::{Locator, block_comment_end};
 
 /// A kind of edit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -366,28 +366,6 @@ fn closing(text: &str, open: usize) -> Option<usize> {
             _ => {}
         }
         i += 1;
-    }
-    None
-}
-
-/// The offset after the (nested) block comment starting at `at`.
-fn block_comment_end(bytes: &[u8], at: usize) -> Option<usize> {
-    let (mut depth, mut i) = (0usize, at);
-    while i + 1 < bytes.len() {
-        match (bytes[i], bytes[i + 1]) {
-            (b'/', b'*') => {
-                depth += 1;
-                i += 2;
-            }
-            (b'*', b'/') => {
-                depth -= 1;
-                i += 2;
-                if depth == 0 {
-                    return Some(i);
-                }
-            }
-            _ => i += 1,
-        }
     }
     None
 }

@@ -9,6 +9,8 @@
 
 use std::ops::Range;
 
+use crate::scene::locate::block_comment_end;
+
 /// What a token is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
@@ -78,7 +80,7 @@ pub fn tokens(text: &str, mut each: impl FnMut(Token) -> bool) {
                 continue;
             }
             b'/' if b.get(i + 1) == Some(&b'*') => {
-                i = block_comment_end(b, i);
+                i = block_comment_end(b, i).unwrap_or(b.len());
                 continue;
             }
             b'"' => {
@@ -182,27 +184,6 @@ fn raw_string(b: &[u8], start: usize, i: &mut usize) -> Option<Kind> {
             }
         }
     })
-}
-
-/// The offset past the (nestable) block comment opening at `from`; the end of the text if it
-/// is not closed.
-fn block_comment_end(b: &[u8], from: usize) -> usize {
-    let (mut i, mut depth) = (from, 0usize);
-    while i < b.len() {
-        if b[i..].starts_with(b"/*") {
-            depth += 1;
-            i += 2;
-        } else if b[i..].starts_with(b"*/") {
-            depth -= 1;
-            i += 2;
-            if depth == 0 {
-                return i;
-            }
-        } else {
-            i += 1;
-        }
-    }
-    b.len()
 }
 
 /// An open bracket around a place in the text.

@@ -260,7 +260,7 @@ fn tokens<'a>(source: &'a str, from: usize, mut each: impl FnMut(Token<'a>) -> b
 
 /// The offset past the `*/` that closes the (nestable) block comment opening at `from`, or
 /// `None` if the text ends first.
-pub(super) fn block_comment_end(b: &[u8], from: usize) -> Option<usize> {
+pub(crate) fn block_comment_end(b: &[u8], from: usize) -> Option<usize> {
     let (mut i, mut depth) = (from, 0usize);
     while i < b.len() {
         if b[i..].starts_with(b"/*") {
