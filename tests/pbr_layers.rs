@@ -14,12 +14,12 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 use common::chi2::chi_square_of_directions;
+use common::furnace::{furnace_pixels, write_white_map};
 use common::gltf_doc::{Bin, doc};
-use common::{render, temp_dir, with, write_scene};
+use common::{temp_dir, write_scene};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use rondo::scene::assets::AssetCache;
-use rondo::scene::format::Method;
 use rondo::scene::load::load_scene;
 use rondo::shading::layers::Layers;
 use rondo::shading::material::Material;
@@ -386,29 +386,6 @@ fn sampled_directions_of_the_layers_follow_the_density() {
             "{what} {deg}°: χ² {chi2:.1} (limit {limit:.1})"
         );
     }
-}
-
-/// Writes a 16 × 8 OpenEXR map of constant grey radiance 1.
-fn write_white_map(dir: &Path) {
-    let image = image::Rgb32FImage::from_raw(16, 8, vec![1.0; 16 * 8 * 3]).expect("buffer size");
-    image.save(dir.join("one.exr")).expect("write map");
-}
-
-/// A unit ball of `material` in the white environment, 40 × 40 pixels.
-fn furnace_pixels(dir: &Path, material: &str, spp: u32) -> Vec<f64> {
-    let scene = write_scene(
-        dir,
-        "ball.ron",
-        &format!(
-            "Scene(camera: Camera(position: (0, 0, -4), look_at: (0, 0, 0), fov: 32), \
-             settings: Settings(width: 40, height: 40, max_depth: 8, \
-             environment: Environment(path: \"one.exr\")), materials: {{ \"m\": {material} }}, \
-             entities: [Entity(material: \"m\", shape: Sphere(center: (0, 0, 0), radius: 1))])"
-        ),
-    );
-    let r = render(&scene, with(Method::Mis, spp), None);
-    assert_eq!(r.stats().nonfinite, 0);
-    r.film().mean().iter().map(|p| f64::from(p.x)).collect()
 }
 
 #[test]

@@ -10,6 +10,7 @@ use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
 use common::chi2::chi2_test;
+use common::furnace::write_white_map;
 use common::gltf_doc::{Bin, doc};
 use common::{point_camera, render, temp_dir, with, write_scene};
 use glam::{Vec2, Vec3};
@@ -228,12 +229,6 @@ fn a_rough_interface_passes_on_all_that_arrives_and_tends_to_fresnel() {
             "θ {theta}: roughness 0.06 is {last} from Fresnel"
         );
     }
-}
-
-/// Writes a 16 × 8 OpenEXR map of constant grey radiance 1.
-fn write_white_map(dir: &Path) {
-    let image = image::Rgb32FImage::from_raw(16, 8, vec![1.0; 16 * 8 * 3]).expect("buffer size");
-    image.save(dir.join("one.exr")).expect("write map");
 }
 
 #[test]

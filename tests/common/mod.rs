@@ -5,6 +5,7 @@
 )]
 
 pub mod chi2;
+pub mod furnace;
 pub mod gltf_doc;
 pub mod watch_diff;
 
