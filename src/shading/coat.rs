@@ -145,14 +145,6 @@ impl Coated {
             }
             s.wi
         };
-        if wi.dot(n) <= 0.0 {
-            return None;
-        }
-        let (f_cos, pdf) = self.eval(wo, wi, n);
-        (pdf > 0.0 && pdf.is_finite()).then(|| PbrSample {
-            wi,
-            weight: f_cos / pdf,
-            pdf: Some(pdf),
-        })
+        PbrSample::evaluated(wi, n, self.eval(wo, wi, n))
     }
 }

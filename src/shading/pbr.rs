@@ -84,6 +84,20 @@ pub struct PbrSample {
     pub pdf: Option<f32>,
 }
 
+impl PbrSample {
+    /// The sample of direction `wi`, above the surface of normal `n`, from the BRDF's
+    /// `(f·cos θi, pdf)` there; `None` below the surface or where the density is not positive
+    /// and finite.
+    #[inline]
+    pub(super) fn evaluated(wi: Vec3, n: Vec3, (f_cos, pdf): (Vec3, f32)) -> Option<Self> {
+        (wi.dot(n) > 0.0 && pdf > 0.0 && pdf.is_finite()).then(|| Self {
+            wi,
+            weight: f_cos / pdf,
+            pdf: Some(pdf),
+        })
+    }
+}
+
 impl Pbr {
     /// The BRDF of base colour `base_color`, `metallic` and perceptual `roughness` (both in
     /// [0, 1]; out-of-range values are clamped).
@@ -336,15 +350,7 @@ impl Pbr {
             }
             s.wi
         };
-        if wi.dot(n) <= 0.0 {
-            return None;
-        }
-        let (f_cos, pdf) = self.eval(wo, wi, n);
-        (pdf > 0.0 && pdf.is_finite()).then(|| PbrSample {
-            wi,
-            weight: f_cos / pdf,
-            pdf: Some(pdf),
-        })
+        PbrSample::evaluated(wi, n, self.eval(wo, wi, n))
     }
 
     /// [`Pbr::sample`] of the BRDF under the sheen.
@@ -373,15 +379,7 @@ impl Pbr {
             let u = Vec2::new(((u.x - p_spec) / (1.0 - p_spec)).clamp(0.0, 1.0), u.y);
             frame.to_world(cosine_hemisphere(u)).normalize()
         };
-        if wi.dot(n) <= 0.0 {
-            return None;
-        }
-        let (f_cos, pdf) = self.eval_base(wo, wi, n);
-        (pdf > 0.0 && pdf.is_finite()).then(|| PbrSample {
-            wi,
-            weight: f_cos / pdf,
-            pdf: Some(pdf),
-        })
+        PbrSample::evaluated(wi, n, self.eval_base(wo, wi, n))
     }
 }
 
