@@ -418,6 +418,8 @@ def main():
                     help="seconds to match with the OIDN denoiser on (render + denoise)")
     ap.add_argument("--spp-list", default="", help="fixed spp renders")
     ap.add_argument("--threads", type=int, default=0)
+    ap.add_argument("--guiding", action="store_true",
+                    help="path guiding on (Open PGL; surface guiding, Cycles' defaults)")
     args = ap.parse_args()
     b = Builder(args.export)
     scene = b.build(tuple(args.size))
@@ -433,6 +435,9 @@ def main():
     c.denoising_input_passes = "RGB_ALBEDO_NORMAL"
     c.denoising_prefilter = "ACCURATE"
     c.denoising_quality = "HIGH"
+    if args.guiding:
+        c.use_guiding = True
+        c.use_surface_guiding = True
     print(json.dumps({"notes": sorted(b.notes)}), flush=True)
     os.makedirs(args.out, exist_ok=True)
 

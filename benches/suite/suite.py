@@ -183,6 +183,45 @@ def rondo_denoised(args, scene, size, budgets, raw, ref, own_ref, mi, out_img):
     return pts
 
 
+def cycles_curve(args, export, work, size, rondo_pts, budgets, own_ref, ref, mi, guiding):
+    """Cycles at equal time with rondo's raw renders (and at the denoised budgets): the raw
+    points, the denoised points and Cycles' notes. `guiding` turns on Cycles' path guiding
+    (Open PGL, surface guiding; it trains on its first samples)."""
+    cmd = [args.cycles_python, os.path.join(HERE, "cycles_render.py"), export,
+           os.path.join(work, "cycles_guiding" if guiding else "cycles"),
+           "--size", str(size[0]), str(size[1]),
+           "--targets", ",".join("%.4f" % p["t"] for p in rondo_pts),
+           "--denoise-targets", ",".join("%g" % b for b in budgets)]
+    if args.threads:
+        cmd += ["--threads", str(args.threads)]
+    if guiding:
+        cmd += ["--guiding"]
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0:
+        sys.exit("cycles failed:\n%s" % p.stderr[-3000:])
+    pts, dpts, notes = [], [], []
+    for line in p.stdout.splitlines():
+        if not line.startswith("{"):
+            continue
+        d = json.loads(line)
+        if "notes" in d:
+            notes = d["notes"]
+            continue
+        img = read_exr(mi, d["file"])
+        pix = img.shape[0] * img.shape[1]
+        pt = {"spp": d["spp"], "t": d["seconds"], "wall": d["wall"], "err": err(img, own_ref),
+              "msps": d["spp"] * pix / d["seconds"] / 1e6, "mean": means(img, ref)}
+        if d.get("denoised"):
+            pt["budget"] = d["target"]
+            dpts.append(pt)
+        else:
+            pts.append(pt)
+        print("  cycles%s%s %5d spp %8.3f s (call %.3f s) err %.4e" % (
+            " guiding" if guiding else "", "+OIDN" if d.get("denoised") else "     ", d["spp"],
+            d["seconds"], d["wall"], pt["err"]), flush=True)
+    return pts, dpts, notes
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scenes", default=",".join(ALL),
@@ -197,9 +236,15 @@ def main():
                     help="time budgets (s) of the denoised renders, rondo's and Cycles'")
     ap.add_argument("--reference-spp", type=int, default=1024)
     ap.add_argument("--reference-sampler", default="ldsampler")
+    ap.add_argument("--rondo-reference", default="", metavar="METHOD:SPP",
+                    help="measure every renderer's err against rondo's render with METHOD at SPP "
+                    "(e.g. caustics:4096, for caustics a path tracer's reference leaves noisy); "
+                    "the means stay against Mitsuba's reference")
     ap.add_argument("--rondo", default=os.path.join(ROOT, "target", "release", "rondo"))
     ap.add_argument("--cycles-python", default=None, help="Python of the Cycles venv")
     ap.add_argument("--no-cycles", action="store_true")
+    ap.add_argument("--cycles-guiding", action="store_true",
+                    help="also Cycles with path guiding on (a second Cycles column)")
     ap.add_argument("--threads", type=int, default=0, help="render threads (0: all)")
     ap.add_argument("--rondo-methods", default="",
                     help="rondo's light-transport methods, comma-separated (default: the "
@@ -256,6 +301,16 @@ def main():
         ref = read_exr(mi, ref_path)
         refs = own_references(args, name, scene, export, work, size, mi) \
             if name in OWN_REFERENCE else {}
+        if args.rondo_reference:
+            method, spp = args.rondo_reference.split(":")
+            path = os.path.join(work, "rondo_%s_reference_%dx%d_%s.exr" % ((method,) + size
+                                                                            + (spp,)))
+            r = rondo_render(args.rondo, scene, int(spp), size, 30_000, path, args.threads,
+                             method=method)
+            print("  rondo %s reference %s spp, %.1f s: every renderer's err against it" % (
+                method, spp, r["t"]), flush=True)
+            common = read_exr(mi, path)
+            refs = {"rondo": common, "cycles": common, "mitsuba": common}
 
         curves = {}
         out_img = os.path.join(work, "rondo.exr")
@@ -311,7 +366,7 @@ def main():
                         break
                     n = max(1, round(n * rp["t"] / t))
                 pix = img.shape[0] * img.shape[1]
-                pts.append({"spp": n, "t": t, "err": err(img, ref),
+                pts.append({"spp": n, "t": t, "err": err(img, refs.get("mitsuba", ref)),
                             "msps": n * pix / t / 1e6, "mean": means(img, ref)})
                 print("  mitsuba/%-11s %5d spp %8.3f s err %.4e" % (sampler, n, t,
                                                                      pts[-1]["err"]),
@@ -320,44 +375,20 @@ def main():
             curves["mitsuba " + sampler + " notes"] = notes
 
         if not args.no_cycles:
-            cy_out = os.path.join(work, "cycles")
-            cmd = [args.cycles_python, os.path.join(HERE, "cycles_render.py"), export, cy_out,
-                   "--size", str(size[0]), str(size[1]),
-                   "--targets", ",".join("%.4f" % p["t"] for p in rondo_pts),
-                   "--denoise-targets", ",".join("%g" % b for b in budgets)]
-            if args.threads:
-                cmd += ["--threads", str(args.threads)]
-            p = subprocess.run(cmd, capture_output=True, text=True)
-            if p.returncode != 0:
-                sys.exit("cycles failed:\n%s" % p.stderr[-3000:])
-            pts, dpts, notes = [], [], []
-            for line in p.stdout.splitlines():
-                if not line.startswith("{"):
-                    continue
-                d = json.loads(line)
-                if "notes" in d:
-                    notes = d["notes"]
-                    continue
-                img = read_exr(mi, d["file"])
-                pix = img.shape[0] * img.shape[1]
-                pt = {"spp": d["spp"], "t": d["seconds"], "wall": d["wall"],
-                      "err": err(img, refs.get("cycles", ref)),
-                      "msps": d["spp"] * pix / d["seconds"] / 1e6,
-                      "mean": means(img, ref)}
-                if d.get("denoised"):
-                    pt["budget"] = d["target"]
-                    dpts.append(pt)
-                else:
-                    pts.append(pt)
-                print("  cycles%s %5d spp %8.3f s (call %.3f s) err %.4e" % (
-                    "+OIDN" if d.get("denoised") else "     ", d["spp"], d["seconds"],
-                    d["wall"], pt["err"]), flush=True)
+            pts, dpts, notes = cycles_curve(args, export, work, size, rondo_pts, budgets,
+                                            refs.get("cycles", ref), ref, mi, guiding=False)
             curves["cycles"] = pts
             if budgets:
                 denoised["cycles"] = dpts
             curves["cycles notes"] = notes
+            if args.cycles_guiding:
+                pts, _, notes = cycles_curve(args, export, work, size, rondo_pts, [],
+                                             refs.get("cycles", ref), ref, mi, guiding=True)
+                curves["cycles guiding"] = pts
+                curves["cycles guiding notes"] = notes
 
         row = summarise(name, size, args, curves, denoised)
+        row["own_reference"] = name in OWN_REFERENCE
         rows.append(row)
         json.dump({"size": size, "curves": curves, "denoised": denoised, "row": row},
                   open(os.path.join(work, "result.json"), "w"), indent=1)
@@ -454,15 +485,17 @@ def table(rows, args):
             " | ".join("%.2f" % r["E"][p] if p in r["E"] else "" for p in peers),
             " | ".join("%.2f" % r["peer_msps"][p] if p in r["peer_msps"] else "" for p in peers),
             m("rondo"), " | ".join(m(p) for p in peers)))
-    lines += denoised_table(rows)
+    lines += denoised_table(rows, args.reference_spp)
     text = "\n".join(lines) + "\n"
     print()
     print(text)
     open(os.path.join(args.out, "summary.md"), "w").write(text)
 
 
-def denoised_table(rows):
-    """Denoised error at each time budget, rondo's beside Cycles + OIDN's."""
+def denoised_table(rows, reference_spp):
+    """Denoised error at each time budget, rondo's beside Cycles + OIDN's. On a scene measured
+    against each renderer's own reference, a render of more than a quarter of the reference's
+    samples is marked: its error is then mostly the reference's own noise, not the render's."""
     budgets = []
     for r in rows:
         for pts in r["denoised"].values():
@@ -474,7 +507,10 @@ def denoised_table(rows):
     who = ["rondo", "cycles"]
     lines = ["", "Denoised (Open Image Denoise, albedo and normal guides, quality high): clamped "
              "RMSE against the same reference at each time budget (render + denoise; Cycles' "
-             "own render time, its denoiser included), spp and measured time in brackets.", "",
+             "own render time, its denoiser included), spp and measured time in brackets. "
+             "† a render of more than a quarter of its own reference's %d samples: the error "
+             "measures mostly the reference's noise (compare only unmarked cells)." % reference_spp,
+             "",
              "| scene | size | " + " | ".join("%s + OIDN, %g s" % (w, b) for b in budgets
                                                for w in who) + " |",
              "|" + "---|" * (2 + len(budgets) * len(who))]
@@ -483,8 +519,10 @@ def denoised_table(rows):
         for b in budgets:
             for w in who:
                 p = [q for q in r["denoised"].get(w, []) if q["budget"] == b]
-                cells.append("%.4f (%d spp, %.2f s)" % (p[0]["err"], p[0]["spp"], p[0]["t"])
-                             if p else "")
+                mark = "†" if p and r.get("own_reference") and 4 * p[0]["spp"] > reference_spp \
+                    else ""
+                cells.append("%.4f%s (%d spp, %.2f s)" % (p[0]["err"], mark, p[0]["spp"],
+                                                         p[0]["t"]) if p else "")
         lines.append("| %s | %s | %s |" % (r["scene"], r["size"], " | ".join(cells)))
     return lines
 
