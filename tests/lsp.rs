@@ -336,6 +336,65 @@ fn a_typo_in_the_buffer_is_reported_at_its_exact_range() {
 }
 
 #[test]
+fn an_unsaved_prefab_buffer_stands_for_its_file_in_the_scenes_that_place_it() {
+    let dir = temp_dir("lsp-prefab-buffer");
+    let (_, uri) = workspace(&dir);
+    let prefab_uri = format!("file://{}", dir.join("prefabs/box.ron").display());
+    let mut c = Client::start();
+    c.initialize();
+    c.open(&uri, SCENE);
+    assert_eq!(errors(&c.diagnostics(&uri)).len(), 0);
+
+    // The buffer names a material the prefab does not define; the file on disk is still good.
+    let broken = PREFAB.replace("material: \"surface\"", "material: \"surfac\"");
+    c.open(&prefab_uri, &broken);
+    let scene_d = c.diagnostics(&uri);
+    let e = errors(&scene_d);
+    assert_eq!(e.len(), 1, "the scene's load reads the buffer: {scene_d:?}");
+    assert!(
+        e[0]["message"]
+            .as_str()
+            .is_some_and(|m| m.contains("box.ron")),
+        "{scene_d:?}"
+    );
+    let prefab_d = c.diagnostics(&prefab_uri);
+    let e = errors(&prefab_d);
+    assert_eq!(e.len(), 1, "shown in the prefab's buffer too: {prefab_d:?}");
+    let typo = broken.find("\"surfac\"").expect("typo");
+    assert_eq!(e[0]["range"]["start"], pos_json(position(&broken, typo)));
+    assert_eq!(
+        e[0]["range"]["end"],
+        pos_json(position(&broken, typo + "\"surfac\"".len()))
+    );
+
+    // Mended in the buffer: both clear.
+    c.notify(
+        "textDocument/didChange",
+        json!({"textDocument": {"uri": prefab_uri, "version": 2},
+               "contentChanges": [{"text": PREFAB}]}),
+    );
+    assert_eq!(errors(&c.diagnostics(&uri)).len(), 0);
+    assert_eq!(errors(&c.diagnostics(&prefab_uri)).len(), 0);
+
+    // Broken again, then closed unsaved: the scene reads the file on disk again.
+    c.notify(
+        "textDocument/didChange",
+        json!({"textDocument": {"uri": prefab_uri, "version": 3},
+               "contentChanges": [{"text": broken}]}),
+    );
+    assert_eq!(errors(&c.diagnostics(&uri)).len(), 1);
+    c.notify(
+        "textDocument/didClose",
+        json!({"textDocument": {"uri": prefab_uri}}),
+    );
+    assert_eq!(errors(&c.diagnostics(&uri)).len(), 0);
+    c.request("shutdown", Value::Null);
+    c.notify("exit", Value::Null);
+    let (status, _) = c.finish();
+    assert_eq!(status.code(), Some(0));
+}
+
+#[test]
 fn definition_goes_to_the_material_the_prefab_and_its_names() {
     let dir = temp_dir("lsp-definition");
     let (_, uri) = workspace(&dir);

@@ -4,9 +4,13 @@
 //! A scene buffer is loaded as [`crate::scene::load::load_scene_source`] loads any scene text,
 //! with an [`AssetCache`] kept per document: like `watch`, a keystroke re-parses only the
 //! entities it touched, and meshes, textures and glTF files are read again only when their files
-//! change. A prefab buffer is parsed as a prefab (its names are checked where it is placed).
+//! change. A prefab buffer is parsed as a prefab; what the loads of the open scenes that place
+//! it find in it (a material name it does not map, a field out of range) is shown in it too. An
+//! open prefab buffer stands for its file in those loads, saved or not ([`Analysis::set_overlays`]).
 
-use std::path::Path;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use lsp_types::{
     Diagnostic, DiagnosticRelatedInformation, DiagnosticSeverity, Location, NumberOrString,
@@ -26,6 +30,38 @@ pub struct Analysis {
     assets: AssetCache,
     /// The last scene that loaded from the buffer (for hovers that need the expanded scene).
     pub scene: Option<LoadedScene>,
+    /// What the last load found in other files (the prefabs it placed), for their buffers.
+    pub elsewhere: Vec<Finding>,
+}
+
+/// An error or warning of a scene's load located in another file than the scene's.
+#[derive(Clone, Debug)]
+pub struct Finding {
+    /// The file it is in (as the loader named it).
+    pub file: PathBuf,
+    /// 1-based line and column in characters, when known.
+    located: Option<(usize, usize)>,
+    message: String,
+    severity: DiagnosticSeverity,
+    code: Option<NumberOrString>,
+}
+
+impl Finding {
+    /// The diagnostic of this finding in `doc`, the open buffer of its file.
+    pub fn in_buffer(&self, doc: &Document) -> Diagnostic {
+        let range = match self.located {
+            Some((line, col)) => token_at(&doc.text, doc.offset_of_line_col(line, col)),
+            None => 0..0,
+        };
+        Diagnostic {
+            range: doc.range(range),
+            severity: Some(self.severity),
+            code: self.code.clone(),
+            source: Some("rondo".into()),
+            message: self.message.clone(),
+            ..Diagnostic::default()
+        }
+    }
 }
 
 impl Default for Analysis {
@@ -37,6 +73,7 @@ impl Default for Analysis {
         Self {
             assets,
             scene: None,
+            elsewhere: Vec::new(),
         }
     }
 }
@@ -47,17 +84,38 @@ impl Analysis {
         self.assets.invalidate_all();
     }
 
-    /// The diagnostics of `doc`, a scene (`prefab` false) or a prefab buffer, whose file is
-    /// `path`.
-    pub fn diagnose(&mut self, doc: &Document, path: &Path, prefab: bool) -> Vec<Diagnostic> {
-        if prefab {
-            return match parse::<PrefabDesc>(path, &doc.text) {
-                Ok(_) => Vec::new(),
-                Err(e) => vec![error(doc, path, &e)],
-            };
-        }
-        match load_scene_source(path, doc.text.clone(), &mut self.assets) {
+    /// Loads of this scene read the texts of `overlays` (canonical paths) instead of those
+    /// files: the editor's open prefab buffers.
+    pub fn set_overlays(&mut self, overlays: HashMap<PathBuf, Arc<str>>) {
+        self.assets.set_overlays(overlays);
+    }
+
+    /// The diagnostics of `doc`, a prefab buffer whose file is `path`: its parse error, else
+    /// `found`, what the open scenes' loads found in it.
+    pub fn diagnose_prefab(doc: &Document, path: &Path, found: &[Finding]) -> Vec<Diagnostic> {
+        match parse::<PrefabDesc>(path, &doc.text) {
+            Ok(_) => found.iter().map(|f| f.in_buffer(doc)).collect(),
             Err(e) => vec![error(doc, path, &e)],
+        }
+    }
+
+    /// The diagnostics of `doc`, a scene buffer whose file is `path`; what the load finds in
+    /// other files is kept in [`Analysis::elsewhere`].
+    pub fn diagnose(&mut self, doc: &Document, path: &Path) -> Vec<Diagnostic> {
+        self.elsewhere.clear();
+        match load_scene_source(path, doc.text.clone(), &mut self.assets) {
+            Err(e) => {
+                if e.path != path {
+                    self.elsewhere.push(Finding {
+                        file: e.path.clone(),
+                        located: e.location.map(|l| (l.line, l.col)),
+                        message: e.message.clone(),
+                        severity: DiagnosticSeverity::ERROR,
+                        code: None,
+                    });
+                }
+                vec![error(doc, path, &e)]
+            }
             Ok(scene) => {
                 let mut out: Vec<Diagnostic> = scene
                     .warnings
@@ -72,10 +130,20 @@ impl Analysis {
                     .collect();
                 for w in check_scene(&scene) {
                     let located = w.location.map(|l| (l.line, l.col));
+                    let code = Some(NumberOrString::String(format!("{:?}", w.kind)));
                     let mut d = at(doc, path, &w.path, located, &w.message, &w.to_string());
                     d.severity = Some(DiagnosticSeverity::WARNING);
-                    d.code = Some(NumberOrString::String(format!("{:?}", w.kind)));
+                    d.code = code.clone();
                     out.push(d);
+                    if w.path != path {
+                        self.elsewhere.push(Finding {
+                            file: w.path.clone(),
+                            located,
+                            message: w.message.clone(),
+                            severity: DiagnosticSeverity::WARNING,
+                            code,
+                        });
+                    }
                 }
                 self.scene = Some(scene);
                 out

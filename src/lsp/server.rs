@@ -7,6 +7,8 @@
 //! `initialize`: -32002) and the server goes on.
 
 use std::collections::{BTreeSet, HashMap};
+use std::path::PathBuf;
+use std::sync::Arc;
 
 use lsp_types::{
     CompletionOptions, CompletionParams, CompletionResponse, DidChangeTextDocumentParams,
@@ -21,7 +23,7 @@ use serde_json::{Value, json};
 
 use super::completion::completion;
 use super::definition::definition;
-use super::diagnostics::Analysis;
+use super::diagnostics::{Analysis, Finding};
 use super::documents::{Document, Documents};
 use super::hover::hover;
 use super::outline::{Outline, outline, top_name};
@@ -69,6 +71,13 @@ pub struct Server {
     outlines: HashMap<String, Outline>,
     /// Documents whose diagnostics are out of date.
     dirty: BTreeSet<String>,
+    /// The open prefab buffers' texts by their files' canonical paths: every scene's load
+    /// reads them instead of the files.
+    overlays: HashMap<PathBuf, Arc<str>>,
+    /// A prefab buffer was closed: the scenes' loads read its file from disk again.
+    prefab_closed: bool,
+    /// A scene buffer was closed: what its loads found in prefabs goes from their buffers.
+    scene_closed: bool,
 }
 
 impl Default for Server {
@@ -86,6 +95,9 @@ impl Server {
             analyses: HashMap::new(),
             outlines: HashMap::new(),
             dirty: BTreeSet::new(),
+            overlays: HashMap::new(),
+            prefab_closed: false,
+            scene_closed: false,
         }
     }
 
@@ -141,22 +153,90 @@ impl Server {
     }
 
     /// Publishes the diagnostics of every document changed since the last call, to `out`.
+    ///
+    /// Open prefab buffers stand for their files in every scene's load: when one changed (or
+    /// was closed), every open scene is analysed again, and every open prefab buffer gets what
+    /// those loads found in it.
     pub fn publish(&mut self, out: &mut Vec<Value>) {
-        for uri in std::mem::take(&mut self.dirty) {
-            let Some(doc) = self.documents.get(&uri) else {
+        let dirty = std::mem::take(&mut self.dirty);
+        let prefab_changed = std::mem::take(&mut self.prefab_closed)
+            || dirty
+                .iter()
+                .any(|uri| self.documents.get(uri).is_some_and(is_prefab));
+        let (mut scenes, mut prefabs) = (BTreeSet::new(), BTreeSet::new());
+        for uri in self.documents.uris() {
+            let Some(doc) = self.documents.get(uri) else {
+                continue;
+            };
+            match is_prefab(doc) {
+                true if prefab_changed || dirty.contains(uri) => prefabs.insert(uri.clone()),
+                false if prefab_changed || dirty.contains(uri) => scenes.insert(uri.clone()),
+                _ => false,
+            };
+        }
+        if prefab_changed {
+            self.overlays = self.prefab_overlays();
+        }
+        for uri in &scenes {
+            let Some(doc) = self.documents.get(uri) else {
                 continue;
             };
             let Some(path) = doc.path.clone() else {
                 continue;
             };
-            let prefab = top_name(&doc.text) == "Prefab";
-            let analysis = self.analyses.entry(uri.clone()).or_default();
-            let diagnostics = analysis.diagnose(doc, &path, prefab);
-            out.push(notification(
-                "textDocument/publishDiagnostics",
-                json!({"uri": uri, "version": doc.version, "diagnostics": diagnostics}),
-            ));
+            let analysis = self.analyses.entry(uri.clone()).or_insert_with(|| {
+                let mut a = Analysis::default();
+                a.set_overlays(self.overlays.clone());
+                a
+            });
+            if prefab_changed {
+                analysis.set_overlays(self.overlays.clone());
+            }
+            let diagnostics = analysis.diagnose(doc, &path);
+            out.push(publication(uri, doc, diagnostics));
         }
+        if !scenes.is_empty() || std::mem::take(&mut self.scene_closed) {
+            prefabs.extend(
+                self.documents
+                    .uris()
+                    .filter(|u| self.documents.get(u).is_some_and(is_prefab))
+                    .cloned(),
+            );
+        }
+        for uri in &prefabs {
+            let Some(doc) = self.documents.get(uri) else {
+                continue;
+            };
+            let Some(path) = doc.path.clone() else {
+                continue;
+            };
+            let canonical = std::fs::canonicalize(&path).ok();
+            let found: Vec<Finding> = self
+                .analyses
+                .values()
+                .flat_map(|a| &a.elsewhere)
+                .filter(|f| {
+                    f.file == path
+                        || canonical.is_some() && std::fs::canonicalize(&f.file).ok() == canonical
+                })
+                .cloned()
+                .collect();
+            let diagnostics = Analysis::diagnose_prefab(doc, &path, &found);
+            out.push(publication(uri, doc, diagnostics));
+        }
+    }
+
+    /// The open prefab buffers' texts by their files' canonical paths.
+    fn prefab_overlays(&self) -> HashMap<PathBuf, Arc<str>> {
+        self.documents
+            .uris()
+            .filter_map(|uri| self.documents.get(uri))
+            .filter(|doc| is_prefab(doc))
+            .filter_map(|doc| {
+                let canonical = std::fs::canonicalize(doc.path.as_ref()?).ok()?;
+                Some((canonical, Arc::from(doc.text.as_str())))
+            })
+            .collect()
     }
 
     fn request(&mut self, method: &str, params: Value) -> Result<Value, Failure> {
@@ -301,6 +381,11 @@ impl Server {
             (_, "textDocument/didClose") => {
                 if let Some(p) = params_or_log::<DidCloseTextDocumentParams>(method, params) {
                     let uri = p.text_document.uri.as_str().to_string();
+                    match self.documents.get(&uri).map(is_prefab) {
+                        Some(true) => self.prefab_closed = true,
+                        Some(false) => self.scene_closed = true,
+                        None => {}
+                    }
                     self.documents.close(&uri);
                     self.forget(&uri, out);
                 }
@@ -345,6 +430,19 @@ impl Server {
             out.push(notification("textDocument/publishDiagnostics", params));
         }
     }
+}
+
+/// Whether `doc` is a prefab file (its top-level value is a `Prefab`).
+fn is_prefab(doc: &Document) -> bool {
+    top_name(&doc.text) == "Prefab"
+}
+
+/// The `publishDiagnostics` notification of `doc`.
+fn publication(uri: &str, doc: &Document, diagnostics: Vec<lsp_types::Diagnostic>) -> Value {
+    notification(
+        "textDocument/publishDiagnostics",
+        json!({"uri": uri, "version": doc.version, "diagnostics": diagnostics}),
+    )
 }
 
 /// What the server can do.

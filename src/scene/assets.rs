@@ -46,6 +46,8 @@ pub struct AssetCache {
     requested: Vec<PathBuf>,
     /// The same paths, for O(1) membership (a scene can ask for 10⁵ files).
     requested_set: HashSet<PathBuf>,
+    /// Texts that stand for files (canonical paths): an editor's unsaved prefab buffers.
+    overlays: HashMap<PathBuf, Arc<str>>,
 }
 
 /// What identifies the content of a file without reading it: metadata of the file a path
@@ -345,6 +347,17 @@ impl AssetCache {
         bytes: &[u8],
     ) -> Result<(u32, u32, Vec<f32>), String> {
         decode_environment_pixels(path, bytes)
+    }
+
+    /// Reads each file of `overlays` (canonical paths) as the text given instead of from
+    /// disk, replacing the overlays set before: the language server's unsaved prefab buffers.
+    pub fn set_overlays(&mut self, overlays: HashMap<PathBuf, Arc<str>>) {
+        self.overlays = overlays;
+    }
+
+    /// The text standing for the file at `canonical`, if one was set.
+    pub fn overlay(&self, canonical: &Path) -> Option<&str> {
+        self.overlays.get(canonical).map(|t| &**t)
     }
 
     /// Starts a scene load: forgets the paths asked for by the previous one.

@@ -74,7 +74,11 @@ impl Expander<'_> {
         let loaded = match self.prefabs.get(&canonical) {
             Some(p) => p.clone(),
             None => {
-                let source = std::fs::read_to_string(&path).map_err(|err| {
+                let source = match self.assets.overlay(&canonical) {
+                    Some(text) => Ok(text.to_string()),
+                    None => std::fs::read_to_string(&path),
+                };
+                let source = source.map_err(|err| {
                     file.error(
                         at,
                         Some(prefab),
