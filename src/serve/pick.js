@@ -24,7 +24,8 @@
     #pick .dim { color: var(--dim); }
     #pick a { color: #8fb8ff; }
     #pick ol { margin: 2px 0 0; padding-left: 2.5ch; }
-    #pick-outline { position: absolute; pointer-events: none; image-rendering: pixelated; }`;
+    #pick-outline { position: absolute; pointer-events: none; image-rendering: pixelated;
+                    background: transparent; margin: 0; }`;
   document.head.append(style);
 
   const panel = document.createElement("aside");
@@ -56,9 +57,10 @@
         if (magic !== "RONDOIDS") continue;
         const head = new DataView(buffer, 8, 12);
         const width = head.getUint32(0, true), height = head.getUint32(4, true);
-        state.ids = { width, height, reload: head.getUint32(8, true),
-                      data: new Uint32Array(buffer, 20, width * height) };
-        state.entries = new Map();
+        const reload = head.getUint32(8, true);
+        // Entries hold for a reload's scene: only a new reload's ids make them stale.
+        if (!state.ids || state.ids.reload !== reload) state.entries = new Map();
+        state.ids = { width, height, reload, data: new Uint32Array(buffer, 20, width * height) };
         state.hover = null;
         document.body.dataset.pickReload = String(state.ids.reload);
         await repin();
@@ -170,13 +172,13 @@
     const e = id === SKY ? null : await entry(id);
     if (seq !== state.seq) return;
     render(id, e);
-    // To the panel's DOM updated, and to the start of the frame that paints it.
+    // To the panel's DOM updated, and to the frame that paints it.
     const body = document.body.dataset;
     body.pickMs = (performance.now() - start).toFixed(2);
     body.pickCached = String(cached);
-    requestAnimationFrame((frame) => {
+    requestAnimationFrame(() => {
       if (seq !== state.seq) return;
-      body.pickFrameMs = (frame - start).toFixed(2);
+      body.pickFrameMs = (performance.now() - start).toFixed(2);
       body.picks = String((Number(body.picks) || 0) + 1);
     });
   }
@@ -278,4 +280,6 @@
   new MutationObserver(place).observe(canvas, { attributes: true, attributeFilter: ["style", "width", "height"] });
   window.addEventListener("resize", place);
   window.rondoPick = state;
+  // The `pick` event may have come while this script loaded.
+  fetchIds();
 })();

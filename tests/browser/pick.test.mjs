@@ -34,10 +34,11 @@ function check(name, ok, detail = "") {
   else { failed++; console.log(`FAIL ${name}${detail ? `: ${detail}` : ""}`); }
 }
 
-// 64×64, camera at (0, 0, −5) looking at the origin, fov 40°: 17.6 pixels per unit at z = 0.
-// Pixel (14, 32) sees only the ball, (50, 32) only the crate's box, (32, 32) only the wall
-// (z = 5, ±2), (2, 2) the sky. The crate's box spans pixel columns 40..60 and rows 22..41 (its
-// front face at z = −0.5, its left side reaching back to z = 0.5).
+// 64×64, camera at (0, 0, −5) looking at the origin (+z), up +y, fov 40°: image x grows along
+// forward × up = −x, 17.6 pixels per unit at z = 0. Pixel (49, 32) sees only the ball (x = −1),
+// (14, 32) only the crate's box, (32, 32) only the wall (z = 5, ±2), (2, 2) the sky. The crate's
+// box spans pixel columns 3..23 and rows 22..41 (its front face at z = −0.5, x from 0.5 to 1.5;
+// its side at x = 0.5 reaching back to z = 0.5).
 const SCENE = `Scene(
     camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0), fov: 40.0),
     settings: Settings(width: 64, height: 64, spp: 4, max_depth: 3),
@@ -126,7 +127,23 @@ async function hover(page, x, y, id) {
   const width = await page.evaluate(() => document.getElementById("canvas").width);
   const scale = box.width / width;
   await page.mouse.move(box.x + (x + 0.5) * scale, box.y + (y + 0.5) * scale);
-  await page.waitForFunction((id) => document.getElementById("pick").dataset.id === id, id, { timeout: WAIT });
+  try {
+    await page.waitForFunction((id) => document.getElementById("pick").dataset.id === id, id, { timeout: WAIT });
+  } catch (e) {
+    const seen = await page.evaluate(() => document.getElementById("pick").dataset.id).catch(() => "?");
+    throw new Error(`hover over (${x}, ${y}) never showed id ${id}: the panel shows ${seen}\n${e.stack}`);
+  }
+}
+
+// Waits until the page has an image and its ids; on timeout, the error says what it has.
+async function waitPicks(page) {
+  try {
+    await page.waitForFunction(() => document.body.dataset.pickReload !== undefined
+      && !document.getElementById("canvas").hidden, null, { timeout: WAIT });
+  } catch (e) {
+    const seen = await page.evaluate(() => JSON.stringify(document.body.dataset)).catch(() => "?");
+    throw new Error(`the page never had an image and its ids: ${seen}\n${e.stack}`);
+  }
 }
 
 const text = (page, selector) => page.textContent(selector);
@@ -142,18 +159,18 @@ async function behaviour(context) {
     const url = await rondo.url;
     await context.grantPermissions(["clipboard-read", "clipboard-write"], { origin: new URL(url).origin });
     const page = await context.newPage();
+    page.on("pageerror", (e) => console.log(`page error: ${e.message}`));
     await page.goto(url);
-    await page.waitForFunction(() => document.body.dataset.pickReload !== undefined
-      && !document.getElementById("canvas").hidden, null, { timeout: WAIT });
+    await waitPicks(page);
     const { width, ids } = await fetchIds(url);
     const table = await (await fetch(new URL("/pick/table.json", url))).json();
     const idOf = (name) => table.entities.find((e) => e.name === name).id;
     check("the ids name the ball, the crate's box, the wall and the sky at known pixels",
-      ids[32 * width + 14] === idOf("ball") && ids[32 * width + 50] === idOf("crate/box")
+      ids[32 * width + 49] === idOf("ball") && ids[32 * width + 14] === idOf("crate/box")
         && ids[32 * width + 32] === idOf("wall") && ids[2 * width + 2] === SKY,
-      `${ids[32 * width + 14]} ${ids[32 * width + 50]} ${ids[32 * width + 32]} ${ids[2 * width + 2]}`);
+      `${ids[32 * width + 49]} ${ids[32 * width + 14]} ${ids[32 * width + 32]} ${ids[2 * width + 2]}`);
 
-    await hover(page, 14, 32, String(idOf("ball")));
+    await hover(page, 49, 32, String(idOf("ball")));
     check("hover: the ball's name", (await text(page, "#pick .name")) === "ball", await text(page, "#pick .name"));
     check("... its place", (await text(page, "#pick .entity")) === locate(file, 'Entity(name: "ball"', '"ball"'),
       await text(page, "#pick .entity"));
@@ -163,7 +180,7 @@ async function behaviour(context) {
       `${await text(page, "#pick .material")} ${await text(page, "#pick .material-at")}`);
     check("... and no placement", (await page.locator("#pick .chain").count()) === 0);
 
-    await hover(page, 50, 32, String(idOf("crate/box")));
+    await hover(page, 14, 32, String(idOf("crate/box")));
     const boxAt = locate(crate, "entities", '"box"');
     check("hover: the prefab's box by its full name", (await text(page, "#pick .name")) === "crate/box",
       await text(page, "#pick .name"));
@@ -177,19 +194,19 @@ async function behaviour(context) {
       await text(page, "#pick .chain"));
     const [l, c] = boxAt.slice(crate.length + 1).split(":");
     const href = await page.getAttribute("#pick a.entity", "href");
-    check("--editor-url makes the place a link", href === `vscode://file${crate}:${l}:${c}`, href);
+    check("--editor-url makes the place a link", href === `vscode://file/${crate}:${l}:${c}`, href);
 
     await hover(page, 2, 2, "sky");
     check("hover over the sky says so", (await text(page, "#pick .name")) === "sky (no entity)");
 
     // Click: pinned, outlined, copied.
-    await hover(page, 50, 32, String(idOf("crate/box")));
+    await hover(page, 14, 32, String(idOf("crate/box")));
     const canvasBox = await page.locator("#canvas").boundingBox();
     const scale = canvasBox.width / width;
-    await page.mouse.click(canvasBox.x + 50.5 * scale, canvasBox.y + 32.5 * scale);
+    await page.mouse.click(canvasBox.x + 14.5 * scale, canvasBox.y + 32.5 * scale);
     await page.waitForFunction(() => document.getElementById("pick").dataset.pinned === "true"
       && !document.getElementById("pick-outline").hidden, null, { timeout: WAIT });
-    await hover(page, 14, 32, String(idOf("crate/box")));
+    await hover(page, 49, 32, String(idOf("crate/box")));
     check("a click pins the entity: hovering elsewhere keeps it", (await text(page, "#pick .name")) === "crate/box");
     const copied = await page.getAttribute("#pick", "data-copied");
     const clipboard = await page.evaluate(() => navigator.clipboard.readText()).catch((e) => `unreadable: ${e}`);
@@ -219,12 +236,14 @@ async function behaviour(context) {
       `${got.length} outlined, ${want.length} expected`);
     const xs = got.map((i) => i % 64), ys = got.map((i) => Math.floor(i / 64));
     const bounds = [Math.min(...xs), Math.max(...xs), Math.min(...ys), Math.max(...ys)];
-    check("... around the box's projection (columns 40..60, rows 22..41)",
-      Math.abs(bounds[0] - 40) <= 1 && Math.abs(bounds[1] - 60) <= 1 && Math.abs(bounds[2] - 22) <= 1
+    check("... around the box's projection (columns 3..23, rows 22..41)",
+      Math.abs(bounds[0] - 3) <= 1 && Math.abs(bounds[1] - 23) <= 1 && Math.abs(bounds[2] - 22) <= 1
         && Math.abs(bounds[3] - 41) <= 1, String(bounds));
     const overlay = await page.locator("#pick-outline").boundingBox();
-    check("... laid over the image", Math.abs(overlay.x - canvasBox.x) < 1 && Math.abs(overlay.width - canvasBox.width) < 1,
-      JSON.stringify([overlay, canvasBox]));
+    const background = await page.evaluate(() => getComputedStyle(document.getElementById("pick-outline")).backgroundColor);
+    check("... laid over the image, which shows through", Math.abs(overlay.x - canvasBox.x) < 1
+      && Math.abs(overlay.width - canvasBox.width) < 1 && background === "rgba(0, 0, 0, 0)",
+      JSON.stringify([overlay, canvasBox, background]));
     if (screenshot) { await page.screenshot({ path: screenshot }); console.log(`wrote ${screenshot}`); }
 
     await page.keyboard.press("Escape");
@@ -252,12 +271,20 @@ async function latency(context) {
     const url = await rondo.url;
     const page = await context.newPage();
     await page.goto(url);
-    await page.waitForFunction(() => document.body.dataset.pickReload !== undefined
-      && !document.getElementById("canvas").hidden, null, { timeout: WAIT });
+    await waitPicks(page);
     const { width, height, ids } = await fetchIds(url);
-    // One pixel of each id seen, in a fixed order.
+    // One pixel of each id seen, in a fixed order, inside its entity (its 5×5 neighbourhood
+    // of the same id), so that a mouse position rounded to a screen pixel stays on it.
+    const inside = (i) => {
+      const x = i % width, y = Math.floor(i / width);
+      if (x < 2 || y < 2 || x >= width - 2 || y >= height - 2) return false;
+      for (let dy = -2; dy <= 2; dy++) {
+        for (let dx = -2; dx <= 2; dx++) if (ids[i + dy * width + dx] !== ids[i]) return false;
+      }
+      return true;
+    };
     const first = new Map();
-    for (let i = 0; i < ids.length; i += 7) if (!first.has(ids[i])) first.set(ids[i], i);
+    for (let i = 0; i < ids.length; i += 7) if (!first.has(ids[i]) && inside(i)) first.set(ids[i], i);
     const spots = [...first.values()];
     let previous = null;
     for (let k = 0; k < HOVERS; k++) {
@@ -266,7 +293,8 @@ async function latency(context) {
       previous = ids[i];
       const before = Number(await page.evaluate(() => document.body.dataset.picks || 0));
       await hover(page, i % width, Math.floor(i / width), ids[i] === SKY ? "sky" : String(ids[i]));
-      await page.waitForFunction((n) => Number(document.body.dataset.picks) > n, before, { timeout: WAIT });
+      await page.waitForFunction((n) => Number(document.body.dataset.picks) > n, before, { timeout: WAIT })
+        .catch((e) => { throw new Error(`no frame after the hover over id ${ids[i]} (${before} before)\n${e.stack}`); });
       const [ms, frameMs, wasCached] = await page.evaluate(() => [Number(document.body.dataset.pickMs),
         Number(document.body.dataset.pickFrameMs), document.body.dataset.pickCached === "true"]);
       (wasCached ? cached : fetched).push(ms);
