@@ -22,10 +22,11 @@ use crate::scene::assets::AssetCache;
 use crate::scene::error::SceneError;
 use crate::scene::format::{CameraDesc, Method, SettingsDesc};
 use crate::scene::load::{LoadedScene, load_scene};
+use crate::scene::provenance::Provenance;
 use crate::shading::sampler::SamplerKind;
 use crate::systems::{
-    apply_scene, assign_materials, geometry_changed, material_refs_changed, rebuild_geometry,
-    render_frame, write_image,
+    IdBuffer, apply_scene, assign_materials, geometry_changed, material_refs_changed, pick_ids,
+    rebuild_geometry, render_frame, write_image,
 };
 
 /// Command-line overrides of a scene's settings.
@@ -100,6 +101,9 @@ pub struct Renderer {
     assets: AssetCache,
     pool: rayon::ThreadPool,
     overrides: Overrides,
+    /// Whether each load keeps where its entities come from ([`Renderer::keep_provenance`]).
+    keep_provenance: bool,
+    provenance: Option<Arc<Provenance>>,
 }
 
 impl Renderer {
@@ -181,6 +185,8 @@ impl Renderer {
             assets: AssetCache::default(),
             pool,
             overrides: Overrides::default(),
+            keep_provenance: false,
+            provenance: None,
         })
     }
 
@@ -289,6 +295,9 @@ impl Renderer {
                 bytes_read: self.assets.bytes_read().saturating_sub(bytes),
             },
         };
+        if self.keep_provenance {
+            self.provenance = Some(Arc::new(Provenance::of(&scene)));
+        }
         self.submit(scene);
         Ok(info)
     }
@@ -424,6 +433,33 @@ impl Renderer {
     /// Number of environment maps decoded and given their distribution by the asset cache.
     pub fn environment_builds(&self) -> u64 {
         self.assets.environment_builds()
+    }
+
+    /// Makes every later [`Renderer::load`] keep where the scene's entities come from (names,
+    /// materials, placements; a clone of the names, linear in the scene), for picking.
+    pub fn keep_provenance(&mut self, on: bool) {
+        self.keep_provenance = on;
+        if !on {
+            self.provenance = None;
+        }
+    }
+
+    /// Where the entities of the last scene loaded come from, if kept
+    /// ([`Renderer::keep_provenance`]): indexed like the ids of [`Renderer::pick_ids`] once that
+    /// scene is applied (by the next [`Renderer::run_once`]).
+    pub fn provenance(&self) -> Option<Arc<Provenance>> {
+        self.provenance.clone()
+    }
+
+    /// The id buffer of the scene and camera in the world ([`pick_ids`]): one central ray per
+    /// pixel, traced on the renderer's threads.
+    pub fn pick_ids(&self) -> IdBuffer {
+        self.pool.install(|| pick_ids(&self.world))
+    }
+
+    /// The version of the scene in the world: it changes with every applied change.
+    pub fn scene_version(&self) -> u64 {
+        self.world.resource::<SceneVersion>().0
     }
 
     /// Number of image decodes by the asset cache.

@@ -91,6 +91,12 @@ enum Command {
         /// localhost are always answered; any other name is refused (DNS rebinding).
         #[arg(long, value_name = "NAME", requires = "serve", value_parser = rondo::serve::parse_host_name)]
         allow_host: Vec<String>,
+        /// With --serve: make the file:line:col of a picked entity a link that opens it in an
+        /// editor, from TEMPLATE with {path}, {line} and {col} filled in, e.g.
+        /// 'vscode://file/{path}:{line}:{col}' (VS Code) or
+        /// 'idea://open?file={path}&line={line}' (JetBrains).
+        #[arg(long, value_name = "TEMPLATE", requires = "serve", value_parser = rondo::serve::parse_editor_url)]
+        editor_url: Option<String>,
         /// Samples per pixel of the first pass.
         #[arg(long, default_value_t = 1, value_parser = at_least_one_u32())]
         first_spp: u32,
@@ -248,8 +254,16 @@ fn run(cli: Cli) -> Result<()> {
             output,
             serve,
             allow_host,
+            editor_url,
             first_spp,
             options,
-        } => watch::run(&scene, output, first_spp, &options, serve, allow_host),
+        } => {
+            let serve = serve.map(|addr| watch::Serve {
+                addr,
+                allowed_hosts: allow_host,
+                editor_url,
+            });
+            watch::run(&scene, output, first_spp, &options, serve)
+        }
     }
 }

@@ -570,8 +570,8 @@ fn serve_without_output_and_a_bad_address_are_handled() {
 /// The library's server on a free loopback port with `limits`; no image is ever fed to it.
 fn library_server(limits: Limits) -> (Viewer, rondo::serve::Feed) {
     let options = Options {
-        allowed_hosts: Vec::new(),
         limits,
+        ..Options::default()
     };
     let addr = SocketAddr::from(([127, 0, 0, 1], 0));
     Viewer::start(addr, false, options).expect("start the viewer")

@@ -8,16 +8,26 @@ use super::args::RenderArgs;
 use rondo::cli::check_output_file;
 use rondo::watch::Watch;
 
+/// How `rondo watch --serve` serves.
+pub struct Serve {
+    /// `--serve ADDR` (`None`: the default address).
+    pub addr: Option<String>,
+    /// `--allow-host`.
+    pub allowed_hosts: Vec<String>,
+    /// `--editor-url`.
+    pub editor_url: Option<String>,
+}
+
 /// `rondo watch`: runs until Ctrl-C, one line per reload on stderr; with `serve`, also serves
-/// the live viewer, which shows each pass denoised too. `--denoise` needs the denoiser: it is
-/// loaded before anything else, so that a missing library is an error, not a warning later.
+/// the live viewer, which shows each pass denoised too and what each pixel shows (picking).
+/// `--denoise` needs the denoiser: it is loaded before anything else, so that a missing library
+/// is an error, not a warning later.
 pub fn run(
     scene: &Path,
     output: Option<PathBuf>,
     first_spp: u32,
     args: &RenderArgs,
-    serve: Option<Option<String>>,
-    allowed_hosts: Vec<String>,
+    serve: Option<Serve>,
 ) -> Result<()> {
     let mut options =
         args.watch_options(scene, output.as_deref().unwrap_or(Path::new("")), first_spp)?;
@@ -31,12 +41,17 @@ pub fn run(
     let mut watch = Watch::new(options)?;
     // Viewer hook: start the server and feed it every reload, pass and report.
     let viewer = match serve {
-        Some(addr) => {
+        Some(Serve {
+            addr,
+            allowed_hosts,
+            editor_url,
+        }) => {
             let fall_back = addr.is_none();
             let addr =
                 rondo::serve::parse_addr(addr.as_deref().unwrap_or(rondo::serve::DEFAULT_ADDR))?;
             let serve_options = rondo::serve::Options {
                 allowed_hosts,
+                editor_url,
                 ..Default::default()
             };
             let (viewer, feed) = rondo::serve::Viewer::start(addr, fall_back, serve_options)?;
@@ -49,6 +64,7 @@ pub fn run(
             // Denoised passes reach the viewer only when a denoise is asked for (`--denoise` or
             // the scene's setting): the library is loaded for nothing else.
             watch.set_denoise_sink(feed.denoise_sink());
+            watch.set_pick_sink(feed.pick_sink());
             Some(viewer)
         }
         None => None,

@@ -8,6 +8,7 @@ pub mod caustics;
 pub mod integrator;
 pub mod medium;
 pub mod pass;
+pub mod pick;
 
 use glam::Vec3;
 

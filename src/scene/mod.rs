@@ -28,3 +28,4 @@ pub mod incremental;
 pub mod load;
 pub mod locate;
 pub mod mesh;
+pub mod provenance;

@@ -9,6 +9,7 @@
 //! {"kind":"progress","reload":3,"rows":128,"height":512}
 //! {"kind":"done","reload":3,"spp":64,"full_ms":812.0,"line":"reload 3: materials | …"}
 //! {"kind":"denoised","reload":3,"spp":16,"quality":"balanced","took_ms":210.4,"since_save_ms":380.2}
+//! {"kind":"pick","reload":3,"width":512,"height":512,"entities":8}
 //! {"kind":"error","file":"scene.ron","line":6,"column":40,"field":"materials.red.albedo",
 //!  "message":"material \"red\": …","source_line":"        \"red\": Diffuse(albedo: …","reload":2}
 //! ```
@@ -18,9 +19,11 @@
 //! flight, `done` ends a render at full quality, `denoised` says a denoised image of a pass of
 //! the render shown (`spp` samples, denoised at `quality` in `took_ms`) is at `/denoised.f32`,
 //! with that pass's albedo and normal at `/albedo.f32` and `/normal.f32` (see
-//! [`Feed::denoise_sink`]), and `error` is a save that did not load (the last good image stays;
-//! `reload` is the number of the render still shown). A new client first gets the latest
-//! `reload`, `pass`, `denoised`, `done` and `error` that still apply.
+//! [`Feed::denoise_sink`]), `pick` says the ids and entities of reload `reload`'s scene are
+//! at `/pick/ids.u32` and `/pick/table.json` (see [`Feed::pick_sink`]), and `error` is a save
+//! that did not load (the last good image stays; `reload` is the number of the render still
+//! shown). A new client first gets the latest `reload`, `pass`, `denoised`, `pick`, `done` and
+//! `error` that still apply.
 //!
 //! An error's place is its own fields, as the loader found it: `file`, and `line`, `column` and
 //! `field` where known (`null` otherwise); `message` says what is wrong, without the place. Its
@@ -40,9 +43,10 @@ use super::event_text::{
     MAX_MESSAGE, MAX_SOURCE_LINE, bounded, bounded_chars, changed_text, ms, names,
 };
 use super::images::{DenoisedImages, Frame};
+use super::pick::Picks;
 use crate::denoise::{DenoiseSink, DenoisedFrame};
 use crate::film::Film;
-use crate::watch::{Observer, Report};
+use crate::watch::{Observer, PickSink, Picked, Report};
 
 /// Events a stalled client may have queued; older ones are dropped.
 const QUEUE: usize = 32;
@@ -94,6 +98,7 @@ struct Sticky {
     reload: Option<Arc<str>>,
     pass: Option<Arc<str>>,
     denoised: Option<Arc<str>>,
+    pick: Option<Arc<str>>,
     done: Option<Arc<str>>,
     error: Option<Arc<str>>,
 }
@@ -104,6 +109,8 @@ struct State {
     previous: Option<Arc<Frame>>,
     /// The newest denoised pass of the reload shown.
     denoised: Option<Arc<DenoisedImages>>,
+    /// The ids and provenance of the latest scene rendered.
+    picks: Option<Arc<Picks>>,
     render: Option<Render>,
     sticky: Sticky,
     clients: Vec<Arc<Client>>,
@@ -162,6 +169,27 @@ impl Feed {
         self.state().denoised.clone()
     }
 
+    /// The ids and provenance of the latest scene rendered (see [`Feed::pick_sink`]).
+    pub fn picks(&self) -> Option<Arc<Picks>> {
+        self.state().picks.clone()
+    }
+
+    /// This feed as the watch loop's pick sink ([`crate::watch::Watch::set_pick_sink`]): keeps
+    /// each scene's ids and provenance in place of the last ones and sends a `pick` event.
+    pub fn pick_sink(&self) -> PickSink {
+        let feed = self.clone();
+        Arc::new(move |picked| feed.take_picked(picked))
+    }
+
+    fn take_picked(&self, picked: Picked) {
+        let picks = Picks::new(picked);
+        let event = picks.event();
+        let mut state = self.state();
+        state.picks = Some(Arc::new(picks));
+        let text = Self::broadcast(&mut state, &event);
+        state.sticky.pick = Some(text);
+    }
+
     /// A new event-stream client, already holding the events that describe the present; `None`
     /// if `max` clients are connected.
     pub fn subscribe(&self, max: usize) -> Option<Arc<Client>> {
@@ -174,7 +202,7 @@ impl Feed {
             ready: Condvar::new(),
         });
         let s = &state.sticky;
-        for e in [&s.reload, &s.pass, &s.denoised, &s.done, &s.error]
+        for e in [&s.reload, &s.pass, &s.denoised, &s.pick, &s.done, &s.error]
             .into_iter()
             .flatten()
         {
@@ -406,11 +434,12 @@ impl Feed {
         let sticky = &mut state.sticky;
         match event["kind"].as_str() {
             // A good save starts afresh: the error and the old render's events no longer apply
-            // (its denoised image does until the new render's first image replaces it).
+            // (its denoised image and its ids do until the new render's replace them).
             Some("reload") => {
                 *sticky = Sticky {
                     reload: Some(text),
                     denoised: sticky.denoised.take(),
+                    pick: sticky.pick.take(),
                     ..Sticky::default()
                 }
             }

@@ -14,6 +14,7 @@
 //! | `GET /albedo.f32` | that pass's mean albedo, as raw floats |
 //! | `GET /normal.f32` | that pass's mean shading normal (components in [-1, 1]), as raw floats |
 //! | `GET /events` | server-sent events: one JSON object per `data:` line (see [`Feed`]) |
+//! | `GET /pick.js`, `/pick/…` | picking: which entity each pixel shows, and where it is written (`pick.rs`) |
 //!
 //! The images answer `503` until the first pass exists; the denoised pass's images answer `404`
 //! while there is none for the render shown (none yet, denoising off, or no denoiser). Each
@@ -42,6 +43,7 @@ mod event_text;
 mod feed;
 mod http;
 mod images;
+mod pick;
 
 use std::io::Write;
 use std::net::{IpAddr, Ipv4Addr, Ipv6Addr, SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
@@ -53,6 +55,7 @@ use std::time::Duration;
 pub use event_text::{CUT, MAX_MESSAGE, MAX_SOURCE_LINE, changed_text};
 pub use feed::{Client, Feed};
 pub use images::{DenoisedImages, DenoisedLayer, Encoding, Frame, RAW_MAGIC};
+pub use pick::{IDS_MAGIC, MAX_EDITOR_URL, Picks, parse_editor_url};
 
 /// The page, compiled into the binary.
 pub const PAGE: &str = include_str!("page.html");
@@ -106,6 +109,9 @@ pub struct Options {
     pub allowed_hosts: Vec<String>,
     /// The bounds on every client.
     pub limits: Limits,
+    /// The template that turns a `file:line:col` of picking into a link (`--editor-url`,
+    /// checked by [`parse_editor_url`]).
+    pub editor_url: Option<String>,
 }
 
 /// Why the server could not start.
@@ -409,6 +415,7 @@ enum Route {
     PreviousRaw,
     Denoised(DenoisedLayer),
     Events,
+    Pick(pick::Route),
 }
 
 impl Route {
@@ -425,7 +432,7 @@ impl Route {
             "/albedo.f32" => Self::Denoised(DenoisedLayer::Albedo),
             "/normal.f32" => Self::Denoised(DenoisedLayer::Normal),
             "/events" => Self::Events,
-            _ => return None,
+            _ => return pick::Route::of(path).map(Self::Pick),
         })
     }
 }
@@ -468,6 +475,19 @@ fn answer(
     let feed = &context.feed;
     let (frame, content_type, encoding) = match route {
         Route::Events => return stream_events(stream, context, with_body),
+        Route::Pick(route) => {
+            let editor_url = context.options.editor_url.as_deref();
+            let picks = feed.picks();
+            let target = &request.target;
+            return pick::answer(
+                stream,
+                route,
+                target,
+                picks.as_deref(),
+                editor_url,
+                with_body,
+            );
+        }
         Route::Page => {
             return http::respond(
                 stream,

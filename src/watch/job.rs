@@ -72,6 +72,8 @@ impl Watch {
         let wall = start.elapsed();
         let r = &mut job.report;
         let first_frame = frame.applied.is_some();
+        // The world holds a new scene or new geometry: the viewer's picking follows.
+        let (picked, reload) = (first_frame || frame.geometry.is_some(), r.number);
         if let Some(changes) = frame.applied {
             r.applied = true;
             r.changes = changes;
@@ -164,6 +166,9 @@ impl Watch {
         }
         if let Some((reload, saved)) = denoise {
             self.denoise_pass(reload, saved);
+        }
+        if picked {
+            self.publish_pick(reload);
         }
     }
 }

@@ -93,6 +93,7 @@ mod files;
 mod job;
 mod options;
 mod pending;
+mod pick;
 mod reload;
 mod report;
 mod session;
@@ -104,6 +105,8 @@ use job::{Job, OnDisk};
 use options::Denoising;
 pub use options::WatchOptions;
 use pending::Pending;
+use pick::Picking;
+pub use pick::{PickSink, Picked};
 pub use report::*;
 pub use session::WatchSession;
 
@@ -175,6 +178,8 @@ pub struct Watch {
     denoising: Denoising,
     /// The denoise thread, started with the first pass to denoise.
     denoiser: Option<DenoiseWorker>,
+    /// Where the ids of each scene go (the viewer's picking), if anywhere.
+    picking: Option<Picking>,
 }
 
 impl Watch {
@@ -245,6 +250,7 @@ impl Watch {
             denoise_sink: None,
             denoising: Denoising::Off,
             denoiser: None,
+            picking: None,
         })
     }
 

@@ -61,6 +61,7 @@ fn scene(
         sources: Vec::new(),
         origins: Vec::new(),
         material_origins: BTreeMap::new(),
+        placements: Vec::new(),
         sky: Default::default(),
         lights: Vec::new(),
         stats: Default::default(),

@@ -146,6 +146,7 @@ impl Expander<'_> {
         }
 
         let canonical = std::fs::canonicalize(&full).unwrap_or_else(|_| full.clone());
+        let placement = self.place(origin, name, canonical.clone(), true);
         // The table key of each material index (`None`: the default material), made once.
         let mut keys: HashMap<Option<usize>, String> = HashMap::new();
         let mut placed_nodes: HashMap<usize, usize> = HashMap::new();
@@ -231,6 +232,7 @@ impl Expander<'_> {
                 let origin = Origin {
                     prefix: prefix.len() as u32,
                     named: false,
+                    placement: Some(placement),
                     ..origin
                 };
                 self.push_entity(file, at, placed, origin)

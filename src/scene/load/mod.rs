@@ -70,6 +70,9 @@ pub struct Origin {
     pub prefix: u32,
     /// Whether the entity has a `name` (otherwise it is `#index`).
     pub named: bool,
+    /// The innermost prefab or glTF placement that put the entity there (an index in
+    /// [`LoadedScene::placements`]); `None` for an entity written in the scene file itself.
+    pub placement: Option<u32>,
 }
 
 impl Origin {
@@ -82,6 +85,36 @@ impl Origin {
             locator.entity(self.index as usize)
         }
     }
+
+    /// Like [`Origin::offset`], but a named entity's name is looked for within its own
+    /// `Entity(…)`: the first string literal of the name at or after the file's `index`-th
+    /// `Entity(`, so that a material or another file's entity of the same name is not taken
+    /// for it. Reads the entity's text up to its name.
+    pub fn name_offset(&self, qualified: &str, locator: &Locator) -> Option<usize> {
+        let entity = locator.entity(self.index as usize);
+        match (self.named, entity) {
+            (true, Some(at)) => locator
+                .after(qualified.get(self.prefix as usize..)?, at)
+                .or_else(|| self.offset(qualified, locator)),
+            _ => self.offset(qualified, locator),
+        }
+    }
+}
+
+/// A prefab or glTF placement: the entity of a scene or prefab file whose `prefab` or `gltf`
+/// put another file's contents into the scene.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Placement {
+    /// Where the placing entity is written (its own `placement` is the one that placed its
+    /// file, if any).
+    pub origin: Origin,
+    /// Its qualified name (`tall`, `room/lamp`): the prefix, without its `/`, of the names of
+    /// the entities it placed.
+    pub name: String,
+    /// The file it places, canonical (absolute, symlinks resolved) where it could be.
+    pub file: PathBuf,
+    /// Whether it places a glTF file (otherwise a prefab).
+    pub gltf: bool,
 }
 
 /// Work counted while loading, for the scaling tests and `rondo bench load`.
@@ -118,6 +151,9 @@ pub struct LoadedScene {
     pub origins: Vec<Origin>,
     /// Where each material is defined: file (index in [`Self::sources`]) and written name.
     pub material_origins: BTreeMap<String, (u32, String)>,
+    /// Every prefab and glTF placement, each after the placement of its own file (see
+    /// [`Origin::placement`]).
+    pub placements: Vec<Placement>,
     /// Work counted while loading.
     pub stats: LoadStats,
     /// The distant lights of `settings.environment` and `settings.sun`, the map loaded (the
@@ -222,6 +258,9 @@ struct Expander<'a> {
     material_origins: BTreeMap<String, (u32, String)>,
     entities: Vec<LoadedEntity>,
     origins: Vec<Origin>,
+    placements: Vec<Placement>,
+    /// The placement whose file is being expanded (`None`: the scene file).
+    placing: Option<u32>,
     /// Dependencies in first-seen order, with a set for O(1) membership.
     dependencies: Vec<PathBuf>,
     seen: HashSet<PathBuf>,
@@ -310,6 +349,8 @@ fn expand_scene(
         material_origins: BTreeMap::new(),
         entities: Vec::with_capacity(desc.entities.len()),
         origins: Vec::with_capacity(desc.entities.len()),
+        placements: Vec::new(),
+        placing: None,
         dependencies: Vec::new(),
         seen: HashSet::new(),
         sources: vec![SourceText {
@@ -381,6 +422,7 @@ fn expand_scene(
         sources: x.sources,
         origins: x.origins,
         material_origins: x.material_origins,
+        placements: x.placements,
         stats: x.stats,
         sky,
         lights,
@@ -395,6 +437,17 @@ impl Expander<'_> {
         if self.warned.insert(warning.clone()) {
             self.warnings.push(warning);
         }
+    }
+
+    /// Records the placement of `file` by the entity at `origin` named `name`; returns its index.
+    fn place(&mut self, origin: Origin, name: &str, file: PathBuf, gltf: bool) -> u32 {
+        self.placements.push(Placement {
+            origin,
+            name: name.to_owned(),
+            file,
+            gltf,
+        });
+        (self.placements.len() - 1) as u32
     }
 
     fn depend(&mut self, path: &Path) {
@@ -455,6 +508,7 @@ impl Expander<'_> {
                 index: i as u32,
                 prefix: prefix.len() as u32,
                 named: e.name.is_some(),
+                placement: self.placing,
             };
             // No transform is the identity: `parent` exactly, without composing one.
             let transform = e.transform.map_or(parent, |t| parent * t.matrix());
@@ -463,7 +517,7 @@ impl Expander<'_> {
                     self.place_shape(file, e, shape, scope, name, transform, origin)?
                 }
                 (None, Some(prefab), None) => {
-                    self.place_prefab(file, e, prefab, scope, &name, transform, i)?
+                    self.place_prefab(file, e, prefab, scope, &name, transform, origin)?
                 }
                 (None, None, Some(gltf)) => {
                     self.place_gltf(file, e, gltf, scope, &name, transform, origin)?

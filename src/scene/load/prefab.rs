@@ -8,7 +8,7 @@ use std::rc::Rc;
 
 use glam::Affine3A;
 
-use super::{Anchor, Expander, MAX_PREFAB_DEPTH, Prefab, Scope, SourceFile, parse};
+use super::{Anchor, Expander, MAX_PREFAB_DEPTH, Origin, Prefab, Scope, SourceFile, parse};
 use crate::scene::error::SceneError;
 use crate::scene::format::{EntityDesc, PrefabDesc};
 use crate::scene::locate::SourceText;
@@ -41,9 +41,9 @@ impl Expander<'_> {
         scope: &Scope,
         name: &str,
         transform: Affine3A,
-        index: usize,
+        origin: Origin,
     ) -> Result<(), SceneError> {
-        let at = Anchor::Entity(index, e.name.as_deref());
+        let at = Anchor::Entity(origin.index as usize, e.name.as_deref());
         if e.material.is_some() {
             return Err(file.error(at, None, format!("entity \"{name}\": a prefab placement maps names with `materials`, not `material`")));
         }
@@ -177,6 +177,8 @@ impl Expander<'_> {
                 ),
             ));
         }
+        let placement = self.place(origin, name, canonical.clone(), false);
+        let outer = self.placing.replace(placement);
         self.chain.push(canonical);
         let result = self.expand(
             prefab_file,
@@ -186,6 +188,7 @@ impl Expander<'_> {
             &format!("{name}/"),
         );
         self.chain.pop();
+        self.placing = outer;
         result
     }
 }
