@@ -28,13 +28,16 @@ use glam::{BVec4A, Vec4};
 
 use super::aabb::RayQuery;
 use super::ray::{Ray, gamma};
-use super::store::{SphereSoa, TriangleSoa, closest_triangle_scalar};
+use super::store::{SOA_PADDING, SphereSoa, TriangleSoa, closest_triangle_scalar};
 use super::triangle::TriangleHit;
 
 /// Primitives tested at once: one SSE register of `f32`. The BVH's leaves hold 1 to 8
 /// primitives, about 3.7 on average for the benchmark scenes, so 8 lanes would leave most of
 /// them idle; a leaf of 5 to 8 primitives takes two chunks.
 pub const LANES: usize = 4;
+
+// A sphere chunk starting at any sphere loads whole vectors from the padded fields.
+const _: () = assert!(SOA_PADDING + 1 >= LANES);
 
 /// `LANES` floats, operated on element-wise: glam's `Vec4`, one SSE register on x86-64
 /// (SSE2 is part of the baseline, so no runtime detection is needed) and plain arrays elsewhere.

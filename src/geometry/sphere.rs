@@ -91,28 +91,34 @@ const SMALL_CONE_SIN2: f32 = 0.000_685_23;
 /// outside it, chosen uniformly in the solid angle of the cone the sphere subtends (pbrt-v4,
 /// `Sphere::Sample`): density `1 / (2π · cone_one_minus_cos(r²/|c − p|²))` per steradian.
 /// Returns the point and the sphere's outward unit normal there.
-#[inline]
+///
+/// pbrt-v4's construction with fewer divisions and roots (this was a tenth of Veach's scene):
+/// `sin²θ / sin θmax` and `sin²θ / sin²θmax` from one quotient `x = sin²θ / sin²θmax` (which is
+/// `u.x` itself for a small cone), `cos θ` of a wide cone taken as sampled rather than
+/// recomputed from `sin²θ`, the axis scaled by one reciprocal, and the normal left as the
+/// orthonormal frame builds it (unit to rounding, as a normalised vector is). Always inlined,
+/// so that the light sample shares the distance and `sin²θmax` its strategy computed.
+#[inline(always)]
 pub fn sample_sphere_cone(c: Vec3, r: f32, p: Vec3, u: Vec2) -> (Vec3, Vec3) {
     let to_centre = c - p;
     let dc2 = to_centre.length_squared();
     let sin2_max = r * r / dc2;
     let sin_max = sin2_max.sqrt();
-    let sin2_t = if sin2_max < SMALL_CONE_SIN2 {
-        sin2_max * u.x
+    // cos θ of the sampled direction, and x = sin²θ / sin²θmax.
+    let (cos_t, x) = if sin2_max < SMALL_CONE_SIN2 {
+        ((1.0 - sin2_max * u.x).max(0.0).sqrt(), u.x)
     } else {
         let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
         let cos_t = (cos_max - 1.0) * u.x + 1.0;
-        1.0 - cos_t * cos_t
+        (cos_t, (1.0 - cos_t * cos_t) / sin2_max)
     };
-    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
-    // Angle at the centre between the axis and the sampled point.
-    let cos_alpha = sin2_t / sin_max + cos_t * (1.0 - sin2_t / sin2_max).max(0.0).sqrt();
+    // Angle at the centre between the axis and the sampled point: cos α = sin²θ / sin θmax +
+    // cos θ √(1 − sin²θ / sin²θmax), with sin²θ / sin θmax = x · sin θmax.
+    let cos_alpha = x * sin_max + cos_t * (1.0 - x).max(0.0).sqrt();
     let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
     let phi = unit_circle(u.y);
-    let frame = Frame::from_normal(to_centre / dc2.sqrt());
-    let n = frame
-        .to_world(-Vec3::new(sin_alpha * phi.x, sin_alpha * phi.y, cos_alpha))
-        .normalize();
+    let frame = Frame::from_normal(to_centre * (1.0 / dc2.sqrt()));
+    let n = frame.to_world(-Vec3::new(sin_alpha * phi.x, sin_alpha * phi.y, cos_alpha));
     (c + r * n, n)
 }
 
