@@ -4,7 +4,6 @@
 
 pub mod environment;
 mod guide;
-mod prefetch;
 pub mod sun;
 
 use std::sync::Arc;
