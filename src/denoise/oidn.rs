@@ -1,8 +1,9 @@
 //! The binding to Intel Open Image Denoise 2.x's C API (`OpenImageDenoise/oidn.h`), loaded at run
 //! time with libloading: a device, and one `RT` filter per call over caller-owned images.
 //!
-//! This is the crate's only unsafe code: calling C functions found by name in a shared library
-//! cannot be checked by the compiler. The safe wrapper ([`Device`]) keeps the invariants the C API
+//! This is the crate's only unsafe code besides the sky's cache prefetch hint
+//! (`sky/prefetch.rs`): calling C functions found by name in a shared library cannot be checked
+//! by the compiler. The safe wrapper ([`Device`]) keeps the invariants the C API
 //! needs: the function pointers come from libraries that are never unloaded, every image handed to
 //! OIDN has exactly `width * height * 3` floats and outlives the filter that reads it, the device
 //! is used by one thread at a time (it lives in a `Mutex` in [`super::Denoiser`]), and errors are

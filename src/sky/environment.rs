@@ -36,7 +36,8 @@
 //! sampling finds it at full weight). The search for the count is O(1) expected: a guide table
 //! (the cutpoint method) per table gives, for each of its equal slices of the 24-bit numbers,
 //! the first entry the slice can pick, and a binary search runs only between the first entries
-//! of a slice and of the next (a few entries on average, whatever the distribution). Within
+//! of a slice and of the next (a few entries on average, whatever the distribution), whose
+//! lines are asked for all at once before it starts, so that their cache misses overlap. Within
 //! the texel the direction is uniform in solid angle (φ uniform, cos θ uniform between the
 //! row's edges), from a second, independent pair of numbers, so the density is the texel's
 //! probability over its solid angle: constant over the texel, like the radiance. It is the
@@ -59,7 +60,10 @@ use std::f32::consts::{FRAC_PI_2, PI};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::guide::{SCALE, bits24, build_guide, count, guide_bits, guided_pick};
+use super::guide::{
+    SCALE, bits24, build_guide, count, guide_bits, guide_bounds, guided_pick, search,
+};
+use super::prefetch::prefetch;
 
 /// Most texels a map may have (a 8192 × 4096 map): at most 528 MiB at 16.5 bytes each.
 pub const MAX_TEXELS: u64 = 1 << 25;
@@ -514,9 +518,15 @@ impl EnvironmentMap {
         });
         let guide = &self.column_guide[row * self.column_guide_len..][..self.column_guide_len];
         let base = 4 * row * w + 3;
-        let column = guided_pick(guide, self.column_shift, w, bits24(u.x), |j| {
-            self.texels[base + 4 * j]
-        });
+        let g = bits24(u.x);
+        let (lo, hi) = guide_bounds(guide, self.column_shift, w, g);
+        // The search's first, middle and last counts (and the left neighbour's, for the
+        // density) asked for at once: their lines' misses overlap instead of following one
+        // another down the search.
+        prefetch(&self.texels, (base + 4 * lo).wrapping_sub(4));
+        prefetch(&self.texels, base + 2 * (lo + hi));
+        prefetch(&self.texels, base + 4 * hi);
+        let column = search(lo, hi, g, |j| self.texels[base + 4 * j]);
         let (radiance, pdf) = self.texel(row, column);
         // φ = φ_j + δ: the edge's sine and cosine from the table, δ's by polynomial (a
         // column of a map 16 or more texels wide spans at most π/8).

@@ -57,7 +57,14 @@ pub(super) fn guided_pick(
     g: u32,
     at: impl Fn(usize) -> f32,
 ) -> usize {
-    let (mut lo, mut hi) = guide_bounds(guide, shift, n, g);
+    let (lo, hi) = guide_bounds(guide, shift, n, g);
+    search(lo, hi, g, at)
+}
+
+/// The first index in `lo..=hi` whose count `at` exceeds the 24-bit number `g`, `hi` if none
+/// before it does (the bounds of [`guide_bounds`]).
+#[inline]
+pub(super) fn search(mut lo: usize, mut hi: usize, g: u32, at: impl Fn(usize) -> f32) -> usize {
     // Counts are integers ≤ 2²⁴, exact as f32, and so is g.
     let g = g as f32;
     while lo < hi {

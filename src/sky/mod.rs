@@ -4,6 +4,7 @@
 
 pub mod environment;
 mod guide;
+mod prefetch;
 pub mod sun;
 
 use std::sync::Arc;
