@@ -38,6 +38,7 @@ fn pbr(base: Vec3, metallic: f32, roughness: f32) -> Material {
         normal_map: None,
         alpha: None,
         layers: Layers::NONE,
+        layer_maps: None,
     }
 }
 

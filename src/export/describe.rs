@@ -175,6 +175,7 @@ fn material(m: &Material, images: &ImageFiles) -> Result<Value, ExportError> {
             normal_map,
             alpha,
             layers,
+            layer_maps,
         } => {
             let alpha = match alpha {
                 None => Value::Null,
@@ -215,6 +216,16 @@ fn material(m: &Material, images: &ImageFiles) -> Result<Value, ExportError> {
                     "clearcoat": layers.clearcoat,
                     "clearcoat_roughness": layers.clearcoat_roughness,
                 });
+            }
+            if let Some(maps) = layer_maps {
+                let mut out = serde_json::Map::new();
+                for (name, channel, t) in maps.channels() {
+                    out.insert(
+                        name.into(),
+                        json!({"channel": channel, "texture": texture(&t, images)?}),
+                    );
+                }
+                pbr["layer_maps"] = Value::Object(out);
             }
             pbr
         }

@@ -142,9 +142,13 @@ fn material_images(materials: &[&Material]) -> Vec<Arc<ImageTexture>> {
                 emissive,
                 normal_map,
                 alpha,
+                layer_maps,
                 ..
             } => {
                 walk(base_color, &mut out);
+                for (_, _, t) in layer_maps.iter().flat_map(|m| m.channels()) {
+                    walk(&t, &mut out);
+                }
                 walk(emissive, &mut out);
                 if let Some(t) = metallic_roughness {
                     walk(t, &mut out);

@@ -11,6 +11,7 @@ use super::dielectric::Dielectric;
 use super::diffuse::Diffuse;
 use super::emission::Emission;
 use super::fuzzed::Fuzzed;
+use super::layer_maps::LayerMaps;
 use super::layers::Layers;
 use super::maps::{AlphaMask, NormalMap};
 use super::microfacet::{alpha_from_roughness, is_specular_alpha};
@@ -99,6 +100,9 @@ pub enum Material {
         alpha: Option<AlphaMask>,
         /// Specular strength and colour, a sheen and a clear coat ([`Layers::NONE`]: none).
         layers: Layers,
+        /// Textures that scale the layers' factors over the surface (`None`: the factors hold
+        /// everywhere, and no lookup is made).
+        layer_maps: Option<Box<LayerMaps>>,
     },
 }
 
@@ -184,6 +188,7 @@ impl Material {
                 emissive,
                 normal_map,
                 alpha,
+                layer_maps,
                 ..
             } => {
                 base_color.reads_uv()
@@ -191,6 +196,7 @@ impl Material {
                     || emissive.reads_uv()
                     || normal_map.is_some()
                     || alpha.is_some()
+                    || layer_maps.is_some()
             }
         }
     }
@@ -270,6 +276,7 @@ impl Material {
                 metallic_roughness,
                 normal_map,
                 layers,
+                layer_maps,
                 ..
             } => {
                 let ns = match normal_map {
@@ -284,7 +291,8 @@ impl Material {
                     }
                 };
                 // Light sampling is decided per material, not per point: a textured mix may
-                // be evaluable at some points and a perfect mirror at others.
+                // be evaluable at some points and a perfect mirror at others. The layers'
+                // textures only scale their factors down, so the factors decide it.
                 let coat_alpha = alpha_from_roughness(layers.clearcoat_roughness);
                 let coated = layers.clearcoat > 0.0;
                 let sheen = Sheen::new(layers.sheen_color, layers.sheen_roughness);
@@ -292,14 +300,24 @@ impl Material {
                     || !Pbr::new(Vec3::ONE, *metallic, *roughness).is_delta()
                     || !sheen.is_off()
                     || (coated && !is_specular_alpha(coat_alpha));
-                let specular = Specular::new(layers.specular, layers.specular_color);
+                let textured;
+                let (here, sheen, coat_alpha) = match layer_maps {
+                    None => (layers, sheen, coat_alpha),
+                    Some(maps) => {
+                        textured = maps.at(layers, uv);
+                        let sheen = Sheen::new(textured.sheen_color, textured.sheen_roughness);
+                        let alpha = alpha_from_roughness(textured.clearcoat_roughness);
+                        (&textured, sheen, alpha)
+                    }
+                };
+                let specular = Specular::new(here.specular, here.specular_color);
                 let base = Pbr::new(base_color.eval(uv), m, r)
                     .with_specular(specular)
                     .with_sheen(sheen);
                 let lobe = if coated {
                     Lobe::Coated(Coated {
                         base,
-                        weight: layers.clearcoat.min(1.0),
+                        weight: here.clearcoat.min(1.0),
                         alpha: coat_alpha,
                     })
                 } else {
@@ -552,6 +570,7 @@ mod tests {
                 normal_map: None,
                 alpha: None,
                 layers: Layers::NONE,
+                layer_maps: None,
             },
         ]
     }

@@ -12,6 +12,7 @@ pub mod energy;
 pub mod fresnel;
 pub mod fuzzed;
 pub mod glass_table;
+pub mod layer_maps;
 pub mod layers;
 pub mod maps;
 pub mod material;

@@ -7,6 +7,7 @@
 pub mod chi2;
 pub mod furnace;
 pub mod gltf_doc;
+pub mod sheen_brdf;
 pub mod watch_diff;
 
 use std::path::{Path, PathBuf};

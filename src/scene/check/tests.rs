@@ -394,6 +394,7 @@ fn a_pbr_base_colour_above_one_is_reported() {
         normal_map: None,
         alpha: None,
         layers: crate::shading::layers::Layers::NONE,
+        layer_maps: None,
     };
     let sphere = Shape::Sphere {
         center: Vec3::ZERO,

@@ -241,11 +241,63 @@ pub struct GltfMaterial {
     pub attenuation_color: Vec3,
     /// `KHR_materials_volume`'s attenuation distance (infinite without it: no absorption).
     pub attenuation_distance: f32,
-    /// `KHR_materials_specular`'s and `KHR_materials_clearcoat`'s factors ([`Layers::NONE`]
-    /// without them).
+    /// `KHR_materials_specular`'s, `KHR_materials_sheen`'s and `KHR_materials_clearcoat`'s
+    /// factors ([`Layers::NONE`] without them).
     pub layers: Layers,
-    /// What of those extensions is not read (their textures), one sentence each.
+    /// Those extensions' textures.
+    pub layer_textures: GltfLayerTextures,
+    /// What of those extensions is not read (the coat's normal texture), one sentence each.
     pub layer_notes: Vec<String>,
+}
+
+/// The textures of `KHR_materials_specular`, `KHR_materials_sheen` and
+/// `KHR_materials_clearcoat` a material names, each multiplying its factor.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GltfLayerTextures {
+    /// `specularTexture`: its alpha scales `specularFactor`.
+    pub specular: Option<GltfTexture>,
+    /// `specularColorTexture` (sRGB): its RGB scales `specularColorFactor`.
+    pub specular_color: Option<GltfTexture>,
+    /// `sheenColorTexture` (sRGB): its RGB scales `sheenColorFactor`.
+    pub sheen_color: Option<GltfTexture>,
+    /// `sheenRoughnessTexture`: its alpha scales `sheenRoughnessFactor`.
+    pub sheen_roughness: Option<GltfTexture>,
+    /// `clearcoatTexture`: its red scales `clearcoatFactor`.
+    pub clearcoat: Option<GltfTexture>,
+    /// `clearcoatRoughnessTexture`: its green scales `clearcoatRoughnessFactor`.
+    pub clearcoat_roughness: Option<GltfTexture>,
+}
+
+impl GltfLayerTextures {
+    /// Each texture slot with its field's name in the material.
+    pub fn slots(&self) -> [(&'static str, Option<&GltfTexture>); 6] {
+        [
+            (
+                "extensions.KHR_materials_specular.specularTexture",
+                self.specular.as_ref(),
+            ),
+            (
+                "extensions.KHR_materials_specular.specularColorTexture",
+                self.specular_color.as_ref(),
+            ),
+            (
+                "extensions.KHR_materials_sheen.sheenColorTexture",
+                self.sheen_color.as_ref(),
+            ),
+            (
+                "extensions.KHR_materials_sheen.sheenRoughnessTexture",
+                self.sheen_roughness.as_ref(),
+            ),
+            (
+                "extensions.KHR_materials_clearcoat.clearcoatTexture",
+                self.clearcoat.as_ref(),
+            ),
+            (
+                "extensions.KHR_materials_clearcoat.clearcoatRoughnessTexture",
+                self.clearcoat_roughness.as_ref(),
+            ),
+        ]
+    }
 }
 
 /// Bytes of a glTF file's buffers: a range of one shared allocation, so that a source named by

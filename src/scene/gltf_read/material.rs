@@ -2,36 +2,11 @@
 
 use glam::Vec3;
 
-use super::data::{AlphaMode, GltfMaterial, GltfTexture, Wrap};
+use super::data::{AlphaMode, GltfMaterial, GltfTexture};
 use super::field::check_field;
 use super::layers::read_layers;
+use super::texture_ref::texture;
 use super::texture_transform;
-
-/// A texture reference with its sampler, and its `KHR_texture_transform` from the reference's
-/// extension value `ext` (`slot` names the reference in errors).
-pub(super) fn texture(
-    tex: &gltf::Texture,
-    texcoord: u32,
-    ext: Option<&gltf::json::Value>,
-    slot: &dyn Fn() -> String,
-) -> Result<GltfTexture, String> {
-    use gltf::texture::{MagFilter, WrappingMode};
-    let wrap = |w| match w {
-        WrappingMode::Repeat => Wrap::Repeat,
-        WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
-        WrappingMode::ClampToEdge => Wrap::ClampToEdge,
-    };
-    let sampler = tex.sampler();
-    let transform = texture_transform::read(ext, slot)?;
-    Ok(GltfTexture {
-        image: tex.source().index(),
-        texcoord: transform.and_then(|t| t.texcoord).unwrap_or(texcoord),
-        transform: transform.map(|t| texture_transform::to_rondo_space(t.matrix)),
-        wrap_s: wrap(sampler.wrap_s()),
-        wrap_t: wrap(sampler.wrap_t()),
-        nearest: sampler.mag_filter() == Some(MagFilter::Nearest),
-    })
-}
 
 /// A `textureInfo` (or the normal texture's) read by [`texture`]; `field` is its name in the
 /// material.
@@ -45,8 +20,11 @@ fn info(
     texture(tex, texcoord, ext, &|| format!("{}: {field}", what()))
 }
 
-/// Reads a material, checking its factors against the spec's ranges.
-pub(super) fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> {
+/// Reads material `m` of `doc`, checking its factors against the spec's ranges.
+pub(super) fn read_material(
+    doc: &gltf::Document,
+    m: &gltf::Material,
+) -> Result<GltfMaterial, String> {
     let pbr = m.pbr_metallic_roughness();
     let name = m.name().map(str::to_owned);
     let what = || match (&name, m.index()) {
@@ -123,7 +101,7 @@ pub(super) fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> 
     if let Some(cutoff) = m.alpha_cutoff() {
         check_field(&what, "alphaCutoff", cutoff, at_least_0)?;
     }
-    let (layers, layer_notes) = read_layers(m, &what)?;
+    let (layers, layer_textures, layer_notes) = read_layers(doc, m, &what)?;
     let alpha_mode = match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
         gltf::material::AlphaMode::Mask => AlphaMode::Mask(m.alpha_cutoff().unwrap_or(0.5)),
@@ -180,6 +158,7 @@ pub(super) fn read_material(m: &gltf::Material) -> Result<GltfMaterial, String> 
         attenuation_color: Vec3::from(attenuation_color),
         attenuation_distance,
         layers,
+        layer_textures,
         layer_notes,
         name,
     })

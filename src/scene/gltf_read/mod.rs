@@ -17,8 +17,8 @@
 //! `EXT_mesh_gpu_instancing` (`instancing.rs`), the metallic–roughness material with its
 //! textures and their `KHR_texture_transform` (`texture_transform.rs`),
 //! `KHR_materials_emissive_strength`, `KHR_materials_transmission`, `KHR_materials_ior`,
-//! the factors of `KHR_materials_specular`, `KHR_materials_sheen` and `KHR_materials_clearcoat`
-//! (`layers.rs`; their textures are named in a warning),
+//! `KHR_materials_specular`, `KHR_materials_sheen` and `KHR_materials_clearcoat` with their
+//! textures (`layers.rs`; the coat's normal texture is named in a warning),
 //! `KHR_mesh_quantization`, the nodes' cameras and `KHR_lights_punctual` lights (`lights.rs`;
 //! the scene loader decides what becomes of them). Skipped with a warning: points and lines,
 //! morph targets, skins, and every other extension the file uses (the warning says what will
@@ -45,6 +45,7 @@ mod layers;
 mod lights;
 mod material;
 mod nodes;
+mod texture_ref;
 mod texture_transform;
 mod unsupported;
 mod uv_sets;
@@ -58,9 +59,9 @@ use self::nodes::walk;
 
 pub use self::buffers::{MAX_BUFFER_BYTES, relative_uri};
 pub use self::data::{
-    AlphaMode, GltfCamera, GltfImage, GltfLight, GltfLightKind, GltfMaterial, GltfMesh, GltfNode,
-    GltfPrimitive, GltfProjection, GltfScene, GltfTexture, MAX_NODE_DEPTH, MAX_NODE_INSTANCES,
-    MAX_TRIANGLES, MAX_VERTICES, MAX_ZERO_FILLED, SharedBytes, Wrap,
+    AlphaMode, GltfCamera, GltfImage, GltfLayerTextures, GltfLight, GltfLightKind, GltfMaterial,
+    GltfMesh, GltfNode, GltfPrimitive, GltfProjection, GltfScene, GltfTexture, MAX_NODE_DEPTH,
+    MAX_NODE_INSTANCES, MAX_TRIANGLES, MAX_VERTICES, MAX_ZERO_FILLED, SharedBytes, Wrap,
 };
 pub use self::uv_sets::MAX_UV_SETS;
 
@@ -130,7 +131,7 @@ fn read(
         ..GltfScene::default()
     };
     for m in doc.materials() {
-        scene.materials.push(read_material(&m)?);
+        scene.materials.push(read_material(doc, &m)?);
     }
     for (i, m) in scene.materials.iter().enumerate() {
         let sets = m.uv_sets();

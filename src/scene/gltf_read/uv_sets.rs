@@ -25,6 +25,7 @@ impl GltfMaterial {
             ("emissiveTexture", self.emissive_texture.as_ref()),
         ]
         .into_iter()
+        .chain(self.layer_textures.slots())
         .filter_map(|(name, t)| t.map(|t| (name, t)))
     }
 

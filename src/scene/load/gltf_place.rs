@@ -282,6 +282,7 @@ impl Expander<'_> {
                 normal_map: None,
                 alpha: None,
                 layers: Layers::NONE,
+                layer_maps: None,
             });
         };
         let what = format!("material \"{label}\"");
@@ -359,6 +360,7 @@ impl Expander<'_> {
             image,
             map,
         });
+        let layer_maps = self.gltf_layer_maps(asset, path, m, &what)?;
         Ok(Material::Pbr {
             base_color,
             metallic: m.metallic,
@@ -369,13 +371,14 @@ impl Expander<'_> {
             normal_map,
             alpha,
             layers: m.layers,
+            layer_maps,
         })
     }
 
     /// Texture `t` of the glTF file at `path`: its image decoded with `encoding` (an external
     /// file through the cache, as a dependency; an embedded one once per content of the glTF
     /// file) and its sampler.
-    fn gltf_image(
+    pub(super) fn gltf_image(
         &mut self,
         asset: &GltfAsset,
         path: &Path,
@@ -425,7 +428,7 @@ fn scaled(texture: Option<Texture>, factor: Vec3) -> Texture {
 /// Which coordinates texture `t` of material `m` reads: its slot among the sets the material's
 /// primitives carry (slot 0 for a set beyond them, warned about), through its
 /// `KHR_texture_transform`.
-fn uv_map(m: &GltfMaterial, t: &GltfTexture) -> Box<UvMap> {
+pub(super) fn uv_map(m: &GltfMaterial, t: &GltfTexture) -> Box<UvMap> {
     Box::new(UvMap {
         set: m.uv_slot(t).unwrap_or(0),
         transform: t.transform,
@@ -434,7 +437,7 @@ fn uv_map(m: &GltfMaterial, t: &GltfTexture) -> Box<UvMap> {
 
 /// `texture` read through `map`; `texture` itself for the identity map (set 0, no transform),
 /// so files without transforms or second sets render as before.
-fn mapped(texture: Texture, map: Box<UvMap>) -> Texture {
+pub(super) fn mapped(texture: Texture, map: Box<UvMap>) -> Texture {
     if *map == UvMap::default() {
         texture
     } else {

@@ -143,6 +143,7 @@ impl Expander<'_> {
                         clearcoat: clearcoat.0,
                         clearcoat_roughness: clearcoat_roughness.0,
                     },
+                    layer_maps: None,
                 }
             }
         })

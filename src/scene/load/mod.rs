@@ -23,6 +23,7 @@ use crate::shading::texture::ImageTexture;
 use crate::sky::{Sky, Sun};
 
 mod gltf_glass;
+mod gltf_layers;
 mod gltf_lights;
 mod gltf_place;
 mod materials;
