@@ -10,8 +10,6 @@
 
 mod common;
 
-use std::f64::consts::PI;
-
 use common::chi2::chi_square_of_directions;
 use common::furnace::{furnace_pixels, write_white_map};
 use common::sheen_brdf::{hemisphere, sheen_cos};

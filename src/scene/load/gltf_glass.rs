@@ -25,7 +25,7 @@ pub(super) enum Transmission {
     /// Opaque: the metallic–roughness material, with a note if transmission was dropped.
     Opaque(Option<String>),
     /// Glass, with notes on what of the file it does not show.
-    Glass(Material, Vec<String>),
+    Glass(Box<Material>, Vec<String>),
 }
 
 /// The transmission of glTF material `m`.
@@ -83,11 +83,11 @@ pub(super) fn transmission(m: &GltfMaterial) -> Transmission {
         Vec3::ZERO
     };
     Transmission::Glass(
-        Material::Dielectric {
+        Box::new(Material::Dielectric {
             ior: m.ior,
             roughness: m.roughness,
             absorption,
-        },
+        }),
         notes,
     )
 }

@@ -292,7 +292,7 @@ impl Expander<'_> {
                 for note in notes {
                     self.warn(path, &format!("{what}: {note}"));
                 }
-                return Ok(glass);
+                return Ok(*glass);
             }
             Transmission::Opaque(Some(note)) => self.warn(path, &format!("{what}: {note}")),
             Transmission::Opaque(None) => {}
