@@ -560,3 +560,31 @@ fn prefab_paths_that_are_not_prefab_files_are_errors() {
     let largest = LARGEST.load(Ordering::Relaxed);
     assert!(largest <= ALLOCATION_CAP, "a {largest}-byte allocation");
 }
+
+#[test]
+fn scene_and_prefab_files_over_the_size_bound_are_refused_before_they_are_read() {
+    // Sparse files one byte over the 1 GiB bound of scene text: the size is there, the disk
+    // blocks are not. Expected: an error naming the size, for the scene itself and at the
+    // placement of the prefab (line 3, column 32), and no allocation above the cap — reading
+    // either into memory would take 1 GiB.
+    let dir = temp_dir("fuzz-huge");
+    let huge = |name: &str| {
+        let file = std::fs::File::create(dir.join(name)).expect("create");
+        file.set_len((1 << 30) + 1).expect("sparse length");
+    };
+    huge("huge.ron");
+    let scene = "Scene(\n    camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0)),\n    entities: [ Entity(prefab: \"huge.ron\") ],\n)";
+    let e = load_error(&dir, scene).expect("a huge prefab loaded");
+    assert!(e.contains("scene.ron:3:32:"), "{e}");
+    assert!(e.contains("is 1073741825 bytes"), "{e}");
+    huge("scene.ron");
+    let path = dir.join("scene.ron");
+    let e = match catch_unwind(|| load_scene(&path, &mut AssetCache::default())) {
+        Ok(Err(e)) => e.to_string(),
+        Ok(Ok(_)) => panic!("a huge scene loaded"),
+        Err(_) => panic!("the loader panicked on a huge scene"),
+    };
+    assert!(e.contains("is 1073741825 bytes"), "{e}");
+    let largest = LARGEST.load(Ordering::Relaxed);
+    assert!(largest <= ALLOCATION_CAP, "a {largest}-byte allocation");
+}

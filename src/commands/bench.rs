@@ -144,8 +144,8 @@ pub fn watch(
 ) -> Result<()> {
     use rondo::bench::load_watch::{self, Kind};
     use rondo::bench::load_watch_time::{self, Interrupt};
-    let original = std::fs::read_to_string(scene)
-        .with_context(|| format!("{}: cannot read", scene.display()))?;
+    let original = rondo::scene::bounded_read::read_text(scene)
+        .map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", scene.display()))?;
     let mut edits = load_watch::find_edits(scene, &original).map_err(anyhow::Error::msg)?;
     if !kinds.is_empty() {
         for name in kinds {

@@ -5,6 +5,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
+use super::bounded_read::{MAX_INPUT_BYTES, read_bounded};
 use super::gltf_read::{GltfImage, GltfScene, read_gltf};
 use crate::model::MeshData;
 use crate::shading::texture::ImageTexture;
@@ -15,9 +16,6 @@ struct Cached<T> {
     hash: u64,
     value: Arc<T>,
 }
-
-/// Largest asset file read (a 8192 × 4096 float RGBA map, uncompressed, is 512 MiB).
-const MAX_ASSET_BYTES: u64 = 1 << 30;
 
 /// Decoded images, meshes and environment maps by path. A file's bytes are decoded again only
 /// when their hash differs from the cached one: content decides, not the modification time or
@@ -134,7 +132,8 @@ impl Files {
 
     /// Reads `path`, records its metadata and hash, and returns the hash and the bytes.
     fn read(&mut self, path: &Path) -> Result<(u64, Vec<u8>), String> {
-        let (meta, bytes) = read_asset(path)?;
+        let (meta, bytes) =
+            read_bounded(path, MAX_INPUT_BYTES).map_err(|e| format!("cannot read: {e}"))?;
         self.bytes_read += bytes.len() as u64;
         let hash = hash_bytes(&bytes);
         let record = Record {
@@ -170,26 +169,6 @@ impl Files {
             }
         }
     }
-}
-
-/// The metadata and bytes of the file at `path`: a regular file of at most [`MAX_ASSET_BYTES`].
-fn read_asset(path: &Path) -> Result<(std::fs::Metadata, Vec<u8>), String> {
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read: {e}"))?;
-    if meta.is_dir() {
-        return Err("is a directory, not a file".into());
-    }
-    // A device or a pipe (`/dev/zero`, a FIFO) would be read forever.
-    if !meta.is_file() {
-        return Err("is not a regular file".into());
-    }
-    if meta.len() > MAX_ASSET_BYTES {
-        return Err(format!(
-            "is {} bytes; files of at most {MAX_ASSET_BYTES} bytes are read",
-            meta.len()
-        ));
-    }
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
-    Ok((meta, bytes))
 }
 
 /// Refuses `path`, a glTF file's buffer or image below the file's folder `dir` (by its URI,

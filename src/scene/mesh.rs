@@ -17,6 +17,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
+use super::bounded_read::{MAX_INPUT_BYTES, read_bounded};
 use crate::model::MeshData;
 
 /// Most triangles one OBJ file may produce (the limit of glTF files too).
@@ -35,7 +36,8 @@ const BEYOND: u32 = u32::MAX - 1;
 /// Malformed files, out-of-range indices, non-finite coordinates and empty meshes are errors
 /// naming the line, never panics.
 pub fn load_obj(path: &Path) -> Result<MeshData, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read OBJ: {e}"))?;
+    let (_, bytes) =
+        read_bounded(path, MAX_INPUT_BYTES).map_err(|e| format!("cannot read OBJ: {e}"))?;
     parse_obj(&bytes)
 }
 

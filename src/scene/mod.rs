@@ -20,6 +20,7 @@
 //! The full format is documented in `scenes/README.md`.
 
 pub mod assets;
+pub mod bounded_read;
 pub mod check;
 pub mod error;
 pub mod format;

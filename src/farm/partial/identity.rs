@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use super::meta::{FORMAT, PartialError, error};
+use crate::scene::bounded_read::{MAX_INPUT_BYTES, read_bounded};
 use crate::scene::format::{Method, SettingsDesc};
 use crate::shading::sampler::SamplerKind;
 
@@ -166,7 +167,8 @@ pub fn image_hash(
     h.field(FORMAT.as_bytes());
     h.field(env!("CARGO_PKG_VERSION").as_bytes());
     for path in dependencies {
-        let data = std::fs::read(path).map_err(|e| error(path, format!("cannot read: {e}")))?;
+        let (_, data) = read_bounded(path, MAX_INPUT_BYTES)
+            .map_err(|e| error(path, format!("cannot read: {e}")))?;
         h.field(&data);
     }
     h.field(&size.0.to_le_bytes());

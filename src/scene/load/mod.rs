@@ -33,6 +33,7 @@ mod reach;
 use self::reach::{corner_reach, world_reach};
 use super::assets::AssetCache;
 use super::assets::GltfAsset;
+use super::bounded_read::read_text;
 use super::error::{Location, SceneError};
 use super::format::{
     CameraDesc, EntityDesc, MAX_COORDINATE, PrefabDesc, SceneCamera, SceneDesc, SettingsDesc,
@@ -304,7 +305,7 @@ struct Expander<'a> {
 pub fn load_scene(path: &Path, assets: &mut AssetCache) -> Result<LoadedScene, SceneError> {
     // A scene that cannot be read still starts a load: it asked for no file.
     assets.begin_load();
-    let source = std::fs::read_to_string(path)
+    let source = read_text(path)
         .map_err(|e| SceneError::at(path, None, format!("cannot read scene: {e}")))?;
     load_scene_source(path, source, assets)
 }

@@ -9,6 +9,7 @@ use std::rc::Rc;
 use glam::Affine3A;
 
 use super::{Anchor, Expander, MAX_PREFAB_DEPTH, Origin, Prefab, Scope, SourceFile, parse};
+use crate::scene::bounded_read::read_text;
 use crate::scene::error::SceneError;
 use crate::scene::format::{EntityDesc, PrefabDesc};
 use crate::scene::locate::SourceText;
@@ -76,7 +77,7 @@ impl Expander<'_> {
             None => {
                 let source = match self.assets.overlay(&canonical) {
                     Some(text) => Ok(text.to_string()),
-                    None => std::fs::read_to_string(&path),
+                    None => read_text(&path),
                 };
                 let source = source.map_err(|err| {
                     file.error(
