@@ -86,3 +86,34 @@ fn check_warnings_give_the_file_line_and_column_of_what_they_are_about() {
     }
     assert_eq!(lines[expected.len()], format!("{s}: 4 warnings"));
 }
+
+#[test]
+fn a_warning_about_an_entity_named_like_a_material_points_at_the_entity() {
+    let dir = temp_dir("check-locations-names");
+    let scene = r#"Scene(
+    camera: Camera(position: (0, 1, -10), look_at: (0, 0, 0)),
+    materials: {
+        "moon": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
+    },
+    entities: [
+        Entity(name: "moon", material: "moon", shape: Sphere(center: (0, 0, -400), radius: 1)),
+    ],
+)"#;
+    let path = write_scene(&dir, "s.ron", scene);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .arg("check")
+        .arg(&path)
+        .output()
+        .expect("run rondo check");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    // The material's key is the first "moon" of the file, the entity's name the second.
+    let expected = format!(
+        "warning: {}:{}: entity \"moon\" is far outside",
+        path.display(),
+        line_col(scene, "\"moon\"", 1)
+    );
+    assert!(
+        stdout.lines().any(|l| l.starts_with(&expected)),
+        "want {expected}…\ngot {stdout}"
+    );
+}

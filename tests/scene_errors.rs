@@ -643,3 +643,35 @@ fn degenerate_input_is_rejected_at_load_time_with_a_located_message() {
         assert!(e.contains(words), "{name}: {e}");
     }
 }
+
+#[test]
+fn an_entity_named_like_a_material_is_located_at_its_own_name() {
+    // The material "ball" is defined (line 5) before the entity "ball" (line 8) whose sphere
+    // reaches beyond the coordinate limit: the error points at the entity's name, not at the
+    // first string "ball" of the file.
+    let source = format!(
+        "{HEADER}    materials: {{
+        \"ball\": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
+    }},
+    entities: [
+        Entity(name: \"floor\", material: \"ball\", shape: Plane(point: (0, 0, 0), normal: (0, 1, 0))),
+        Entity(name: \"ball\", material: \"ball\", shape: Sphere(center: (0, 1e12, 0), radius: 1)),
+    ],
+)"
+    );
+    let text = error_of("entity-like-material", &source);
+    let line = source
+        .lines()
+        .position(|l| l.contains("name: \"ball\""))
+        .expect("entity")
+        + 1;
+    let col = source
+        .lines()
+        .nth(line - 1)
+        .expect("line")
+        .find("\"ball\"")
+        .expect("name")
+        + 1;
+    assert_eq!(location(&text), (line, col), "{text}");
+    assert!(message(&text).contains("beyond"), "{text}");
+}

@@ -168,6 +168,23 @@ impl<'a> Locator<'a> {
         self.entities.get(index).copied()
     }
 
+    /// Offset of the string literal `text` within the file's `index`-th entity: after its
+    /// `Entity(` and before the next one. Reads that entity's text up to the string.
+    pub fn in_entity(&self, index: usize, text: &str) -> Option<usize> {
+        let from = self.entity(index)?;
+        let mut found = None;
+        let read = tokens(self.source, from, |t| match t {
+            Token::Str(at, s) if s == text => {
+                found = Some(at);
+                false
+            }
+            Token::Entity(at) => at == from,
+            Token::Str(..) => true,
+        });
+        self.scanned.set(self.scanned.get() + read as u64);
+        found
+    }
+
     /// Offset of the first string literal `text` at or after `from`, which must be the start of
     /// a token (an entity or a string, as returned by the other queries). Reads from `from` on.
     pub fn after(&self, text: &str, from: usize) -> Option<usize> {
@@ -357,5 +374,13 @@ Entity(name: r#"a"#, m: "a")"##;
         let second = l.entity(1).expect("second entity");
         assert_eq!(l.after("a", second), l.second("a"));
         assert_eq!(l.after("a", l.first("a").expect("first")), l.first("a"));
+        assert_eq!(l.in_entity(2, "a"), l.second("a"));
+        assert_eq!(l.in_entity(0, "a"), l.first("a"));
+        assert_eq!(
+            l.in_entity(1, "a"),
+            None,
+            "the next entity's strings are not its own"
+        );
+        assert_eq!(l.in_entity(3, "a"), None);
     }
 }

@@ -179,7 +179,7 @@ impl Provenance {
         let mut places = Places::new(&self.sources);
         let mut at = |o: &Origin, name: &str| {
             let l = places.locator(o.file)?;
-            o.name_offset(name, l).map(|off| l.location(off))
+            o.offset(name, l).map(|off| l.location(off))
         };
         let entities = self
             .origins

@@ -79,26 +79,18 @@ pub struct Origin {
 
 impl Origin {
     /// Offset of the entity named `qualified` in its file, found by that file's locator: its
-    /// name's first string literal, or for an unnamed entity its `Entity(`.
+    /// name's string literal within its own `Entity(…)` (so that a material of the same name is
+    /// not taken for it; the first string literal of the name where the entity is not written
+    /// as `Entity(…)`), or for an unnamed entity its `Entity(`. Reads the entity's text up to
+    /// its name.
     pub fn offset(&self, qualified: &str, locator: &Locator) -> Option<usize> {
         if self.named {
-            locator.first(qualified.get(self.prefix as usize..)?)
+            let name = qualified.get(self.prefix as usize..)?;
+            locator
+                .in_entity(self.index as usize, name)
+                .or_else(|| locator.first(name))
         } else {
             locator.entity(self.index as usize)
-        }
-    }
-
-    /// Like [`Origin::offset`], but a named entity's name is looked for within its own
-    /// `Entity(…)`: the first string literal of the name at or after the file's `index`-th
-    /// `Entity(`, so that a material or another file's entity of the same name is not taken
-    /// for it. Reads the entity's text up to its name.
-    pub fn name_offset(&self, qualified: &str, locator: &Locator) -> Option<usize> {
-        let entity = locator.entity(self.index as usize);
-        match (self.named, entity) {
-            (true, Some(at)) => locator
-                .after(qualified.get(self.prefix as usize..)?, at)
-                .or_else(|| self.offset(qualified, locator)),
-            _ => self.offset(qualified, locator),
         }
     }
 }
@@ -181,8 +173,8 @@ fn parse<T: serde::de::DeserializeOwned>(path: &Path, source: &str) -> Result<T,
 /// What an error points at, resolved only when the error is made.
 #[derive(Clone, Copy)]
 enum Anchor<'s> {
-    /// The `index`-th entity of the file: its name's first string literal if it has one, else
-    /// its `Entity(`.
+    /// The `index`-th entity of the file: its name's string literal within its `Entity(…)` if it
+    /// has one (see [`Origin::offset`]), else its `Entity(`.
     Entity(usize, Option<&'s str>),
     /// The first string literal with these contents.
     Quoted(&'s str),
@@ -204,7 +196,10 @@ impl SourceFile {
     fn location(&self, anchor: Anchor, then: Option<&str>) -> Option<Location> {
         let locator = Locator::new(&self.source);
         let base = match anchor {
-            Anchor::Entity(_, Some(name)) | Anchor::Quoted(name) => locator.first(name),
+            Anchor::Entity(index, Some(name)) => locator
+                .in_entity(index, name)
+                .or_else(|| locator.first(name)),
+            Anchor::Quoted(name) => locator.first(name),
             Anchor::Entity(index, None) => locator.entity(index),
             Anchor::Again(name) => locator.second(name).or_else(|| locator.first(name)),
         };
