@@ -16,7 +16,7 @@ pub const MAX_INPUT_BYTES: u64 = 1 << 30;
 /// that grows between the check and the read is refused too rather than read whole. A device or
 /// a pipe (`/dev/zero`, a FIFO) would be read forever, and is refused before it is read.
 pub fn read_bounded(path: &Path, limit: u64) -> Result<(Metadata, Vec<u8>), String> {
-    let file = File::open(path).map_err(|e| e.to_string())?;
+    let file = open_without_blocking(path).map_err(|e| e.to_string())?;
     let meta = file.metadata().map_err(|e| e.to_string())?;
     if meta.is_dir() {
         return Err("is a directory, not a file".into());
@@ -39,6 +39,19 @@ pub fn read_bounded(path: &Path, limit: u64) -> Result<(Metadata, Vec<u8>), Stri
         ));
     }
     Ok((meta, bytes))
+}
+
+/// Opens `path` for reading without waiting for a writer: opening a FIFO would otherwise block
+/// until one came, before its type could be checked on the opened file.
+fn open_without_blocking(path: &Path) -> std::io::Result<File> {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(rustix::fs::OFlags::NONBLOCK.bits() as i32);
+    }
+    options.open(path)
 }
 
 /// The text of the file at `path` (a scene or a prefab), of at most [`MAX_INPUT_BYTES`] bytes of
@@ -81,6 +94,19 @@ mod tests {
         assert!(err.contains("not a regular file"), "{err}");
         let err = read_bounded(&std::env::temp_dir(), 1 << 20).expect_err("a directory");
         assert!(err.contains("directory"), "{err}");
+    }
+
+    #[test]
+    fn a_fifo_is_refused_without_waiting_for_a_writer() {
+        let path = temp("pipe.ron");
+        let _ = std::fs::remove_file(&path);
+        let made = std::process::Command::new("mkfifo")
+            .arg(&path)
+            .status()
+            .expect("mkfifo");
+        assert!(made.success());
+        let err = read_text(&path).expect_err("a FIFO");
+        assert!(err.contains("not a regular file"), "{err}");
     }
 
     #[test]
