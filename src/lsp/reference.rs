@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 
 use super::outline::Outline;
 use super::syntax::{Context, Kind, Token, slice};
+use crate::scene::bounded_read::read_bounded;
 
 /// What a string names.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -88,18 +89,8 @@ pub const MAX_PREFAB_BYTES: u64 = 16 << 20;
 
 /// The text of the prefab at `path`, if it is a regular file of at most [`MAX_PREFAB_BYTES`].
 pub fn read_prefab(path: &Path) -> Option<String> {
-    use std::io::Read;
-    let meta = std::fs::metadata(path).ok()?;
-    if !meta.is_file() || meta.len() > MAX_PREFAB_BYTES {
-        return None;
-    }
-    let mut text = String::new();
-    std::fs::File::open(path)
-        .ok()?
-        .take(MAX_PREFAB_BYTES)
-        .read_to_string(&mut text)
-        .ok()?;
-    Some(text)
+    let (_, bytes) = read_bounded(path, MAX_PREFAB_BYTES).ok()?;
+    String::from_utf8(bytes).ok()
 }
 
 #[cfg(test)]
