@@ -117,3 +117,34 @@ fn a_warning_about_an_entity_named_like_a_material_points_at_the_entity() {
         "want {expected}…\ngot {stdout}"
     );
 }
+
+#[test]
+fn a_warning_about_a_material_points_at_its_definition_after_the_entities_naming_it() {
+    let dir = temp_dir("check-locations-materials");
+    let scene = r#"Scene(
+    camera: Camera(position: (0, 1, -10), look_at: (0, 0, 0)),
+    entities: [
+        Entity(name: "ball", material: "hot", shape: Sphere(center: (0, 0, 0), radius: 1)),
+    ],
+    materials: {
+        "hot": Diffuse(albedo: Constant((1.5, 0.5, 0.5))),
+    },
+)"#;
+    let path = write_scene(&dir, "s.ron", scene);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .arg("check")
+        .arg(&path)
+        .output()
+        .expect("run rondo check");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    // The entity's reference is the first "hot" of the file, the definition the second.
+    let expected = format!(
+        "warning: {}:{}: material \"hot\": albedo component",
+        path.display(),
+        line_col(scene, "\"hot\"", 1)
+    );
+    assert!(
+        stdout.lines().any(|l| l.starts_with(&expected)),
+        "want {expected}…\ngot {stdout}"
+    );
+}

@@ -90,6 +90,9 @@ pub struct Locator<'a> {
     marks: Vec<(usize, u32, u32)>,
     /// First and second offset (of the opening quote) of each string literal's raw contents.
     strings: HashMap<&'a str, (usize, Option<usize>)>,
+    /// Offset of the first string literal with each raw contents that is a map's key (followed
+    /// by `:`): a material's definition in a `materials` map.
+    keys: HashMap<&'a str, usize>,
     /// Offsets of every `Entity(` (the `E`), in order.
     entities: Vec<usize>,
     /// Bytes read so far: the two scans, then every query.
@@ -98,8 +101,9 @@ pub struct Locator<'a> {
 
 /// One lexical item the scan reports.
 enum Token<'a> {
-    /// A string literal starting at the offset, with its raw (still escaped) contents.
-    Str(usize, &'a str),
+    /// A string literal starting at the offset, with its raw (still escaped) contents, and
+    /// whether a `:` follows it (a map's key).
+    Str(usize, &'a str, bool),
     /// `Entity` followed by `(` at the offset.
     Entity(usize),
 }
@@ -124,10 +128,14 @@ impl<'a> Locator<'a> {
             }
         }
         let mut strings = HashMap::new();
+        let mut keys = HashMap::new();
         let mut entities = Vec::new();
         tokens(source, 0, |t| {
             match t {
-                Token::Str(at, text) => {
+                Token::Str(at, text, key) => {
+                    if key {
+                        keys.entry(text).or_insert(at);
+                    }
                     strings
                         .entry(text)
                         .and_modify(|e: &mut (usize, Option<usize>)| {
@@ -143,6 +151,7 @@ impl<'a> Locator<'a> {
             source,
             marks,
             strings,
+            keys,
             entities,
             scanned: Cell::new(2 * source.len() as u64),
         }
@@ -163,6 +172,13 @@ impl<'a> Locator<'a> {
         self.strings.get(text).and_then(|e| e.1)
     }
 
+    /// Offset of the definition of material `name`: the first string literal of the name that
+    /// is a map's key (followed by `:`), wherever entities name the material before it; else
+    /// the first string literal of the name.
+    pub fn material(&self, name: &str) -> Option<usize> {
+        self.keys.get(name).copied().or_else(|| self.first(name))
+    }
+
     /// Offset of the `index`-th `Entity(` of the file.
     pub fn entity(&self, index: usize) -> Option<usize> {
         self.entities.get(index).copied()
@@ -174,7 +190,7 @@ impl<'a> Locator<'a> {
         let from = self.entity(index)?;
         let mut found = None;
         let read = tokens(self.source, from, |t| match t {
-            Token::Str(at, s) if s == text => {
+            Token::Str(at, s, _) if s == text => {
                 found = Some(at);
                 false
             }
@@ -190,7 +206,7 @@ impl<'a> Locator<'a> {
     pub fn after(&self, text: &str, from: usize) -> Option<usize> {
         let mut found = None;
         let read = tokens(self.source, from, |t| match t {
-            Token::Str(at, s) if s == text => {
+            Token::Str(at, s, _) if s == text => {
                 found = Some(at);
                 false
             }
@@ -231,7 +247,8 @@ fn tokens<'a>(source: &'a str, from: usize, mut each: impl FnMut(Token<'a>) -> b
         match b[i] {
             b'"' => {
                 let end = close(i + 1);
-                if !each(Token::Str(i, source.get(i + 1..end).unwrap_or_default())) {
+                let text = source.get(i + 1..end).unwrap_or_default();
+                if !each(Token::Str(i, text, colon_after(b, end + 1))) {
                     return end - from;
                 }
                 i = end + 1;
@@ -257,7 +274,7 @@ fn tokens<'a>(source: &'a str, from: usize, mut each: impl FnMut(Token<'a>) -> b
                     if let Some(raw) = raw_string(b, i) {
                         let end = raw.contents.end;
                         let text = source.get(raw.contents).unwrap_or_default();
-                        if !each(Token::Str(start, text)) {
+                        if !each(Token::Str(start, text, colon_after(b, raw.end))) {
                             return end - from;
                         }
                         i = raw.end;
@@ -273,6 +290,26 @@ fn tokens<'a>(source: &'a str, from: usize, mut each: impl FnMut(Token<'a>) -> b
         }
     }
     b.len().saturating_sub(from)
+}
+
+/// Whether the first byte at or after `at` outside whitespace and comments is a `:`.
+fn colon_after(b: &[u8], mut at: usize) -> bool {
+    while let Some(&c) = b.get(at) {
+        match c {
+            c if c.is_ascii_whitespace() => at += 1,
+            b'/' if b.get(at + 1) == Some(&b'/') => {
+                at = b[at..]
+                    .iter()
+                    .position(|&c| c == b'\n')
+                    .map_or(b.len(), |p| at + p);
+            }
+            b'/' if b.get(at + 1) == Some(&b'*') => {
+                at = block_comment_end(b, at).unwrap_or(b.len());
+            }
+            c => return c == b':',
+        }
+    }
+    false
 }
 
 /// The offset past the `*/` that closes the (nestable) block comment opening at `from`, or
@@ -382,5 +419,18 @@ Entity(name: r#"a"#, m: "a")"##;
             "the next entity's strings are not its own"
         );
         assert_eq!(l.in_entity(3, "a"), None);
+    }
+
+    #[test]
+    fn a_material_is_found_at_its_key_after_entities_that_name_it() {
+        let s = r#"Scene(entities: [Entity(name: "gold", material: "gold")],
+    materials: { "gold" /* the key */ : Metal(albedo: Constant((1, 0.8, 0.3))), "tin": Metal() })"#;
+        let l = Locator::new(s);
+        assert_eq!(
+            l.material("gold"),
+            Some(s.find("\"gold\" /*").expect("key"))
+        );
+        assert_eq!(l.material("tin"), Some(s.find("\"tin\"").expect("key")));
+        assert_eq!(l.material("lead"), None);
     }
 }

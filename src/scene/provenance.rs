@@ -206,7 +206,7 @@ impl Provenance {
             if let Some((file, name)) = self.material_origins.get(key) {
                 let location = places
                     .locator(*file)
-                    .and_then(|l| l.first(name).map(|off| l.location(off)));
+                    .and_then(|l| l.material(name).map(|off| l.location(off)));
                 materials.insert(key.clone(), (*file, location));
             }
         }

@@ -187,7 +187,7 @@ impl Out<'_> {
         let origin = self.scene.material_origins.get(key);
         let location = origin.and_then(|(file, name)| {
             let l = self.places.locator(*file)?;
-            l.first(name).map(|off| l.location(off))
+            l.material(name).map(|off| l.location(off))
         });
         let path = origin
             .and_then(|(file, _)| self.places.path(*file))

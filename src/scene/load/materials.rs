@@ -56,7 +56,7 @@ impl Expander<'_> {
         let mut texture = |t: &TextureDesc| {
             self.texture(t, file.dir()).map_err(|(p, msg)| {
                 file.error(
-                    Anchor::Quoted(name),
+                    Anchor::Material(name),
                     Some(&p),
                     format!("material \"{name}\": {msg}"),
                 )
@@ -128,7 +128,7 @@ impl Expander<'_> {
                         Some(desc) => {
                             Some(self.normal_map(desc, file.dir()).map_err(|(p, msg)| {
                                 file.error(
-                                    Anchor::Quoted(name),
+                                    Anchor::Material(name),
                                     Some(&p),
                                     format!("material \"{name}\": normal_map: {msg}"),
                                 )

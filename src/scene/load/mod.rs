@@ -178,6 +178,9 @@ enum Anchor<'s> {
     Entity(usize, Option<&'s str>),
     /// The first string literal with these contents.
     Quoted(&'s str),
+    /// The material of this name: its key in the file's `materials` map (else the first string
+    /// literal of the name).
+    Material(&'s str),
     /// The second string literal with these contents (else the first).
     Again(&'s str),
 }
@@ -200,6 +203,7 @@ impl SourceFile {
                 .in_entity(index, name)
                 .or_else(|| locator.first(name)),
             Anchor::Quoted(name) => locator.first(name),
+            Anchor::Material(name) => locator.material(name),
             Anchor::Entity(index, None) => locator.entity(index),
             Anchor::Again(name) => locator.second(name).or_else(|| locator.first(name)),
         };
