@@ -15,7 +15,8 @@
 //! the first other vertex D is connected to the camera ([`super::camera::Camera::importance`],
 //! a lens point sampled on a thin lens) and splatted to the pixel it lands in.
 //!
-//! Each pass traces `N` light paths per sample index (one per 8 pixels, `PATHS_PER_PIXEL`):
+//! Each pass traces `N` light paths per sample index (from one per 256 pixels to one per 8, as
+//! the caustics' share of the image measured by a pilot says: [`budget`]):
 //! light path `k` of sample `s` draws from `Rng::for_sample(seed ⊕ LIGHT_SEED, k, s)` alone,
 //! and splats are added to the film's exact sums, so images are bit-identical for any thread
 //! count and any split of the samples. Splats are weighted `1 / N`: the film divides by the
@@ -30,6 +31,7 @@
 //! constant background, scenes with alpha masks (there `Caustics` is `Mis`), and light leaving
 //! an emitter inside tinted glass is not attenuated before its first hit.
 
+mod budget;
 pub mod emit;
 pub mod targets;
 
@@ -63,23 +65,6 @@ const CHUNK: u64 = 1024;
 /// memory of a pass to `BATCH · CHUNK` splats, whatever the image size.
 const BATCH: u64 = 64;
 
-/// Light paths per pixel and sample (see [`light_paths`]). The image's error is that of the
-/// camera paths plus that of the light paths, which falls as their number grows while their
-/// cost grows with it (a light path costs about 1.5 camera samples). Measured on `envmap.ron`
-/// and `sun_caustics.ron` at 64 spp against 4096-spp references (BENCHMARKS.md, "How many
-/// light paths"): the whole image's clamped error at equal time is lowest near one light path
-/// for every 8–12 pixels; one per pixel lowers the caustic pixels' error 2× more, at 2.2× the
-/// time of `Mis` on every scene with a mirror or glass ball, caustics or not.
-const PATHS_PER_PIXEL: f64 = 0.125;
-
-/// Light paths traced per sample of an image of `size`: [`PATHS_PER_PIXEL`] per pixel, at
-/// least one.
-fn light_paths(size: (u32, u32)) -> u64 {
-    ((u64::from(size.0) * u64::from(size.1)) as f64 * PATHS_PER_PIXEL)
-        .ceil()
-        .max(1.0) as u64
-}
-
 /// Traces the light paths of samples `samples` and adds their splats to `film` (see the
 /// module's notes); nothing unless the view's method is `Caustics`, the scene has no alpha
 /// masks, and it has a finite surface that may be perfect specular and a light.
@@ -104,7 +89,7 @@ pub fn splat_pass<L: Layout>(
         return Ok(stats);
     }
     let size = (film.width, film.height);
-    let paths = light_paths(size);
+    let paths = budget::light_paths(view, &sources, size, seed, &mut stats);
     let scale = 1.0 / paths as f32;
     let fixed = film.fixed();
     let chunks = paths.div_ceil(CHUNK);
