@@ -8,11 +8,12 @@
 //! | `GET /camera_write.js` | the page's side: `window.rondoCamera = {load(), save(cam), undo()}` |
 //!
 //! `GET /camera.json` answers
-//! `{"base":"<32 hex>","camera":{"position":[x,y,z],"look_at":[…],"up":[…],"fov":40,"aperture":0,"focus_distance":5},"text":"Camera(…)"}`:
-//! `base` names the bytes of the file read (a hash keyed by a secret of the session), `text` is
-//! the camera's value as written, `look_at` the point at the focus distance along the view
-//! (the file may have given a `direction`). A `Gltf(…)` camera, none, or one that does not
-//! parse answers `422`.
+//! `{"base":"<32 hex>","camera":{"position":[x,y,z],"look_at":[…],"up":[…],"fov":40,"aperture":0,"focus_distance":5},"text":"Camera(…)","error":null}`:
+//! `base` names the bytes of the file read (a hash keyed by random keys of the session), `text`
+//! is the camera's value as written, `look_at` the point at the focus distance along the view
+//! (the file may have given a `direction`). Where the file's camera cannot be written (a
+//! `Gltf(…)` camera, none, one that does not parse), `camera` and `text` are `null` and `error`
+//! says why. A file that cannot be read answers `503`.
 //!
 //! `POST /camera` takes the same camera fields and the `base` the page read, as a JSON object
 //! of at most [`MAX_BODY`] bytes, and replaces the text of the scene file's `camera:` value
@@ -211,12 +212,24 @@ fn read(scene: &SceneFile) -> Result<Value, Refusal> {
         .ok_or((404, "no scene file".to_string()))?;
     let text = read_text(path).map_err(|e| (503, format!("{}: {e}", path.display())))?;
     let base = scene.version(text.as_bytes());
-    let span = camera_span(&text).map_err(|e| (422, e.to_string()))?;
+    Ok(match own_camera(path, &text) {
+        Ok((camera, value)) => {
+            json!({ "base": base, "camera": camera_json(&camera), "text": value, "error": null })
+        }
+        Err(error) => json!({ "base": base, "camera": null, "text": null, "error": error }),
+    })
+}
+
+/// The scene text's own camera and the text of its value, or why there is none to write.
+fn own_camera<'a>(path: &Path, text: &'a str) -> Result<(CameraValues, &'a str), String> {
+    let span = camera_span(text).map_err(|e| e.to_string())?;
     let value = &text[span.value];
     let desc = match parse::<SceneCamera>(path, value) {
         Ok(SceneCamera::Camera(desc)) => desc,
-        Ok(SceneCamera::Gltf(_)) => return Err((422, CameraEditError::NotOwn(None).to_string())),
-        Err(e) => return Err((422, format!("the camera does not parse: {}", e.message))),
+        Ok(SceneCamera::Gltf(_)) => {
+            return Err(CameraEditError::NotOwn(Some("Gltf".into())).to_string());
+        }
+        Err(e) => return Err(format!("the camera does not parse: {}", e.message)),
     };
     let camera = CameraValues {
         position: desc.position,
@@ -226,7 +239,7 @@ fn read(scene: &SceneFile) -> Result<Value, Refusal> {
         aperture: desc.aperture,
         focus_distance: desc.focus_distance,
     };
-    Ok(json!({ "base": base, "camera": camera_json(&camera), "text": value }))
+    Ok((camera, value))
 }
 
 /// Checks and carries out `POST /camera`: the answer's JSON, `None` if the client left while

@@ -34,6 +34,11 @@ window.rondoCamera = (() => {
     const answer = await reply(await fetch("/camera.json", { cache: "no-store" }));
     base = answer.base;
     current = answer.camera;
+    if (current === null) {
+      const error = new Error(answer.error);
+      error.status = 422;
+      throw error;
+    }
     return current;
   }
 
