@@ -70,11 +70,10 @@ impl Rondo {
             .expect("start rondo");
         let (tx, lines) = channel();
         let pipe = child.stderr.take().expect("piped stderr");
+        // Read to the end: rondo must never write to a closed pipe.
         std::thread::spawn(move || {
             for line in BufReader::new(pipe).lines().map_while(Result::ok) {
-                if tx.send(line).is_err() {
-                    break;
-                }
+                let _ = tx.send(line);
             }
         });
         let line = wait_on(&lines, "the viewer line", |l| l.starts_with("viewer: "));
@@ -382,82 +381,84 @@ fn refused_writes_leave_the_file_untouched() {
     ];
     let original = rondo.bytes();
     let wrong_token = "0".repeat(32);
-    let cases: Vec<(&str, Reply, u16)> = vec![
-        ("no token", rondo.post(&good, &[("Origin", &origin)]), 403),
+    let stale = body(&"0".repeat(32), &new_camera());
+    let missing = json!({"base": base}).to_string();
+    let cases: Vec<(&str, String, Vec<(&str, &str)>, u16)> = vec![
+        ("no token", good.clone(), vec![page[0]], 403),
         (
             "a wrong token",
-            rondo.post(&good, &[("X-Rondo-Token", &wrong_token)]),
+            good.clone(),
+            vec![("X-Rondo-Token", &wrong_token)],
             403,
         ),
         (
             "the token twice",
-            rondo.post(&good, &[page[1], ("X-Rondo-Token", &wrong_token)]),
+            good.clone(),
+            vec![page[1], ("X-Rondo-Token", &wrong_token)],
             403,
         ),
         (
             "a foreign origin",
-            rondo.post(&good, &[("Origin", "http://evil.example"), page[1]]),
+            good.clone(),
+            vec![("Origin", "http://evil.example"), page[1]],
             403,
         ),
         (
             "a null origin",
-            rondo.post(&good, &[("Origin", "null"), page[1]]),
+            good.clone(),
+            vec![("Origin", "null"), page[1]],
             403,
         ),
         (
             "another port",
-            rondo.post(&good, &[("Origin", "http://127.0.0.1:1"), page[1]]),
+            good.clone(),
+            vec![("Origin", "http://127.0.0.1:1"), page[1]],
             403,
         ),
-        (
-            "a stale base",
-            rondo.post(&body(&"0".repeat(32), &new_camera()), &page),
-            409,
-        ),
-        ("malformed JSON", rondo.post("{\"base\": ", &page), 400),
-        ("not an object", rondo.post("[1, 2, 3]", &page), 400),
-        (
-            "a missing field",
-            rondo.post(&json!({"base": base}).to_string(), &page),
-            400,
-        ),
+        ("a stale base", stale, page.to_vec(), 409),
+        ("malformed JSON", "{\"base\": ".into(), page.to_vec(), 400),
+        ("not an object", "[1, 2, 3]".into(), page.to_vec(), 400),
+        ("a missing field", missing, page.to_vec(), 400),
         (
             "an unknown field",
-            rondo.post(&with(json!({"text": "Camera()"})), &page),
+            with(json!({"text": "Camera()"})),
+            page.to_vec(),
             400,
         ),
-        (
-            "fov 180",
-            rondo.post(&with(json!({"fov": 180})), &page),
-            400,
-        ),
+        ("fov 180", with(json!({"fov": 180})), page.to_vec(), 400),
         (
             "a negative aperture",
-            rondo.post(&with(json!({"aperture": -0.5})), &page),
+            with(json!({"aperture": -0.5})),
+            page.to_vec(),
             400,
         ),
         (
             "focus distance 0",
-            rondo.post(&with(json!({"focus_distance": 0})), &page),
+            with(json!({"focus_distance": 0})),
+            page.to_vec(),
             400,
         ),
         (
             "up along the view",
-            rondo.post(&with(json!({"up": [-1.0, -0.5, 4.3]})), &page),
+            with(json!({"up": [-1.0, -0.5, 4.3]})),
+            page.to_vec(),
             400,
         ),
         (
             "an f32 overflow",
-            rondo.post(&with(json!({"position": [1e39, 0, 0]})), &page),
+            with(json!({"position": [1e39, 0, 0]})),
+            page.to_vec(),
             400,
         ),
         (
             "look_at at the eye",
-            rondo.post(&with(json!({"look_at": [1.1, 0.7, -4.3]})), &page),
+            with(json!({"look_at": [1.1, 0.7, -4.3]})),
+            page.to_vec(),
             400,
         ),
     ];
-    for (what, reply, status) in cases {
+    for (what, body, headers, status) in cases {
+        let reply = rondo.post(&body, &headers);
         assert_eq!(reply.status, status, "{what}: {}", reply.text());
         assert_eq!(rondo.bytes(), original, "{what}: the file is untouched");
     }

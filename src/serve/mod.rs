@@ -333,7 +333,7 @@ impl Viewer {
     pub fn exposure_warning(&self) -> Option<String> {
         (!self.addr.ip().is_loopback()).then(|| {
             format!(
-                "the viewer listens on {}: anyone who can reach this machine on that network can see the images",
+                "the viewer listens on {}: anyone who can reach this machine on that network can see the images and rewrite the camera of the scene file",
                 self.addr
             )
         })
