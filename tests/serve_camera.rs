@@ -303,6 +303,10 @@ fn a_write_changes_only_the_camera_and_the_watch_shows_a_fresh_render() {
     let written = rondo.post(&body(base, &camera), &headers);
     assert_eq!(written.status, 200, "{}", written.text());
     let answer: Value = serde_json::from_slice(&written.body).expect("JSON");
+    assert_eq!(
+        answer["camera"], camera,
+        "the answer's numbers are the shortest"
+    );
 
     // Only the value's bytes changed.
     let after = String::from_utf8(rondo.bytes()).expect("text");

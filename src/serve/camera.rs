@@ -140,15 +140,18 @@ impl WriteBody {
     }
 }
 
-/// A camera as JSON.
+/// A camera as JSON, each number the shortest decimal that reads back as its `f32` (`33.3`, not
+/// the `33.29999923706055` of its `f64`).
 fn camera_json(c: &CameraValues) -> Value {
+    let n = |v: f32| v.to_string().parse::<f64>().unwrap_or(f64::from(v));
+    let v = |v: Vec3| v.to_array().map(n);
     json!({
-        "position": c.position.to_array(),
-        "look_at": c.look_at.to_array(),
-        "up": c.up.to_array(),
-        "fov": c.fov,
-        "aperture": c.aperture,
-        "focus_distance": c.focus_distance,
+        "position": v(c.position),
+        "look_at": v(c.look_at),
+        "up": v(c.up),
+        "fov": n(c.fov),
+        "aperture": n(c.aperture),
+        "focus_distance": n(c.focus_distance),
     })
 }
 
