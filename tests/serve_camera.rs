@@ -365,6 +365,9 @@ fn a_write_changes_only_the_camera_and_the_watch_shows_a_fresh_render() {
     assert_eq!(c.fov, 40.0);
 }
 
+/// A refused write: what it is, its body, its headers, the status expected.
+type Case<'a> = (&'a str, String, Vec<(&'a str, &'a str)>, u16);
+
 #[test]
 fn refused_writes_leave_the_file_untouched() {
     let rondo = Rondo::start("refused", &scene_text());
@@ -387,7 +390,7 @@ fn refused_writes_leave_the_file_untouched() {
     let wrong_token = "0".repeat(32);
     let stale = body(&"0".repeat(32), &new_camera());
     let missing = json!({"base": base}).to_string();
-    let cases: Vec<(&str, String, Vec<(&str, &str)>, u16)> = vec![
+    let cases: Vec<Case> = vec![
         ("no token", good.clone(), vec![page[0]], 403),
         (
             "a wrong token",
