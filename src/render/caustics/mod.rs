@@ -16,7 +16,7 @@
 //! a lens point sampled on a thin lens) and splatted to the pixel it lands in.
 //!
 //! Each pass traces `N` light paths per sample index (from one per 256 pixels to one per 8, as
-//! the caustics' share of the image measured by a pilot says: [`budget`]):
+//! the caustics' share of the image measured by a pilot says: the `budget` module):
 //! light path `k` of sample `s` draws from `Rng::for_sample(seed ⊕ LIGHT_SEED, k, s)` alone,
 //! and splats are added to the film's exact sums, so images are bit-identical for any thread
 //! count and any split of the samples. Splats are weighted `1 / N`: the film divides by the
