@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 use image::RgbImage;
 
 use crate::film::Film;
+use crate::scene::bounded_read::open_regular;
 use crate::scene::format::{MAX_PIXELS, MAX_SIDE};
 
 /// The ε added to `r²` in the denominator of the relative MSE.
@@ -108,8 +109,13 @@ impl Image {
             path: path.to_path_buf(),
             source,
         };
-        let mut reader = image::ImageReader::open(path)
-            .map_err(|e| read_error(image::ImageError::IoError(e)))?
+        let (file, _) = open_regular(path)
+            .map_err(|e| read_error(image::ImageError::IoError(std::io::Error::other(e))))?;
+        let mut reader = image::ImageReader::new(std::io::BufReader::new(file));
+        if let Ok(format) = image::ImageFormat::from_path(path) {
+            reader.set_format(format);
+        }
+        let mut reader = reader
             .with_guessed_format()
             .map_err(|e| read_error(image::ImageError::IoError(e)))?;
         let mut limits = image::Limits::default();

@@ -64,7 +64,7 @@ fn a_mirrored_sun_lights_a_ceiling_as_the_closed_form_says() {
         "mirror.ron",
         r#"Scene(
     camera: Camera(position: (-3, 0.2, 0), look_at: (-3, 2, 0), up: (0, 0, 1), fov: 30),
-    settings: Settings(width: 24, height: 24, spp: 256, max_depth: 3, background: (0, 0, 0),
+    settings: Settings(width: 24, height: 24, spp: 2048, max_depth: 3, background: (0, 0, 0),
         sun: Sun(direction: (1, 1, 0), angular_diameter: 0.53, irradiance: 3.0, colour: (1, 1, 1))),
     materials: {
         "ceiling": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),

@@ -588,3 +588,50 @@ fn scene_and_prefab_files_over_the_size_bound_are_refused_before_they_are_read()
     let largest = LARGEST.load(Ordering::Relaxed);
     assert!(largest <= ALLOCATION_CAP, "a {largest}-byte allocation");
 }
+
+#[test]
+fn pipes_devices_and_directories_given_as_partials_or_images_are_refused_without_waiting() {
+    // A FIFO opened for reading waits for a writer, and a device is read forever: a partial
+    // (`rondo merge`) or an image (`rondo diff`) named by such a path must be refused from the
+    // opened file's type, at once. Each read runs on its own thread, so a reader that waits
+    // fails this test after 20 s instead of hanging it.
+    let dir = temp_dir("fuzz-pipes");
+    let fifo = dir.join("pipe.exr");
+    let _ = std::fs::remove_file(&fifo);
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo");
+    assert!(made.success());
+    let within = |what: &str, read: Box<dyn FnOnce() -> String + Send>| {
+        let (send, answer) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let _ = send.send(read());
+        });
+        let e = answer
+            .recv_timeout(std::time::Duration::from_secs(20))
+            .unwrap_or_else(|_| panic!("reading {what} did not return"));
+        assert!(
+            e.contains("not a regular file") || e.contains("directory"),
+            "{what}: {e}"
+        );
+    };
+    for path in [fifo.clone(), "/dev/zero".into(), dir.to_path_buf()] {
+        let p = path.clone();
+        within(
+            &format!("{} as a partial", path.display()),
+            Box::new(move || match rondo::farm::partial::read_meta(&p) {
+                Ok(_) => "read".into(),
+                Err(e) => e.0,
+            }),
+        );
+        let p = path.clone();
+        within(
+            &format!("{} as an image", path.display()),
+            Box::new(move || match rondo::metrics::Image::read(&p) {
+                Ok(_) => "read".into(),
+                Err(e) => e.to_string(),
+            }),
+        );
+    }
+}

@@ -52,6 +52,7 @@ pub fn run(
             let serve_options = rondo::serve::Options {
                 allowed_hosts,
                 editor_url,
+                scene: Some(scene.to_path_buf()),
                 ..Default::default()
             };
             let (viewer, feed) = rondo::serve::Viewer::start(addr, fall_back, serve_options)?;

@@ -14,6 +14,7 @@ use glam::{Vec2, Vec3};
 
 use super::ExportError;
 use crate::scene::assets::AssetCache;
+use crate::scene::bounded_read::{MAX_INPUT_BYTES, read_bounded};
 use crate::scene::gltf_read::GltfImage;
 use crate::scene::load::LoadedScene;
 use crate::shading::material::Material;
@@ -231,8 +232,11 @@ impl ImageFiles {
 /// The image files the scene depends on, and the images of its glTF files.
 fn candidates(scene: &LoadedScene, cache: &mut AssetCache) -> Result<Vec<Candidate>, ExportError> {
     let mut out = Vec::new();
-    let read =
-        |p: &Path| std::fs::read(p).map_err(|e| ExportError(format!("{}: {e}", p.display())));
+    let read = |p: &Path| {
+        read_bounded(p, MAX_INPUT_BYTES)
+            .map(|(_, bytes)| bytes)
+            .map_err(|e| ExportError(format!("{}: {e}", p.display())))
+    };
     for dep in scene.dependencies.iter().skip(1) {
         let ext = dep
             .extension()

@@ -16,14 +16,7 @@ pub const MAX_INPUT_BYTES: u64 = 1 << 30;
 /// that grows between the check and the read is refused too rather than read whole. A device or
 /// a pipe (`/dev/zero`, a FIFO) would be read forever, and is refused before it is read.
 pub fn read_bounded(path: &Path, limit: u64) -> Result<(Metadata, Vec<u8>), String> {
-    let file = open_without_blocking(path).map_err(|e| e.to_string())?;
-    let meta = file.metadata().map_err(|e| e.to_string())?;
-    if meta.is_dir() {
-        return Err("is a directory, not a file".into());
-    }
-    if !meta.is_file() {
-        return Err("is not a regular file".into());
-    }
+    let (file, meta) = open_regular(path)?;
     let too_big = |len: u64| format!("is {len} bytes; files of at most {limit} bytes are read");
     if meta.len() > limit {
         return Err(too_big(meta.len()));
@@ -39,6 +32,22 @@ pub fn read_bounded(path: &Path, limit: u64) -> Result<(Metadata, Vec<u8>), Stri
         ));
     }
     Ok((meta, bytes))
+}
+
+/// The regular file at `path`, opened for reading, and its metadata, for readers that stream
+/// it with their own bounds (an OpenEXR partial, an image decoder with allocation limits).
+/// Directories, devices and pipes are refused from the opened file's type, without waiting for
+/// a FIFO's writer or reading a device.
+pub fn open_regular(path: &Path) -> Result<(File, Metadata), String> {
+    let file = open_without_blocking(path).map_err(|e| e.to_string())?;
+    let meta = file.metadata().map_err(|e| e.to_string())?;
+    if meta.is_dir() {
+        return Err("is a directory, not a file".into());
+    }
+    if !meta.is_file() {
+        return Err("is not a regular file".into());
+    }
+    Ok((file, meta))
 }
 
 /// Opens `path` for reading without waiting for a writer: opening a FIFO would otherwise block

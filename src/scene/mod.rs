@@ -21,6 +21,7 @@
 
 pub mod assets;
 pub mod bounded_read;
+pub mod camera_edit;
 pub mod check;
 pub mod error;
 pub mod format;

@@ -1,7 +1,8 @@
 //! The HTTP/1.1 the viewer speaks, over [`std::net`]: one request per connection, its head read
-//! with a size limit and a deadline, the answer sent with `Connection: close`. Request bodies
-//! are never read (no route takes one); what a client sends after the head is drained for a
-//! moment before the socket closes, so that the answer is not lost to a reset.
+//! with a size limit and a deadline, the answer sent with `Connection: close`. A body is read only
+//! where a route takes one ([`read_body`]: a `Content-Length` of at most a given size, within a
+//! deadline); what a client sends that is not read is drained for a moment before the socket
+//! closes, so that the answer is not lost to a reset.
 
 use std::io::{ErrorKind, Read, Write};
 use std::net::{Shutdown, TcpStream};
@@ -20,6 +21,52 @@ pub struct Request {
     pub target: String,
     /// The `Host` header's value, if there is one.
     pub host: Option<String>,
+    /// Every header line but `Host`, as (name, value) with the value's blanks trimmed, in the
+    /// order sent (bounded by the head's size).
+    pub headers: Vec<(String, String)>,
+    /// What arrived after the head in the same reads: the start of a body.
+    pub rest: Vec<u8>,
+}
+
+/// A header of a request, by the number of times it was sent.
+#[derive(Debug, PartialEq, Eq)]
+pub enum Header<'a> {
+    /// Not sent.
+    Absent,
+    /// Sent once, with this value.
+    One(&'a str),
+    /// Sent more than once.
+    Repeated,
+}
+
+impl Request {
+    /// The header `name` (compared without regard to case).
+    pub fn header(&self, name: &str) -> Header<'_> {
+        let mut values = self
+            .headers
+            .iter()
+            .filter(|(n, _)| n.eq_ignore_ascii_case(name));
+        match (values.next(), values.next()) {
+            (None, _) => Header::Absent,
+            (Some((_, v)), None) => Header::One(v),
+            (Some(_), Some(_)) => Header::Repeated,
+        }
+    }
+}
+
+/// Why a request body could not be read.
+#[derive(Debug, PartialEq, Eq)]
+pub enum BodyError {
+    /// No `Content-Length` (or a `Transfer-Encoding`, which is not read).
+    LengthRequired,
+    /// A `Content-Length` that is not one decimal number.
+    BadLength,
+    /// Longer than the limit.
+    TooLarge,
+    /// The deadline passed before the whole body arrived.
+    Timeout,
+    /// The client closed before the whole body arrived.
+    Closed,
 }
 
 /// Why no request could be read.
@@ -52,7 +99,9 @@ pub fn read_head(
     let mut len = 0;
     loop {
         if let Some(end) = head_end(&buf[..len]) {
-            return parse_head(&buf[..end]);
+            let mut request = parse_head(&buf[..end])?;
+            request.rest = buf[end..len].to_vec();
+            return Ok(request);
         }
         if len == max {
             return Err(HeadError::TooLarge);
@@ -122,6 +171,9 @@ fn parse_head(head: &[u8]) -> Result<Request, HeadError> {
         return Err(HeadError::Version);
     }
     let mut host = None;
+    let mut headers = Vec::new();
+    // Both are printable ASCII, checked above; header values other than Host need not be.
+    let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
     for line in lines.take_while(|l| !l.is_empty()) {
         let Some(colon) = line.iter().position(|&b| b == b':') else {
             return Err(HeadError::Malformed("a header line without a colon"));
@@ -137,15 +189,68 @@ fn parse_head(head: &[u8]) -> Result<Request, HeadError> {
             if host.replace(value.to_string()).is_some() {
                 return Err(HeadError::Malformed("more than one Host header"));
             }
+        } else {
+            headers.push((text(name), text(value.trim_ascii())));
         }
     }
-    // Both are printable ASCII, checked above.
-    let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
     Ok(Request {
         method: text(method),
         target: text(target),
         host,
+        headers,
+        rest: Vec::new(),
     })
+}
+
+/// Reads the body of `request`, whose head was read from `stream`: `Content-Length` bytes, at
+/// most `max`, within `timeout` from now. A length over `max` is refused before anything is
+/// read or allocated; so is a body sent with `Transfer-Encoding` (chunked bodies are not read).
+pub fn read_body(
+    stream: &mut TcpStream,
+    request: &Request,
+    max: usize,
+    timeout: Duration,
+) -> Result<Vec<u8>, BodyError> {
+    if request.header("transfer-encoding") != Header::Absent {
+        return Err(BodyError::LengthRequired);
+    }
+    let length = match request.header("content-length") {
+        Header::Absent => return Err(BodyError::LengthRequired),
+        Header::Repeated => return Err(BodyError::BadLength),
+        Header::One(v)
+            if v.is_empty() || v.len() > 19 || !v.bytes().all(|b| b.is_ascii_digit()) =>
+        {
+            return Err(BodyError::BadLength);
+        }
+        Header::One(v) => v.parse::<usize>().map_err(|_| BodyError::BadLength)?,
+    };
+    if length > max {
+        return Err(BodyError::TooLarge);
+    }
+    let mut body = request.rest.clone();
+    if body.len() > length {
+        // More than the body: a second request, which is not read.
+        body.truncate(length);
+    }
+    let deadline = Instant::now() + timeout;
+    let mut buf = [0; 4096];
+    while body.len() < length {
+        let left = deadline.saturating_duration_since(Instant::now());
+        if left.is_zero() || stream.set_read_timeout(Some(left)).is_err() {
+            return Err(BodyError::Timeout);
+        }
+        let want = (length - body.len()).min(buf.len());
+        match stream.read(&mut buf[..want]) {
+            Ok(0) => return Err(BodyError::Closed),
+            Ok(n) => body.extend_from_slice(&buf[..n]),
+            Err(e) if e.kind() == ErrorKind::Interrupted => {}
+            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {
+                return Err(BodyError::Timeout);
+            }
+            Err(_) => return Err(BodyError::Closed),
+        }
+    }
+    Ok(body)
 }
 
 /// The reason phrase of the statuses the viewer sends.
@@ -157,6 +262,10 @@ fn reason(status: u16) -> &'static str {
         404 => "Not Found",
         405 => "Method Not Allowed",
         408 => "Request Timeout",
+        409 => "Conflict",
+        411 => "Length Required",
+        413 => "Content Too Large",
+        422 => "Unprocessable Content",
         431 => "Request Header Fields Too Large",
         500 => "Internal Server Error",
         503 => "Service Unavailable",
@@ -268,9 +377,20 @@ mod tests {
                 method: "GET".into(),
                 target: "/image.png?t=1".into(),
                 host: Some("localhost:80".into()),
+                headers: vec![("User-Agent".into(), "x".into())],
+                rest: Vec::new(),
             })
         );
         assert_eq!(parse("HEAD / HTTP/1.0\r\n\r\n").map(|r| r.host), Ok(None));
+    }
+
+    #[test]
+    fn headers_are_found_by_name_once_or_repeated() {
+        let request = parse("POST / HTTP/1.1\r\nX-Token:  a1 \r\norigin: o\r\nOrigin: p\r\n\r\n")
+            .expect("parses");
+        assert_eq!(request.header("x-token"), Header::One("a1"));
+        assert_eq!(request.header("ORIGIN"), Header::Repeated);
+        assert_eq!(request.header("content-length"), Header::Absent);
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! The live viewer of `rondo watch --serve`: an HTTP server that shows every pass in a browser.
 //!
-//! Routes (anything else is `404 Not Found`; methods other than GET and HEAD are `405`; `HEAD`
-//! answers the same headers as `GET`, without a body):
+//! Routes (anything else is `404 Not Found`; methods other than GET and HEAD are `405`, but for
+//! `/camera`, which takes POST only; `HEAD` answers the same headers as `GET`, without a body):
 //!
 //! | route | content |
 //! |---|---|
@@ -15,6 +15,9 @@
 //! | `GET /normal.f32` | that pass's mean shading normal (components in [-1, 1]), as raw floats |
 //! | `GET /events` | server-sent events: one JSON object per `data:` line (see [`Feed`]) |
 //! | `GET /pick.js`, `/pick/…` | picking: which entity each pixel shows, and where it is written (`pick.rs`) |
+//! | `GET /camera.json` | the scene file's camera and the file's version (`camera.rs`) |
+//! | `POST /camera` | writes a camera into the scene file: only its `camera:` value changes (`camera.rs`) |
+//! | `GET /camera_write.js` | the page's side of the camera write (`window.rondoCamera`) |
 //!
 //! The images answer `503` until the first pass exists; the denoised pass's images answer `404`
 //! while there is none for the render shown (none yet, denoising off, or no denoiser). Each
@@ -25,6 +28,11 @@
 //! address (`127.0.0.1`, `192.168.1.5`, `[::1]`), `localhost`, or a name given with
 //! `--allow-host` (any port, so SSH port forwards work), and `403` to the rest: a web page
 //! elsewhere cannot rebind its own name to the server's address and read the images.
+//!
+//! The one route that changes a file, `POST /camera`, also needs the session's secret in
+//! `X-Rondo-Token` (`secret.rs`; the page gets it in its HTML), refuses an `Origin` other than
+//! `http://<Host>`, writes only the watched scene file itself (never a prefab, never through a
+//! symbolic link) and only if it is still the version the page read (see `camera.rs`).
 //!
 //! The server is `http.rs`: std sockets, one thread and one request per connection, every
 //! resource bounded by [`Limits`] (head size, time to send it, stalled writes, open
@@ -39,19 +47,23 @@
 //! queue: a client that stalls loses its oldest queued events, never blocks the render; a
 //! closed client is dropped at its next write.
 
+mod camera;
 mod event_text;
 mod feed;
 mod http;
 mod images;
 mod pick;
+mod secret;
 
 use std::io::Write;
 use std::net::{IpAddr, Ipv4Addr, Ipv6Addr, SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
+pub use camera::MAX_BODY;
 pub use event_text::{CUT, MAX_MESSAGE, MAX_SOURCE_LINE, changed_text};
 pub use feed::{Client, Feed};
 pub use images::{DenoisedImages, DenoisedLayer, Encoding, Frame, RAW_MAGIC};
@@ -112,6 +124,9 @@ pub struct Options {
     /// The template that turns a `file:line:col` of picking into a link (`--editor-url`,
     /// checked by [`parse_editor_url`]).
     pub editor_url: Option<String>,
+    /// The watched scene file, whose camera `POST /camera` may rewrite (`None`: the camera
+    /// routes answer `404`).
+    pub scene: Option<PathBuf>,
 }
 
 /// Why the server could not start.
@@ -120,6 +135,9 @@ pub enum ServeError {
     /// The address is not `HOST:PORT` or a port.
     #[error("--serve {0:?}: expected HOST:PORT (e.g. 127.0.0.1:8080) or a port")]
     Address(String),
+    /// No session secret could be drawn.
+    #[error("cannot serve: {0}")]
+    Secret(String),
     /// Binding failed.
     #[error("cannot serve on {addr}: {message}")]
     Bind {
@@ -194,6 +212,12 @@ fn host_allowed(host: &str, allowed: &[String]) -> bool {
 struct Context {
     feed: Feed,
     options: Options,
+    /// The page, with the session's secret in it.
+    page: String,
+    /// The secret a write must carry.
+    secret: secret::Secret,
+    /// The scene file of the camera routes.
+    scene: camera::SceneFile,
     /// Connections open now.
     open: AtomicUsize,
 }
@@ -253,8 +277,12 @@ impl Viewer {
         })?;
         let feed = Feed::new();
         let stop = Arc::new(AtomicBool::new(false));
+        let secret = secret::Secret::new().map_err(ServeError::Secret)?;
         let context = Arc::new(Context {
             feed: feed.clone(),
+            page: secret.page_with(PAGE),
+            secret,
+            scene: camera::SceneFile::new(options.scene.clone()),
             options,
             open: AtomicUsize::new(0),
         });
@@ -305,7 +333,7 @@ impl Viewer {
     pub fn exposure_warning(&self) -> Option<String> {
         (!self.addr.ip().is_loopback()).then(|| {
             format!(
-                "the viewer listens on {}: anyone who can reach this machine on that network can see the images",
+                "the viewer listens on {}: anyone who can reach this machine on that network can see the images and rewrite the camera of the scene file",
                 self.addr
             )
         })
@@ -416,6 +444,7 @@ enum Route {
     Denoised(DenoisedLayer),
     Events,
     Pick(pick::Route),
+    Camera(camera::Route),
 }
 
 impl Route {
@@ -432,7 +461,11 @@ impl Route {
             "/albedo.f32" => Self::Denoised(DenoisedLayer::Albedo),
             "/normal.f32" => Self::Denoised(DenoisedLayer::Normal),
             "/events" => Self::Events,
-            _ => return pick::Route::of(path).map(Self::Pick),
+            _ => {
+                return pick::Route::of(path)
+                    .map(Self::Pick)
+                    .or_else(|| camera::Route::of(path).map(Self::Camera));
+            }
         })
     }
 }
@@ -460,7 +493,20 @@ fn answer(
     let Some(route) = Route::of(&request.target) else {
         return text(stream, 404, "not found\n");
     };
-    if !matches!(request.method.as_str(), "GET" | "HEAD") {
+    if route == Route::Camera(camera::Route::Write) {
+        if request.method != "POST" {
+            return http::respond(
+                stream,
+                405,
+                &[
+                    ("Content-Type", "text/plain; charset=utf-8"),
+                    ("Allow", "POST"),
+                ],
+                b"only POST\n",
+                with_body,
+            );
+        }
+    } else if !matches!(request.method.as_str(), "GET" | "HEAD") {
         return http::respond(
             stream,
             405,
@@ -488,12 +534,17 @@ fn answer(
                 with_body,
             );
         }
+        Route::Camera(route) => {
+            let shared = (&context.scene, &context.secret);
+            let timeout = context.options.limits.head_timeout;
+            return camera::answer(stream, route, request, shared, host, timeout);
+        }
         Route::Page => {
             return http::respond(
                 stream,
                 200,
                 &[("Content-Type", "text/html; charset=utf-8")],
-                PAGE.as_bytes(),
+                context.page.as_bytes(),
                 with_body,
             );
         }

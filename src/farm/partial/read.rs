@@ -20,10 +20,11 @@ use super::meta::{
 };
 use super::ranges::{normalize, parse_range};
 use crate::film::{ALBEDO_SHIFT, NORMAL_SHIFT, Pixel};
+use crate::scene::bounded_read::open_regular;
 use crate::scene::format::{MAX_SPP, SettingsDesc};
 
 fn open(path: &Path) -> Result<exr::block::reader::Reader<BufReader<File>>, PartialError> {
-    let file = File::open(path).map_err(|e| error(path, format!("cannot open: {e}")))?;
+    let (file, _) = open_regular(path).map_err(|e| error(path, format!("cannot open: {e}")))?;
     exr::block::read(BufReader::new(file), false)
         .map_err(|e| error(path, format!("not an OpenEXR file: {e}")))
 }

@@ -7,7 +7,7 @@ use crate::scene::locate::{block_comment_end, raw_string};
 /// One significant lexical item of RON text: blanks, comments and the insides of strings and
 /// characters are skipped.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum Lexeme {
+pub(in crate::scene) enum Lexeme {
     /// `(`, `[` or `{`.
     Open,
     /// `)`, `]` or `}`.
@@ -23,7 +23,10 @@ pub(super) enum Lexeme {
 /// Calls `each` with every lexeme of `text` and its byte offset, until it returns `false`;
 /// `None` for text that does not lex (an unterminated string, comment or character). Nothing is
 /// collected, so a scan of a big file allocates nothing.
-pub(super) fn lex_each(text: &str, mut each: impl FnMut(usize, Lexeme) -> bool) -> Option<()> {
+pub(in crate::scene) fn lex_each(
+    text: &str,
+    mut each: impl FnMut(usize, Lexeme) -> bool,
+) -> Option<()> {
     let b = text.as_bytes();
     let mut i = 0;
     while i < b.len() {

@@ -12,7 +12,7 @@
 //! uses RON `#![enable(…)]` attributes), the whole file is parsed, so errors keep their exact
 //! `file:line:col`.
 
-mod lexer;
+pub(super) mod lexer;
 mod spans;
 #[cfg(test)]
 mod tests;

@@ -1,0 +1,570 @@
+//! "Save camera" over HTTP: the real `rondo watch --serve` binary on a scene in a temporary
+//! directory, talked to through plain sockets (so every header, or its absence, reaches the
+//! server as written). A write must change only the bytes of the `camera:` value, the watch must
+//! then show what a fresh render of the file shows, and every refused write must leave the file
+//! byte-identical. Waits are bounded (an event or a timeout), never sleeps.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::{SocketAddr, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::{Receiver, channel};
+use std::time::{Duration, Instant};
+
+use rondo::scene::format::{SceneCamera, SceneDesc, parse};
+use serde_json::{Value, json};
+
+mod common;
+
+/// Upper bound of every wait; a passing run takes a small fraction of it.
+const WAIT: Duration = Duration::from_secs(60);
+
+/// The scene's text before its camera value, the value, and the text after it: comments and
+/// odd spacing on both sides, which a write must keep byte for byte.
+const BEFORE: &str = "// Save camera: only the value below changes.\nScene(\n    settings: Settings(width: 24, height: 16, spp: 2, max_depth: 3), // small\n    /* camera: Camera(position: (9, 9, 9)) */\n    camera:   ";
+const CAMERA: &str = "Camera(\n        position: (0, 0.5, -5), // the eye\n        look_at: (0, 0, 0),\n        fov: 40.0,\n    )";
+const AFTER: &str = r#",
+    materials: {
+        "wall": Light(emit: Constant((0.8, 0.6, 0.4)), intensity: 1.0, two_sided: true), // camera: x
+        "ball":   Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
+    },
+    entities: [
+        Entity(name: "wall", material: "wall", shape: Quad(a: (-10, -10, 5), b: (10, -10, 5), c: (10, 10, 5), d: (-10, 10, 5))),
+        Entity(name: "ball", material: "ball", shape: Sphere(center: (0.5, 0.3, 0), radius: 0.8)),
+    ],
+)
+"#;
+
+fn scene_text() -> String {
+    format!("{BEFORE}{CAMERA}{AFTER}")
+}
+
+/// `rondo watch SCENE --serve 127.0.0.1:0`, killed on drop.
+struct Rondo {
+    child: Child,
+    dir: common::TestDir,
+    scene: PathBuf,
+    addr: SocketAddr,
+    events: Receiver<Value>,
+}
+
+impl Rondo {
+    /// Watches `scene.ron` holding `text` in a fresh directory.
+    fn start(name: &str, text: &str) -> Self {
+        let dir = common::temp_dir(&format!("serve-camera-{name}"));
+        let scene = dir.join("scene.ron");
+        std::fs::write(&scene, text).expect("write scene");
+        Self::watch(dir, scene)
+    }
+
+    /// Watches `scene` (in `dir`), and waits for its first render.
+    fn watch(dir: common::TestDir, scene: PathBuf) -> Self {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_rondo"))
+            .arg("watch")
+            .arg(&scene)
+            .args(["--serve", "127.0.0.1:0", "--threads", "2"])
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start rondo");
+        let (tx, lines) = channel();
+        let pipe = child.stderr.take().expect("piped stderr");
+        // Read to the end: rondo must never write to a closed pipe.
+        std::thread::spawn(move || {
+            for line in BufReader::new(pipe).lines().map_while(Result::ok) {
+                let _ = tx.send(line);
+            }
+        });
+        let line = wait_on(&lines, "the viewer line", |l| l.starts_with("viewer: "));
+        let addr = line
+            .trim_start_matches("viewer: http://")
+            .trim_end_matches('/')
+            .parse()
+            .expect("viewer: http://ADDR/");
+        let rondo = Self {
+            child,
+            dir,
+            scene,
+            addr,
+            events: events(addr),
+        };
+        rondo.done(0);
+        rondo
+    }
+
+    /// Waits for the end of a render of reload `reload` or a later one (a save can be seen as
+    /// more than one change, the last reload superseding the others).
+    fn done(&self, reload: u64) {
+        wait_on(&self.events, &format!("done of reload {reload}"), |e| {
+            e["kind"] == "done" && e["reload"].as_u64().is_some_and(|r| r >= reload)
+        });
+    }
+
+    fn get(&self, target: &str) -> Reply {
+        self.send(&format!(
+            "GET {target} HTTP/1.1\r\nHost: {}\r\n\r\n",
+            self.addr
+        ))
+    }
+
+    fn send(&self, request: &str) -> Reply {
+        let mut s = TcpStream::connect(self.addr).expect("connect");
+        // A server that refuses a request may close before all of it is sent.
+        let _ = s.write_all(request.as_bytes());
+        reply(s)
+    }
+
+    /// The session's token, from the page's `<meta name="rondo-token">`.
+    fn token(&self) -> String {
+        let page = self.get("/");
+        assert_eq!(page.status, 200);
+        let html = String::from_utf8_lossy(&page.body).into_owned();
+        let start = html
+            .find(r#"<meta name="rondo-token" content=""#)
+            .expect("the page carries the token")
+            + r#"<meta name="rondo-token" content=""#.len();
+        html[start..start + 32].to_string()
+    }
+
+    /// `GET /camera.json`, as JSON.
+    fn camera(&self) -> Value {
+        let r = self.get("/camera.json");
+        assert_eq!(r.status, 200, "{}", r.text());
+        assert_eq!(r.header("Content-Type"), Some("application/json"));
+        serde_json::from_slice(&r.body).expect("JSON")
+    }
+
+    /// `POST /camera` with `body` and the extra header lines `headers`.
+    fn post(&self, body: &str, headers: &[(&str, &str)]) -> Reply {
+        let mut head = format!(
+            "POST /camera HTTP/1.1\r\nHost: {}\r\nContent-Type: application/json\r\nContent-Length: {}\r\n",
+            self.addr,
+            body.len()
+        );
+        for (name, value) in headers {
+            head.push_str(&format!("{name}: {value}\r\n"));
+        }
+        self.send(&format!("{head}\r\n{body}"))
+    }
+
+    /// The headers of the viewer's own page: its origin and the token.
+    fn page_headers(&self, token: &str) -> Vec<(&'static str, String)> {
+        vec![
+            ("Origin", format!("http://{}", self.addr)),
+            ("X-Rondo-Token", token.to_string()),
+        ]
+    }
+
+    fn bytes(&self) -> Vec<u8> {
+        std::fs::read(&self.scene).expect("read scene")
+    }
+}
+
+impl Drop for Rondo {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Waits at most [`WAIT`] for an item matching `predicate`.
+fn wait_on<T: std::fmt::Debug>(
+    rx: &Receiver<T>,
+    what: &str,
+    mut predicate: impl FnMut(&T) -> bool,
+) -> T {
+    let deadline = Instant::now() + WAIT;
+    let mut seen = Vec::new();
+    while let Ok(item) = rx.recv_timeout(deadline.saturating_duration_since(Instant::now())) {
+        if predicate(&item) {
+            return item;
+        }
+        seen.push(item);
+    }
+    panic!("timed out waiting for {what}; seen meanwhile: {seen:#?}");
+}
+
+/// The server's events, parsed, from a thread reading `/events`.
+fn events(addr: SocketAddr) -> Receiver<Value> {
+    let mut s = TcpStream::connect(addr).expect("connect");
+    write!(s, "GET /events HTTP/1.1\r\nHost: {addr}\r\n\r\n").expect("send");
+    let (tx, rx) = channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(s).lines().map_while(Result::ok) {
+            if let Some(data) = line.strip_prefix("data: ") {
+                let event = serde_json::from_str(data).expect("each event is JSON");
+                if tx.send(event).is_err() {
+                    break;
+                }
+            }
+        }
+    });
+    rx
+}
+
+/// An HTTP reply, read to the end (the server closes after each answer).
+struct Reply {
+    status: u16,
+    head: String,
+    body: Vec<u8>,
+}
+
+impl Reply {
+    fn header(&self, name: &str) -> Option<&str> {
+        self.head.lines().skip(1).find_map(|l| {
+            let (n, v) = l.split_once(':')?;
+            n.eq_ignore_ascii_case(name).then(|| v.trim())
+        })
+    }
+
+    fn text(&self) -> String {
+        String::from_utf8_lossy(&self.body).into_owned()
+    }
+}
+
+/// Reads a reply to the end; what arrived before a reset is the reply.
+fn reply(mut s: TcpStream) -> Reply {
+    let deadline = Instant::now() + WAIT;
+    let mut all = Vec::new();
+    let mut buf = [0; 64 * 1024];
+    loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        assert!(!left.is_zero(), "the reply did not end");
+        s.set_read_timeout(Some(left)).expect("timeout");
+        match s.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => all.extend_from_slice(&buf[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) if e.kind() == std::io::ErrorKind::ConnectionReset && !all.is_empty() => break,
+            Err(e) => panic!("no whole reply: {e} after {} bytes", all.len()),
+        }
+    }
+    let split = all
+        .windows(4)
+        .position(|w| w == b"\r\n\r\n")
+        .expect("a head");
+    let head = String::from_utf8_lossy(&all[..split]).into_owned();
+    let status = head
+        .split(' ')
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .expect("a status");
+    Reply {
+        status,
+        head,
+        body: all[split + 4..].to_vec(),
+    }
+}
+
+/// A write's body: `camera`'s fields and `base`.
+fn body(base: &str, camera: &Value) -> String {
+    let mut v = camera.clone();
+    v["base"] = json!(base);
+    v.to_string()
+}
+
+/// A camera that sees the scene from elsewhere, with numbers that need every digit.
+fn new_camera() -> Value {
+    json!({
+        "position": [1.1, 0.7, -4.3],
+        "look_at": [0.1, 0.2, 0.0],
+        "up": [0.05, 1.0, 0.0],
+        "fov": 33.3,
+        "aperture": 0.0,
+        "focus_distance": 4.5,
+    })
+}
+
+/// The `f32` of a JSON number (as the scene holds it).
+fn f(v: &Value) -> f32 {
+    v.as_f64().expect("a number") as f32
+}
+
+fn v3(v: &Value) -> glam::Vec3 {
+    glam::Vec3::new(f(&v[0]), f(&v[1]), f(&v[2]))
+}
+
+#[test]
+fn a_write_changes_only_the_camera_and_the_watch_shows_a_fresh_render() {
+    let rondo = Rondo::start("write", &scene_text());
+    let token = rondo.token();
+    let read = rondo.camera();
+    assert_eq!(read["text"], CAMERA);
+    assert_eq!(read["camera"]["position"], json!([0.0, 0.5, -5.0]));
+    assert_eq!(read["camera"]["fov"], json!(40.0));
+    assert_eq!(read["error"], Value::Null);
+    let base = read["base"].as_str().expect("base");
+    let before_image = rondo.get("/image.png").body;
+
+    let headers = rondo.page_headers(&token);
+    let headers: Vec<(&str, &str)> = headers.iter().map(|(n, v)| (*n, v.as_str())).collect();
+    let camera = new_camera();
+    let written = rondo.post(&body(base, &camera), &headers);
+    assert_eq!(written.status, 200, "{}", written.text());
+    let answer: Value = serde_json::from_slice(&written.body).expect("JSON");
+    assert_eq!(
+        answer["camera"], camera,
+        "the answer's numbers are the shortest"
+    );
+
+    // Only the value's bytes changed.
+    let after = String::from_utf8(rondo.bytes()).expect("text");
+    assert!(after.starts_with(BEFORE), "{after}");
+    assert!(after.ends_with(AFTER), "{after}");
+    let value = &after[BEFORE.len()..after.len() - AFTER.len()];
+    assert!(
+        value.starts_with("Camera(\n        position: (1.1, 0.7, -4.3),\n"),
+        "{value}"
+    );
+    assert!(value.ends_with(",\n    )"), "{value}");
+
+    // The file reads as the camera sent, each number the f32 nearest to it.
+    let scene: SceneDesc = parse(&rondo.scene, &after).expect("the new file parses");
+    let SceneCamera::Camera(c) = scene.camera else {
+        panic!("a Camera")
+    };
+    assert_eq!(c.position, v3(&camera["position"]));
+    let d = v3(&camera["look_at"]) - v3(&camera["position"]);
+    assert_eq!(c.direction, d / d.abs().max_element());
+    assert_eq!(c.up, v3(&camera["up"]));
+    assert_eq!(
+        [c.fov, c.aperture, c.focus_distance],
+        [33.3f32, 0.0, 4.5],
+        "the numbers read back exactly"
+    );
+
+    // The answer's version is the file's, and the watch shows a fresh render of it.
+    assert_eq!(rondo.camera()["base"], answer["base"]);
+    rondo.done(1);
+    let shown = image::load_from_memory(&rondo.get("/image.png").body)
+        .expect("a PNG")
+        .to_rgb8();
+    let fresh = common::watch_diff::fresh(&rondo.scene).expect("a fresh render");
+    assert!(
+        shown == fresh,
+        "the image after the write is a fresh render"
+    );
+    assert_ne!(rondo.get("/image.png").body, before_image, "the view moved");
+
+    // Undo: the page writes the camera it read before; the file is then as before but for
+    // the value, which now reads as that camera.
+    let base = answer["base"].as_str().expect("base");
+    let undone = rondo.post(&body(base, &read["camera"]), &headers);
+    assert_eq!(undone.status, 200, "{}", undone.text());
+    let after = String::from_utf8(rondo.bytes()).expect("text");
+    assert!(
+        after.starts_with(BEFORE) && after.ends_with(AFTER),
+        "{after}"
+    );
+    let scene: SceneDesc = parse(&rondo.scene, &after).expect("parses");
+    let SceneCamera::Camera(c) = scene.camera else {
+        panic!("a Camera")
+    };
+    assert_eq!(c.position, glam::Vec3::new(0.0, 0.5, -5.0));
+    assert_eq!(c.fov, 40.0);
+}
+
+/// A refused write: what it is, its body, its headers, the status expected.
+type Case<'a> = (&'a str, String, Vec<(&'a str, &'a str)>, u16);
+
+#[test]
+fn refused_writes_leave_the_file_untouched() {
+    let rondo = Rondo::start("refused", &scene_text());
+    let token = rondo.token();
+    let base = rondo.camera()["base"].as_str().expect("base").to_string();
+    let origin = format!("http://{}", rondo.addr);
+    let good = body(&base, &new_camera());
+    let with = |fields: Value| {
+        let mut camera = new_camera();
+        for (k, v) in fields.as_object().expect("fields") {
+            camera[k] = v.clone();
+        }
+        body(&base, &camera)
+    };
+    let page = [
+        ("Origin", origin.as_str()),
+        ("X-Rondo-Token", token.as_str()),
+    ];
+    let original = rondo.bytes();
+    let wrong_token = "0".repeat(32);
+    let stale = body(&"0".repeat(32), &new_camera());
+    let missing = json!({"base": base}).to_string();
+    let cases: Vec<Case> = vec![
+        ("no token", good.clone(), vec![page[0]], 403),
+        (
+            "a wrong token",
+            good.clone(),
+            vec![("X-Rondo-Token", &wrong_token)],
+            403,
+        ),
+        (
+            "the token twice",
+            good.clone(),
+            vec![page[1], ("X-Rondo-Token", &wrong_token)],
+            403,
+        ),
+        (
+            "a foreign origin",
+            good.clone(),
+            vec![("Origin", "http://evil.example"), page[1]],
+            403,
+        ),
+        (
+            "a null origin",
+            good.clone(),
+            vec![("Origin", "null"), page[1]],
+            403,
+        ),
+        (
+            "another port",
+            good.clone(),
+            vec![("Origin", "http://127.0.0.1:1"), page[1]],
+            403,
+        ),
+        ("a stale base", stale, page.to_vec(), 409),
+        ("malformed JSON", "{\"base\": ".into(), page.to_vec(), 400),
+        ("not an object", "[1, 2, 3]".into(), page.to_vec(), 400),
+        ("a missing field", missing, page.to_vec(), 400),
+        (
+            "an unknown field",
+            with(json!({"text": "Camera()"})),
+            page.to_vec(),
+            400,
+        ),
+        ("fov 180", with(json!({"fov": 180})), page.to_vec(), 400),
+        (
+            "a negative aperture",
+            with(json!({"aperture": -0.5})),
+            page.to_vec(),
+            400,
+        ),
+        (
+            "focus distance 0",
+            with(json!({"focus_distance": 0})),
+            page.to_vec(),
+            400,
+        ),
+        (
+            "up along the view",
+            with(json!({"up": [-1.0, -0.5, 4.3]})),
+            page.to_vec(),
+            400,
+        ),
+        (
+            "an f32 overflow",
+            with(json!({"position": [1e39, 0, 0]})),
+            page.to_vec(),
+            400,
+        ),
+        (
+            "look_at at the eye",
+            with(json!({"look_at": [1.1, 0.7, -4.3]})),
+            page.to_vec(),
+            400,
+        ),
+    ];
+    for (what, body, headers, status) in cases {
+        let reply = rondo.post(&body, &headers);
+        assert_eq!(reply.status, status, "{what}: {}", reply.text());
+        assert_eq!(rondo.bytes(), original, "{what}: the file is untouched");
+    }
+
+    // Other methods, no length, too long a body.
+    let head = |method: &str, extra: &str| {
+        format!(
+            "{method} /camera HTTP/1.1\r\nHost: {}\r\nOrigin: {origin}\r\nX-Rondo-Token: {token}\r\n{extra}\r\n",
+            rondo.addr
+        )
+    };
+    for method in ["GET", "HEAD", "PUT", "OPTIONS"] {
+        let reply = rondo.send(&head(method, ""));
+        assert_eq!(reply.status, 405, "{method}");
+        assert_eq!(reply.header("Allow"), Some("POST"), "{method}");
+    }
+    let post_image = rondo.send(&format!(
+        "POST /image.png HTTP/1.1\r\nHost: {}\r\nContent-Length: 0\r\n\r\n",
+        rondo.addr
+    ));
+    assert_eq!(post_image.status, 405, "POST elsewhere");
+    let no_length = rondo.send(&format!("{}{good}", head("POST", "")));
+    assert_eq!(no_length.status, 411, "{}", no_length.text());
+    let padded = format!("{}{}", &good[..good.len() - 1], " ".repeat(5000)) + "}";
+    let big = rondo.send(&format!(
+        "{}{padded}",
+        head("POST", &format!("Content-Length: {}\r\n", padded.len()))
+    ));
+    assert_eq!(big.status, 413, "{}", big.text());
+    assert_eq!(rondo.bytes(), original, "the file is untouched");
+
+    // The same write with the page's headers is accepted.
+    let accepted = rondo.post(&good, &page);
+    assert_eq!(accepted.status, 200, "{}", accepted.text());
+    assert_ne!(rondo.bytes(), original);
+    // The base it was given is now stale.
+    let again = rondo.post(&good, &page);
+    assert_eq!(again.status, 409, "{}", again.text());
+}
+
+#[test]
+fn a_gltf_camera_is_not_rewritten() {
+    let rondo = Rondo::start("gltf", &scene_text());
+    let token = rondo.token();
+    let gltf = scene_text().replace(CAMERA, r#"Gltf(placement: "helmet", camera: "Camera")"#);
+    std::fs::write(&rondo.scene, &gltf).expect("save");
+    let read = rondo.camera();
+    assert_eq!(read["camera"], Value::Null);
+    assert!(
+        read["error"].as_str().is_some_and(|e| e.contains("Gltf")),
+        "{read}"
+    );
+    let base = read["base"].as_str().expect("base");
+    let headers = rondo.page_headers(&token);
+    let headers: Vec<(&str, &str)> = headers.iter().map(|(n, v)| (*n, v.as_str())).collect();
+    let refused = rondo.post(&body(base, &new_camera()), &headers);
+    assert_eq!(refused.status, 422, "{}", refused.text());
+    assert_eq!(std::fs::read_to_string(&rondo.scene).expect("read"), gltf);
+}
+
+#[cfg(unix)]
+#[test]
+fn a_scene_behind_a_symbolic_link_is_not_replaced() {
+    let dir = common::temp_dir("serve-camera-link");
+    let real = dir.join("real.ron");
+    std::fs::write(&real, scene_text()).expect("write scene");
+    let link = dir.join("scene.ron");
+    std::os::unix::fs::symlink(&real, &link).expect("symlink");
+    let rondo = Rondo::watch(dir, link.clone());
+    let token = rondo.token();
+    let base = rondo.camera()["base"].as_str().expect("base").to_string();
+    let headers = rondo.page_headers(&token);
+    let headers: Vec<(&str, &str)> = headers.iter().map(|(n, v)| (*n, v.as_str())).collect();
+    let refused = rondo.post(&body(&base, &new_camera()), &headers);
+    assert_eq!(refused.status, 409, "{}", refused.text());
+    assert!(
+        refused.text().contains("symbolic link"),
+        "{}",
+        refused.text()
+    );
+    assert!(is_link(&link), "the link is kept");
+    assert_eq!(std::fs::read_to_string(&real).expect("read"), scene_text());
+    assert!(rondo.dir.join("real.ron").exists());
+}
+
+#[cfg(unix)]
+fn is_link(path: &Path) -> bool {
+    std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink())
+}
+
+#[test]
+fn the_page_s_script_is_served() {
+    let rondo = Rondo::start("script", &scene_text());
+    let script = rondo.get("/camera_write.js");
+    assert_eq!(script.status, 200);
+    assert_eq!(
+        script.header("Content-Type"),
+        Some("text/javascript; charset=utf-8")
+    );
+    let text = script.text();
+    assert!(text.contains("window.rondoCamera") && text.contains("X-Rondo-Token"));
+}
