@@ -26,8 +26,7 @@ use crate::scene::provenance::Provenance;
 use crate::shading::sampler::SamplerKind;
 use crate::systems::{
     IdBuffer, apply_scene, assign_materials, geometry_changed, material_refs_changed, pick_ids,
-    render_camera,
-    rebuild_geometry, render_frame, write_image,
+    rebuild_geometry, render_camera, render_frame, write_image,
 };
 
 /// Command-line overrides of a scene's settings.
@@ -456,11 +455,6 @@ impl Renderer {
     /// pixel, traced on the renderer's threads.
     pub fn pick_ids(&self) -> IdBuffer {
         self.pool.install(|| pick_ids(&self.world))
-    }
-
-    /// The camera of the scene in the world (as applied by the last [`Renderer::run_once`]).
-    pub fn camera(&self) -> CameraDesc {
-        self.world.resource::<ActiveCamera>().0
     }
 
     /// The world as it is seen through `camera` at `size` with samples `0..spp`

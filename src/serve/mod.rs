@@ -53,6 +53,7 @@ mod feed;
 mod http;
 mod images;
 mod pick;
+mod preview;
 mod secret;
 
 use std::io::Write;
@@ -62,6 +63,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::thread::JoinHandle;
 use std::time::Duration;
+
+use crate::watch::Previews;
 
 pub use camera::MAX_BODY;
 pub use event_text::{CUT, MAX_MESSAGE, MAX_SOURCE_LINE, changed_text};
@@ -127,6 +130,9 @@ pub struct Options {
     /// The watched scene file, whose camera `POST /camera` may rewrite (`None`: the camera
     /// routes answer `404`).
     pub scene: Option<PathBuf>,
+    /// Where framing previews are asked of the render loop ([`crate::watch::Watch::set_previews`]
+    /// with a clone; `None`: the preview routes answer `404`).
+    pub previews: Option<Previews>,
 }
 
 /// Why the server could not start.
@@ -445,6 +451,7 @@ enum Route {
     Events,
     Pick(pick::Route),
     Camera(camera::Route),
+    Frame(preview::Route),
 }
 
 impl Route {
@@ -464,7 +471,8 @@ impl Route {
             _ => {
                 return pick::Route::of(path)
                     .map(Self::Pick)
-                    .or_else(|| camera::Route::of(path).map(Self::Camera));
+                    .or_else(|| camera::Route::of(path).map(Self::Camera))
+                    .or_else(|| preview::Route::of(path).map(Self::Frame));
             }
         })
     }
@@ -493,7 +501,12 @@ fn answer(
     let Some(route) = Route::of(&request.target) else {
         return text(stream, 404, "not found\n");
     };
-    if route == Route::Camera(camera::Route::Write) {
+    let posts = match route {
+        Route::Camera(route) => route == camera::Route::Write,
+        Route::Frame(route) => route.posts(),
+        _ => false,
+    };
+    if posts {
         if request.method != "POST" {
             return http::respond(
                 stream,
@@ -538,6 +551,11 @@ fn answer(
             let shared = (&context.scene, &context.secret);
             let timeout = context.options.limits.head_timeout;
             return camera::answer(stream, route, request, shared, host, timeout);
+        }
+        Route::Frame(route) => {
+            let shared = (context.options.previews.as_ref(), &context.secret);
+            let timeout = context.options.limits.head_timeout;
+            return preview::answer(stream, route, request, shared, host, timeout);
         }
         Route::Page => {
             return http::respond(

@@ -109,8 +109,7 @@ use pending::Pending;
 use pick::Picking;
 pub use pick::{PickSink, Picked};
 pub use preview::{
-    MAX_PREVIEW_SPP, PAUSE, PreviewImage, PreviewOutcome, PreviewRequest, Previews, SceneFraming,
-    preview_size,
+    MAX_PREVIEW_SPP, PAUSE, PreviewImage, PreviewOutcome, PreviewRequest, Previews, preview_size,
 };
 pub use report::*;
 pub use session::WatchSession;
@@ -327,7 +326,9 @@ impl Watch {
                 self.step(&mut out);
                 continue;
             }
-            let until = due.unwrap_or(now + IDLE_POLL).min(paused.unwrap_or(now + IDLE_POLL));
+            let until = due
+                .unwrap_or(now + IDLE_POLL)
+                .min(paused.unwrap_or(now + IDLE_POLL));
             if let Ok(event) = self
                 .events
                 .recv_timeout(until.saturating_duration_since(now))

@@ -62,17 +62,6 @@ pub enum PreviewOutcome {
     TimedOut,
 }
 
-/// The scene's own camera and image size, for the viewer to start framing from.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SceneFraming {
-    /// The camera of the scene in the world.
-    pub camera: CameraDesc,
-    /// The scene's image size.
-    pub size: (u32, u32),
-    /// The reload it belongs to.
-    pub reload: u64,
-}
-
 #[derive(Default)]
 struct State {
     /// The number of the newest request.
@@ -83,7 +72,9 @@ struct State {
     /// The newest answer: its request number and image (`None`: not ready).
     answer: Option<(u64, Option<Arc<PreviewImage>>)>,
     last_request: Option<Instant>,
-    scene: Option<SceneFraming>,
+    /// The scene's image size and the reload whose world is in the renderer, once a frame
+    /// has run.
+    scene: Option<((u32, u32), u64)>,
 }
 
 struct Shared {
@@ -111,17 +102,18 @@ impl Default for Previews {
     }
 }
 
+impl std::fmt::Debug for Previews {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Previews").finish_non_exhaustive()
+    }
+}
+
 impl Previews {
     fn state(&self) -> MutexGuard<'_, State> {
         self.shared
             .state
             .lock()
             .unwrap_or_else(PoisonError::into_inner)
-    }
-
-    /// The scene's camera and size, once a frame has run.
-    pub fn scene(&self) -> Option<SceneFraming> {
-        self.state().scene
     }
 
     /// Asks for a preview and waits at most `timeout` for it (on a viewer's thread). The
@@ -140,7 +132,12 @@ impl Previews {
         };
         // Waiters of older requests learn they were superseded.
         self.shared.answered.notify_all();
-        if let Some(wake) = &*self.shared.wake.lock().unwrap_or_else(PoisonError::into_inner) {
+        if let Some(wake) = &*self
+            .shared
+            .wake
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+        {
             wake();
         }
         let deadline = Instant::now() + timeout;
@@ -187,39 +184,33 @@ impl Watch {
             .shared
             .wake
             .lock()
-            .unwrap_or_else(PoisonError::into_inner) =
-            Some(Box::new(move || {
-                let _ = wake.send(super::FileEvent::Wake);
-            }));
+            .unwrap_or_else(PoisonError::into_inner) = Some(Box::new(move || {
+            let _ = wake.send(super::FileEvent::Wake);
+        }));
         self.previews = Some(previews);
     }
 
-    /// Renders the waiting preview request, if any, and publishes the scene's framing. Returns
+    /// Renders the waiting preview request, if any, after noting the scene's size. Returns
     /// until when the main render waits for more requests (`None`: it does not).
     pub(super) fn serve_previews(&mut self) -> Option<Instant> {
         let previews = self.previews.clone()?;
-        let reload = self.reloads;
         if self.renderer.scene_version() != 0 {
             let s = self.renderer.settings();
-            let scene = SceneFraming {
-                camera: self.renderer.camera(),
-                size: (s.width, s.height),
-                reload,
-            };
-            previews.state().scene = Some(scene);
+            previews.state().scene = Some(((s.width, s.height), self.reloads));
         }
         loop {
-            let (number, request, cancel, size) = {
+            let (number, request, cancel, scene) = {
                 let mut state = previews.state();
                 let Some((number, request)) = state.pending.take() else {
                     break;
                 };
                 let cancel = Arc::new(AtomicBool::new(false));
                 state.in_flight = Some((number, cancel.clone()));
-                let size = state.scene.map(|s| preview_size(s.size.0, s.size.1));
-                (number, request, cancel, size)
+                let scene = state.scene;
+                (number, request, cancel, scene)
             };
-            let image = size.and_then(|size| {
+            let image = scene.and_then(|((width, height), reload)| {
+                let size = preview_size(width, height);
                 match self
                     .renderer
                     .render_camera(&request.camera, size, request.spp, &cancel)?
