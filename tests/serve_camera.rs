@@ -597,7 +597,15 @@ fn a_preview_is_the_render_of_the_file_with_that_camera_and_touches_nothing() {
     let size: Vec<u32> = (0..2)
         .map(|i| u32::from_le_bytes(raw.body[8 + 4 * i..12 + 4 * i].try_into().expect("u32")))
         .collect();
-    assert_eq!(size, [12, 8], "half the scene's 24 × 16");
+    assert_eq!(size, [12, 8], "half the scene's 24 × 16 by default");
+    let body = json!({ "camera": new_camera(), "spp": 1, "divisor": 4 }).to_string();
+    let quarter = rondo.post_to("/preview.f32", &body, &headers);
+    assert_eq!(quarter.status, 200, "{}", quarter.text());
+    assert_eq!(
+        quarter.body[8..16],
+        [6, 0, 0, 0, 4, 0, 0, 0],
+        "a quarter: 6 × 4"
+    );
 
     // The scene file with that camera, written here by hand, rendered at the preview's size.
     let framed = rondo.dir.join("framed.ron");
@@ -660,6 +668,12 @@ fn refused_previews_cost_nothing_and_change_nothing() {
             400,
         ),
         ("fov 180", preview_body(&wide, 1), page.to_vec(), 400),
+        (
+            "divisor 9",
+            json!({ "camera": new_camera(), "spp": 1, "divisor": 9 }).to_string(),
+            page.to_vec(),
+            400,
+        ),
         (
             "no spp",
             json!({ "camera": new_camera() }).to_string(),

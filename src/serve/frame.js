@@ -8,25 +8,30 @@
 //   W A S D Q E     fly: forward, left, back, right, down, up (with the pointer on the image)
 //   Escape          back to the scene's camera (the preview is dropped; the file is untouched)
 //
-// While framing, the page shows the preview (half the scene's size; 1 sample per pixel while
-// the camera moves, then 4 and 16 once it rests) and the render loop pauses. One request is in
+// While framing, the page shows the preview (a quarter of the scene's width and height at 1
+// sample per pixel while the camera moves; once it rests, half of them at 4, then 16) and the
+// render loop pauses. One request is in
 // flight at a time: moves made meanwhile are sent as one request when it returns, so the image
 // of an old position never delays the next. window.rondoFraming exposes the state for the page
-// (image(), active()) and for tests (camera(), latencies: ms from a move to its preview drawn).
+// (image(), active()) and for tests (camera(), latencies, rendering).
 "use strict";
 
 window.rondoFraming = (() => {
   const canvas = document.getElementById("canvas");
   const meta = document.querySelector('meta[name="rondo-token"]');
   const token = meta ? meta.content : "";
-  const REFINE = [4, 16], REST_MS = 150, DRAG_PX = 3;
+  // The previews of a camera, coarse to fine: the first while it moves, the others once it rests.
+  const LEVELS = [{ spp: 1, divisor: 4 }, { spp: 4, divisor: 2 }, { spp: 16, divisor: 2 }];
+  const REST_MS = 150, DRAG_PX = 3;
 
   // `file`: the camera of the scene file as last read or written; `cam`: the framed camera
   // (null: not framing); `image`: the newest preview; `movedAt`: time of the newest move not
-  // yet shown; `spp`: the samples of the preview wanted next (0: none).
-  const state = { file: null, cam: null, image: null, movedAt: 0, spp: 0, inFlight: false,
+  // yet shown; `level`: the index in LEVELS of the preview wanted next (-1: none).
+  const state = { file: null, cam: null, image: null, movedAt: 0, level: -1, inFlight: false,
                   refineTimer: 0, endAfter: null, reload: -1, passReload: -1 };
-  const latencies = [];
+  // Of each coarse preview: ms from the move to its preview drawn, and of those the server's
+  // (from the request's arrival to its image rendered).
+  const latencies = [], rendering = [];
 
   const bar = document.querySelector("header");
   function button(label, title) {
@@ -97,45 +102,51 @@ window.rondoFraming = (() => {
   }
 
   function end() {
-    state.cam = null; state.image = null; state.spp = 0; state.endAfter = null;
+    state.cam = null; state.image = null; state.level = -1; state.endAfter = null;
     clearTimeout(state.refineTimer);
     update();
     redraw();
   }
 
-  // The camera changed: ask for a 1-spp preview now and finer ones once it rests.
+  // The camera changed: ask for a coarse preview now and finer ones once it rests.
   function moved() {
     state.movedAt = performance.now();
-    state.spp = 1;
+    state.level = 0;
     clearTimeout(state.refineTimer);
     pump();
   }
 
   function refineLater(after) {
     clearTimeout(state.refineTimer);
-    const next = REFINE.find((s) => s > after);
-    if (next) state.refineTimer = setTimeout(() => { state.spp = next; pump(); }, REST_MS);
+    if (after + 1 < LEVELS.length) {
+      state.refineTimer = setTimeout(() => { state.level = after + 1; pump(); }, REST_MS);
+    }
   }
 
   async function pump() {
-    if (state.inFlight || !state.cam || state.spp === 0) return;
-    const spp = state.spp, cam = structuredClone(state.cam), movedAt = state.movedAt;
-    state.spp = 0;
+    if (state.inFlight || !state.cam || state.level < 0) return;
+    const level = state.level, cam = structuredClone(state.cam), movedAt = state.movedAt;
+    const { spp, divisor } = LEVELS[level];
+    state.level = -1;
     state.inFlight = true;
     try {
       const response = await fetch("/preview.f32", {
         method: "POST",
         headers: { "Content-Type": "application/json", "X-Rondo-Token": token },
-        body: JSON.stringify({ camera: cam, spp }),
+        body: JSON.stringify({ camera: cam, spp, divisor }),
       });
       if (response.ok && state.cam) {
         const image = window.rondoParseRaw(await response.arrayBuffer());
+        image.divisor = divisor;
         state.image = image;
         redraw();
-        if (spp === 1) latencies.push(performance.now() - movedAt);
+        if (level === 0) {
+          latencies.push(performance.now() - movedAt);
+          rendering.push(Number(response.headers.get("x-rondo-took-ms")));
+        }
         document.body.dataset.previews = String(Number(document.body.dataset.previews || 0) + 1);
         show(`framing · preview ${image.width}×${image.height} · ${spp} spp`);
-        if (state.spp === 0) refineLater(spp);
+        if (state.level < 0) refineLater(level);
       } else if (!response.ok && response.status !== 409) {
         show(`no preview: ${(await response.text()).trim()}`);
       }
@@ -289,5 +300,6 @@ window.rondoFraming = (() => {
     image: () => state.image,
     camera: () => (state.cam ? structuredClone(state.cam) : null),
     latencies,
+    rendering,
   };
 })();

@@ -8,15 +8,17 @@
 //! | `GET /frame.js` | the page's side: mouse and key framing, "Save camera", "Undo" |
 //!
 //! The body is a JSON object of at most [`super::MAX_BODY`] bytes,
-//! `{"camera":{"position":[x,y,z],"look_at":[…],"up":[…],"fov":40,"aperture":0,"focus_distance":5},"spp":1}`,
+//! `{"camera":{"position":[x,y,z],"look_at":[…],"up":[…],"fov":40,"aperture":0,"focus_distance":5},"spp":1,"divisor":2}`,
 //! the camera as `POST /camera` takes it (checked the same way: it is the camera a save would
-//! write) and `spp` in 1..=[`MAX_PREVIEW_SPP`]. The image is the last scene that loaded, seen
-//! through that camera at half the scene's width and height with samples `0..spp`: the image
+//! write), `spp` in 1..=[`MAX_PREVIEW_SPP`] and `divisor` in 1..=[`MAX_PREVIEW_DIVISOR`]
+//! (default 2). The image is the last scene that loaded, seen through that camera at the
+//! scene's width and height divided by `divisor` with samples `0..spp`: the image
 //! `rondo render` makes of the scene file with that camera, size and `--spp` (see
 //! [`crate::watch::Previews`] for how requests meet the render loop: the newest wins, and the
 //! progressive render pauses while the user frames).
 //!
-//! Answers: `200` with the image (headers `X-Rondo-Reload`, `X-Rondo-Samples`); `409` when a
+//! Answers: `200` with the image (headers `X-Rondo-Reload`, `X-Rondo-Samples`, and
+//! `X-Rondo-Took-Ms`: from the request's arrival to its image rendered); `409` when a
 //! newer request replaced this one before it was rendered; `503` before the first frame or if
 //! the render loop did not answer in [`WAIT`]; `404` when the server has no render loop to ask
 //! (the previews were not set up); refusals as for `POST /camera`: `403` without the session's
@@ -24,7 +26,7 @@
 //! scene format refuses or an `spp` out of range.
 
 use std::net::TcpStream;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use serde::Deserialize;
 
@@ -33,7 +35,9 @@ use super::http::{self, Request};
 use super::images::Frame;
 use super::secret::Secret;
 use crate::scene::camera_edit::check_camera;
-use crate::watch::{MAX_PREVIEW_SPP, PreviewOutcome, PreviewRequest, Previews};
+use crate::watch::{
+    MAX_PREVIEW_DIVISOR, MAX_PREVIEW_SPP, PreviewOutcome, PreviewRequest, Previews,
+};
 
 /// How long a request waits for the render loop.
 pub const WAIT: Duration = Duration::from_secs(10);
@@ -75,6 +79,13 @@ impl Route {
 struct Body {
     camera: CameraFields,
     spp: u32,
+    #[serde(default = "half")]
+    divisor: u32,
+}
+
+/// The default divisor of the scene's size: half its width and height.
+fn half() -> u32 {
+    2
 }
 
 /// Answers a framing route (the method is checked by the caller). `host` is the request's
@@ -94,7 +105,7 @@ pub fn answer(
         return http::respond(stream, 200, &headers, SCRIPT.as_bytes(), with_body);
     }
     let (status, text) = match preview(stream, request, previews, secret, host, timeout) {
-        Ok(Some(frame)) => {
+        Ok(Some((frame, took))) => {
             let bytes = match route {
                 Route::Png => frame.png(),
                 _ => Ok(frame.raw()),
@@ -105,8 +116,16 @@ pub fn answer(
                         Route::Png => "image/png",
                         _ => "application/octet-stream",
                     };
-                    let pass = (frame.reload(), frame.samples());
-                    super::respond_image(stream, content_type, pass, bytes, true)
+                    let headers = [
+                        ("Content-Type", content_type),
+                        ("X-Rondo-Reload", &frame.reload().to_string()),
+                        ("X-Rondo-Samples", &frame.samples().to_string()),
+                        (
+                            "X-Rondo-Took-Ms",
+                            &format!("{:.1}", took.as_secs_f64() * 1e3),
+                        ),
+                    ];
+                    http::respond(stream, 200, &headers, bytes, true)
                 }
                 Err(e) => http::respond_text(stream, 500, &format!("{e}\n"), true),
             };
@@ -118,8 +137,8 @@ pub fn answer(
     http::respond_text(stream, status, &format!("{text}\n"), true)
 }
 
-/// Checks a preview request and has it rendered: the image, `None` if the client left while
-/// its body was read, or the refusal.
+/// Checks a preview request and has it rendered: the image and the time from the request to
+/// the image, `None` if the client left while its body was read, or the refusal.
 fn preview(
     stream: &mut TcpStream,
     request: &Request,
@@ -127,7 +146,7 @@ fn preview(
     secret: &Secret,
     host: &str,
     timeout: Duration,
-) -> Result<Option<Frame>, (u16, String)> {
+) -> Result<Option<(Frame, Duration)>, (u16, String)> {
     let refuse = |status: u16, text: &str| Err((status, text.to_string()));
     if let Err(why) = secret.admits(request, host) {
         return refuse(403, &format!("no preview: {why}"));
@@ -144,13 +163,21 @@ fn preview(
     if !(1..=MAX_PREVIEW_SPP).contains(&body.spp) {
         return refuse(400, &format!("spp must be 1 to {MAX_PREVIEW_SPP}"));
     }
+    if !(1..=MAX_PREVIEW_DIVISOR).contains(&body.divisor) {
+        return refuse(400, &format!("divisor must be 1 to {MAX_PREVIEW_DIVISOR}"));
+    }
     let camera = check_camera(&body.camera.values()).map_err(|e| (400, e.to_string()))?;
     let request = PreviewRequest {
         camera,
         spp: body.spp,
+        divisor: body.divisor,
     };
+    let start = Instant::now();
     match previews.request(request, WAIT) {
-        PreviewOutcome::Image(image) => Ok(Some(Frame::new(image.reload, image.film.clone()))),
+        PreviewOutcome::Image(image) => {
+            let frame = Frame::new(image.reload, image.film.clone());
+            Ok(Some((frame, start.elapsed())))
+        }
         PreviewOutcome::Superseded => refuse(409, "a newer preview replaced this one"),
         PreviewOutcome::NotReady => refuse(503, "no scene has loaded yet"),
         PreviewOutcome::TimedOut => refuse(503, "the render loop did not answer in time"),

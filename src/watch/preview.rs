@@ -27,19 +27,26 @@ pub const PAUSE: Duration = Duration::from_millis(400);
 /// Most samples per pixel a preview may ask for.
 pub const MAX_PREVIEW_SPP: u32 = 16;
 
-/// What a viewer asks for: the world through `camera` at a quarter of the pixels (half the
-/// width and height of the scene's image, at least 1) with samples `0..spp`.
+/// The largest divisor of the scene's width and height a preview may ask for.
+pub const MAX_PREVIEW_DIVISOR: u32 = 8;
+
+/// What a viewer asks for: the world through `camera` at the scene's width and height divided
+/// by `divisor` ([`preview_size`]) with samples `0..spp`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PreviewRequest {
     /// The camera, checked as a written `Camera(…)` is.
     pub camera: CameraDesc,
     /// Samples per pixel, 1..=[`MAX_PREVIEW_SPP`].
     pub spp: u32,
+    /// The divisor of the width and height, 1..=[`MAX_PREVIEW_DIVISOR`].
+    pub divisor: u32,
 }
 
-/// The size of the preview of a `width` × `height` image: half of each, at least 1.
-pub fn preview_size(width: u32, height: u32) -> (u32, u32) {
-    ((width / 2).max(1), (height / 2).max(1))
+/// The size of the preview of a `width` × `height` image at `divisor`: each divided (rounded
+/// down), at least 1.
+pub fn preview_size(width: u32, height: u32, divisor: u32) -> (u32, u32) {
+    let divisor = divisor.max(1);
+    ((width / divisor).max(1), (height / divisor).max(1))
 }
 
 /// A rendered preview.
@@ -210,7 +217,7 @@ impl Watch {
                 (number, request, cancel, scene)
             };
             let image = scene.and_then(|((width, height), reload)| {
-                let size = preview_size(width, height);
+                let size = preview_size(width, height, request.divisor);
                 match self
                     .renderer
                     .render_camera(&request.camera, size, request.spp, &cancel)?
