@@ -59,6 +59,13 @@ impl Rondo {
 
     /// Watches `scene` (in `dir`), and waits for its first render.
     fn watch(dir: common::TestDir, scene: PathBuf) -> Self {
+        let rondo = Self::spawn(dir, scene);
+        rondo.done(0);
+        rondo
+    }
+
+    /// Watches `scene` (in `dir`), once its viewer is up.
+    fn spawn(dir: common::TestDir, scene: PathBuf) -> Self {
         let mut child = Command::new(env!("CARGO_BIN_EXE_rondo"))
             .arg("watch")
             .arg(&scene)
@@ -82,15 +89,13 @@ impl Rondo {
             .trim_end_matches('/')
             .parse()
             .expect("viewer: http://ADDR/");
-        let rondo = Self {
+        Self {
             child,
             dir,
             scene,
             addr,
             events: events(addr),
-        };
-        rondo.done(0);
-        rondo
+        }
     }
 
     /// Waits for the end of a render of reload `reload` or a later one (a save can be seen as
@@ -700,4 +705,45 @@ fn refused_previews_cost_nothing_and_change_nothing() {
     assert_eq!(rondo.bytes(), original, "the file is untouched");
     let accepted = rondo.post_to("/preview.png", &good, &page);
     assert_eq!(accepted.status, 200, "{}", accepted.text());
+}
+
+#[test]
+fn previews_between_passes_leave_the_render_a_fresh_one() {
+    // 256 spp at 48 × 32: passes long enough for previews to land between them.
+    let text = scene_text().replace(
+        "width: 24, height: 16, spp: 2,",
+        "width: 48, height: 32, spp: 256,",
+    );
+    let dir = common::temp_dir("serve-camera-previews-between");
+    let scene = dir.join("scene.ron");
+    std::fs::write(&scene, &text).expect("write scene");
+    let rondo = Rondo::spawn(dir, scene);
+    let token = rondo.token();
+    let headers = rondo.page_headers(&token);
+    let headers: Vec<(&str, &str)> = headers.iter().map(|(n, v)| (*n, v.as_str())).collect();
+    // Previews while the progressive render runs: back to back, they keep it paused; after 200
+    // of them, the render goes on where it was and must end as a fresh one.
+    let mut answered = 0;
+    let mut done = false;
+    while !done {
+        let body = json!({ "camera": new_camera(), "spp": 2, "divisor": 1 }).to_string();
+        let reply = rondo.post_to("/preview.f32", &body, &headers);
+        answered += usize::from(reply.status == 200);
+        while let Ok(e) = rondo.events.try_recv() {
+            done |= e["kind"] == "done";
+        }
+        if answered > 200 {
+            rondo.done(0);
+            break;
+        }
+    }
+    assert!(answered > 0, "previews were rendered");
+    let shown = image::load_from_memory(&rondo.get("/image.png").body)
+        .expect("a PNG")
+        .to_rgb8();
+    let fresh = common::watch_diff::fresh(&rondo.scene).expect("a fresh render");
+    assert!(
+        shown == fresh,
+        "after {answered} previews the render is a fresh one"
+    );
 }
