@@ -46,7 +46,7 @@ use glam::Vec3;
 use serde::Deserialize;
 use serde_json::{Value, json};
 
-use super::http::{self, BodyError, Header, Request};
+use super::http::{self, Request};
 use super::secret::Secret;
 use crate::scene::bounded_read::read_text;
 use crate::scene::camera_edit::{
@@ -111,11 +111,11 @@ impl SceneFile {
     }
 }
 
-/// The body of `POST /camera`.
+/// A camera as the page sends it: the body of `POST /camera` (with its `base`), the `camera`
+/// of a preview request.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct WriteBody {
-    base: String,
+pub struct CameraFields {
     position: [f64; 3],
     look_at: [f64; 3],
     up: [f64; 3],
@@ -124,10 +124,10 @@ struct WriteBody {
     focus_distance: f64,
 }
 
-impl WriteBody {
+impl CameraFields {
     /// The camera in `f32`, as the scene holds it (a number out of range becomes infinite, and
     /// is refused by [`check_camera`]).
-    fn camera(&self) -> CameraValues {
+    pub fn values(&self) -> CameraValues {
         let v = |[x, y, z]: [f64; 3]| Vec3::new(x as f32, y as f32, z as f32);
         CameraValues {
             position: v(self.position),
@@ -138,6 +138,17 @@ impl WriteBody {
             focus_distance: self.focus_distance as f32,
         }
     }
+}
+
+/// The body of `POST /camera`: the camera's fields and the `base` the page read, in one object.
+fn write_body(body: &[u8]) -> Result<(String, CameraValues), Refusal> {
+    let not = |e: serde_json::Error| (400, format!("not a camera: {e}"));
+    let mut fields: serde_json::Map<String, Value> = serde_json::from_slice(body).map_err(not)?;
+    let Some(Value::String(base)) = fields.remove("base") else {
+        return Err((400, "not a camera: no \"base\" string".into()));
+    };
+    let camera: CameraFields = serde_json::from_value(Value::Object(fields)).map_err(not)?;
+    Ok((base, camera.values()))
 }
 
 /// A camera as JSON, each number the shortest decimal that reads back as its `f32` (`33.3`, not
@@ -256,44 +267,20 @@ fn write(
     timeout: Duration,
 ) -> Result<Option<Value>, Refusal> {
     let refuse = |status: u16, text: &str| Err((status, text.to_string()));
-    match request.header("origin") {
-        Header::Absent => {}
-        Header::One(origin) if origin.eq_ignore_ascii_case(&format!("http://{host}")) => {}
-        _ => {
-            return refuse(
-                403,
-                "a write is accepted only from the viewer's own page (Origin)",
-            );
-        }
-    }
-    match request.header("x-rondo-token") {
-        Header::One(token) if secret.matches(token) => {}
-        _ => {
-            return refuse(
-                403,
-                "a write needs the session's X-Rondo-Token (from the viewer page)",
-            );
-        }
+    if let Err(why) = secret.admits(request, host) {
+        return refuse(403, &format!("no write: {why}"));
     }
     let Some(path) = scene.path.as_deref() else {
         return refuse(404, "no scene file");
     };
     let body = match http::read_body(stream, request, MAX_BODY, timeout) {
         Ok(body) => body,
-        Err(BodyError::Closed) => return Ok(None),
-        Err(BodyError::LengthRequired) => return refuse(411, "a body with a Content-Length"),
-        Err(BodyError::BadLength) => return refuse(400, "a bad Content-Length"),
-        Err(BodyError::TooLarge) => {
-            return refuse(413, &format!("the body is longer than {MAX_BODY} bytes"));
-        }
-        Err(BodyError::Timeout) => return refuse(408, "the body took too long"),
+        Err(e) => return e.refusal(MAX_BODY).map_or(Ok(None), Err),
     };
-    let body: WriteBody =
-        serde_json::from_slice(&body).map_err(|e| (400, format!("not a camera: {e}")))?;
-    let camera = body.camera();
+    let (base, camera) = write_body(&body)?;
     check_camera(&camera).map_err(|e| (400, e.to_string()))?;
     let _writing = scene.writing.lock().unwrap_or_else(PoisonError::into_inner);
-    let new_text = edit(path, scene, &body.base, &camera)?;
+    let new_text = edit(path, scene, &base, &camera)?;
     crate::output_file::write_bytes(path, new_text.as_bytes())
         .map_err(|e| (500, format!("cannot write {}: {e}", path.display())))?;
     Ok(Some(json!({
