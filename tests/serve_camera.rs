@@ -357,22 +357,20 @@ fn a_write_changes_only_the_camera_and_the_watch_shows_a_fresh_render() {
     );
     assert_ne!(rondo.get("/image.png").body, before_image, "the view moved");
 
-    // Undo: the page writes the camera it read before; the file is then as before but for
-    // the value, which now reads as that camera.
-    let base = answer["base"].as_str().expect("base");
-    let undone = rondo.post(&body(base, &read["camera"]), &headers);
-    assert_eq!(undone.status, 200, "{}", undone.text());
-    let after = String::from_utf8(rondo.bytes()).expect("text");
-    assert!(
-        after.starts_with(BEFORE) && after.ends_with(AFTER),
-        "{after}"
+    // Undo: the page writes back the text it read before; the file is then as it was, byte
+    // for byte, comments inside the value included.
+    assert_eq!(
+        answer["text"],
+        after[BEFORE.len()..after.len() - AFTER.len()]
     );
-    let scene: SceneDesc = parse(&rondo.scene, &after).expect("parses");
-    let SceneCamera::Camera(c) = scene.camera else {
-        panic!("a Camera")
-    };
-    assert_eq!(c.position, glam::Vec3::new(0.0, 0.5, -5.0));
-    assert_eq!(c.fov, 40.0);
+    let base = answer["base"].as_str().expect("base");
+    let undo = json!({ "base": base, "text": read["text"] }).to_string();
+    let undone = rondo.post(&undo, &headers);
+    assert_eq!(undone.status, 200, "{}", undone.text());
+    assert_eq!(rondo.bytes(), scene_text().as_bytes(), "the file as it was");
+    let answer: Value = serde_json::from_slice(&undone.body).expect("JSON");
+    assert_eq!(answer["text"], CAMERA);
+    assert_eq!(answer["camera"]["position"], json!([0.0, 0.5, -5.0]));
 }
 
 /// A refused write: what it is, its body, its headers, the status expected.
@@ -443,6 +441,25 @@ fn refused_writes_leave_the_file_untouched() {
             400,
         ),
         ("fov 180", with(json!({"fov": 180})), page.to_vec(), 400),
+        (
+            "a text that hides the comma",
+            json!({"base": base, "text": "Camera(position: (0, 0, -5)) // x"}).to_string(),
+            page.to_vec(),
+            400,
+        ),
+        (
+            "a text that is not a camera",
+            json!({"base": base, "text": "Camera(position: (0, 0, -5)), materials: {}"})
+                .to_string(),
+            page.to_vec(),
+            400,
+        ),
+        (
+            "a glTF camera's text",
+            json!({"base": base, "text": "Gltf(placement: \"x\")"}).to_string(),
+            page.to_vec(),
+            422,
+        ),
         (
             "a negative aperture",
             with(json!({"aperture": -0.5})),
