@@ -5,14 +5,12 @@
 
 use std::sync::atomic::AtomicBool;
 
-use bevy_ecs::world::World;
-use glam::Vec3;
-
-use super::render_frame::{camera_of, film_shift, method};
+use super::render_frame::{camera_of, scene_film_shift, scene_view};
 use crate::ecs::resources::{OwnerMaterials, PackedGeometry, RenderControl, RenderSettings};
 use crate::film::Film;
-use crate::render::{Cancelled, SceneView, has_masks, render_pass};
+use crate::render::{Cancelled, render_pass};
 use crate::scene::format::CameraDesc;
+use bevy_ecs::world::World;
 
 /// Samples `0..spp` of every pixel of a `width` × `height` image of the world seen through
 /// `camera`, with the scene's seed, sampler, method and film shift: the film `rondo render`
@@ -33,26 +31,9 @@ pub fn render_camera(
         return None;
     }
     let camera = camera_of(camera);
-    let view = SceneView {
-        geometry: &packed.geometry,
-        materials: &materials.materials,
-        owner_material: &materials.owner_material,
-        lights: &materials.lights,
-        camera: &camera,
-        background: s.background,
-        max_depth: s.max_depth,
-        method: method(s.method),
-        roulette: control.roulette,
-        sampler: s.sampler,
-        masked: has_masks(&materials.materials),
-    };
+    let view = scene_view(&packed.geometry, materials, &camera, s, control.roulette);
     let mut film = Film::new(width, height);
     // As `render_frame` resets the accumulation: the shift depends on the files alone.
-    film.shift = film_shift(
-        &materials.materials,
-        s.background
-            .max(Vec3::splat(materials.lights.sky_max_radiance()))
-            .max(Vec3::splat(materials.lights.punctual_max_intensity())),
-    );
+    film.shift = scene_film_shift(materials, s.background);
     Some(render_pass(&view, &mut film, s.seed, 0..spp, cancel, &|_| {}).map(|_| film))
 }
