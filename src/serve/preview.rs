@@ -175,7 +175,7 @@ fn preview(
     let start = Instant::now();
     match previews.request(request, WAIT) {
         PreviewOutcome::Image(image) => {
-            let frame = Frame::new(image.reload, image.film.clone());
+            let frame = Frame::new(image.reload, image.film);
             Ok(Some((frame, start.elapsed())))
         }
         PreviewOutcome::Superseded => refuse(409, "a newer preview replaced this one"),

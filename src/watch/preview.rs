@@ -60,7 +60,7 @@ pub struct PreviewImage {
 /// What became of a request.
 pub enum PreviewOutcome {
     /// The image.
-    Image(Arc<PreviewImage>),
+    Image(PreviewImage),
     /// A newer request replaced it before it was done.
     Superseded,
     /// No frame of a scene has run yet (or the loop stopped).
@@ -76,8 +76,9 @@ struct State {
     pending: Option<(u64, PreviewRequest)>,
     /// The number and cancel flag of the request in flight.
     in_flight: Option<(u64, Arc<AtomicBool>)>,
-    /// The newest answer: its request number and image (`None`: not ready).
-    answer: Option<(u64, Option<Arc<PreviewImage>>)>,
+    /// The newest answer, until its one waiter takes it: its request number and image
+    /// (`None`: not ready).
+    answer: Option<(u64, Option<PreviewImage>)>,
     last_request: Option<Instant>,
     /// The scene's image size and the reload whose world is in the renderer, once a frame
     /// has run.
@@ -153,12 +154,11 @@ impl Previews {
             if state.newest != number {
                 return PreviewOutcome::Superseded;
             }
-            if let Some((n, image)) = &state.answer
+            if let Some((n, _)) = &state.answer
                 && *n == number
+                && let Some((_, image)) = state.answer.take()
             {
-                return image
-                    .clone()
-                    .map_or(PreviewOutcome::NotReady, PreviewOutcome::Image);
+                return image.map_or(PreviewOutcome::NotReady, PreviewOutcome::Image);
             }
             let left = deadline.saturating_duration_since(Instant::now());
             if left.is_zero() {
@@ -222,7 +222,7 @@ impl Watch {
                     .renderer
                     .render_camera(&request.camera, size, request.spp, &cancel)?
                 {
-                    Ok(film) => Some(Ok(Arc::new(PreviewImage { reload, film }))),
+                    Ok(film) => Some(Ok(PreviewImage { reload, film })),
                     Err(_) => Some(Err(())),
                 }
             });
