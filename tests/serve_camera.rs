@@ -141,19 +141,19 @@ impl Rondo {
     }
 
     /// `POST /camera` with `body` and the extra header lines `headers`.
-    fn post(&self, body: &str, headers: &[(&str, &str)]) -> Reply {
+    fn post(&self, body: &str, headers: &[(&str, impl AsRef<str>)]) -> Reply {
         self.post_to("/camera", body, headers)
     }
 
     /// `POST target` with `body` and the extra header lines `headers`.
-    fn post_to(&self, target: &str, body: &str, headers: &[(&str, &str)]) -> Reply {
+    fn post_to(&self, target: &str, body: &str, headers: &[(&str, impl AsRef<str>)]) -> Reply {
         let mut head = format!(
             "POST {target} HTTP/1.1\r\nHost: {}\r\nContent-Type: application/json\r\nContent-Length: {}\r\n",
             self.addr,
             body.len()
         );
         for (name, value) in headers {
-            head.push_str(&format!("{name}: {value}\r\n"));
+            head.push_str(&format!("{name}: {}\r\n", value.as_ref()));
         }
         self.send(&format!("{head}\r\n{body}"))
     }
@@ -164,6 +164,14 @@ impl Rondo {
             ("Origin", format!("http://{}", self.addr)),
             ("X-Rondo-Token", token.to_string()),
         ]
+    }
+
+    /// Whether the image served is a fresh render of the scene file.
+    fn shows_a_fresh_render(&self) -> bool {
+        let shown = image::load_from_memory(&self.get("/image.png").body)
+            .expect("a PNG")
+            .to_rgb8();
+        shown == common::watch_diff::fresh(&self.scene).expect("a fresh render")
     }
 
     fn bytes(&self) -> Vec<u8> {
@@ -308,7 +316,6 @@ fn a_write_changes_only_the_camera_and_the_watch_shows_a_fresh_render() {
     let before_image = rondo.get("/image.png").body;
 
     let headers = rondo.page_headers(&token);
-    let headers: Vec<(&str, &str)> = headers.iter().map(|(n, v)| (*n, v.as_str())).collect();
     let camera = new_camera();
     let written = rondo.post(&body(base, &camera), &headers);
     assert_eq!(written.status, 200, "{}", written.text());
@@ -347,12 +354,8 @@ fn a_write_changes_only_the_camera_and_the_watch_shows_a_fresh_render() {
     // The answer's version is the file's, and the watch shows a fresh render of it.
     assert_eq!(rondo.camera()["base"], answer["base"]);
     rondo.done(1);
-    let shown = image::load_from_memory(&rondo.get("/image.png").body)
-        .expect("a PNG")
-        .to_rgb8();
-    let fresh = common::watch_diff::fresh(&rondo.scene).expect("a fresh render");
     assert!(
-        shown == fresh,
+        rondo.shows_a_fresh_render(),
         "the image after the write is a fresh render"
     );
     assert_ne!(rondo.get("/image.png").body, before_image, "the view moved");
@@ -547,7 +550,6 @@ fn a_gltf_camera_is_not_rewritten() {
     );
     let base = read["base"].as_str().expect("base");
     let headers = rondo.page_headers(&token);
-    let headers: Vec<(&str, &str)> = headers.iter().map(|(n, v)| (*n, v.as_str())).collect();
     let refused = rondo.post(&body(base, &new_camera()), &headers);
     assert_eq!(refused.status, 422, "{}", refused.text());
     assert_eq!(std::fs::read_to_string(&rondo.scene).expect("read"), gltf);
@@ -565,7 +567,6 @@ fn a_scene_behind_a_symbolic_link_is_not_replaced() {
     let token = rondo.token();
     let base = rondo.camera()["base"].as_str().expect("base").to_string();
     let headers = rondo.page_headers(&token);
-    let headers: Vec<(&str, &str)> = headers.iter().map(|(n, v)| (*n, v.as_str())).collect();
     let refused = rondo.post(&body(&base, &new_camera()), &headers);
     assert_eq!(refused.status, 409, "{}", refused.text());
     assert!(
@@ -606,7 +607,6 @@ fn a_preview_is_the_render_of_the_file_with_that_camera_and_touches_nothing() {
     let rondo = Rondo::start("preview", &scene_text());
     let token = rondo.token();
     let headers = rondo.page_headers(&token);
-    let headers: Vec<(&str, &str)> = headers.iter().map(|(n, v)| (*n, v.as_str())).collect();
     let (original, image) = (rondo.bytes(), rondo.get("/image.png").body);
 
     let preview = rondo.post_to("/preview.png", &preview_body(&new_camera(), 4), &headers);
@@ -737,7 +737,6 @@ fn previews_between_passes_leave_the_render_a_fresh_one() {
     let rondo = Rondo::spawn(dir, scene);
     let token = rondo.token();
     let headers = rondo.page_headers(&token);
-    let headers: Vec<(&str, &str)> = headers.iter().map(|(n, v)| (*n, v.as_str())).collect();
     // Previews while the progressive render runs: back to back, they keep it paused; after 200
     // of them, the render goes on where it was and must end as a fresh one.
     let mut answered = 0;
@@ -755,12 +754,8 @@ fn previews_between_passes_leave_the_render_a_fresh_one() {
         }
     }
     assert!(answered > 0, "previews were rendered");
-    let shown = image::load_from_memory(&rondo.get("/image.png").body)
-        .expect("a PNG")
-        .to_rgb8();
-    let fresh = common::watch_diff::fresh(&rondo.scene).expect("a fresh render");
     assert!(
-        shown == fresh,
+        rondo.shows_a_fresh_render(),
         "after {answered} previews the render is a fresh one"
     );
 }
