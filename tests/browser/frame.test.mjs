@@ -13,7 +13,7 @@
 import fs from "node:fs";
 import os from "node:os";
 import path from "node:path";
-import { WAIT, check, launch, render, results, root, startRondo, stats, stopRondo } from "./harness.mjs";
+import { WAIT, check, render, root, runSteps, startRondo, stats, stopRondo } from "./harness.mjs";
 
 const MOVES = Number(process.env.RONDO_FRAME_MOVES) || 30;
 
@@ -241,16 +241,4 @@ async function latency(context) {
   }
 }
 
-let context, profile;
-try {
-  ({ context, profile } = await launch());
-  await behaviour(context);
-  await latency(context);
-} catch (e) {
-  check("the framing test ran to the end", false, e.stack || String(e));
-} finally {
-  if (context) await context.close();
-  if (profile) fs.rmSync(profile, { recursive: true, force: true });
-}
-console.log(`${results.passed} passed, ${results.failed} failed`);
-process.exit(results.failed === 0 && results.passed > 0 ? 0 : 1);
+await runSteps("the framing test ran to the end", [behaviour, latency]);

@@ -88,3 +88,20 @@ export function stats(values) {
   const at = (q) => v[Math.min(v.length - 1, Math.floor(q * v.length))];
   return `median ${at(0.5).toFixed(1)} ms (p90 ${at(0.9).toFixed(1)}, min ${v[0].toFixed(1)}, max ${v[v.length - 1].toFixed(1)}, n ${v.length})`;
 }
+
+/** Runs each step with one browser, then prints "N passed, N failed" and exits (non-zero on a
+ * failure, or if nothing passed). A step that throws fails the check `ranToTheEnd`. */
+export async function runSteps(ranToTheEnd, steps) {
+  let context, profile;
+  try {
+    ({ context, profile } = await launch());
+    for (const step of steps) await step(context);
+  } catch (e) {
+    check(ranToTheEnd, false, e.stack || String(e));
+  } finally {
+    if (context) await context.close();
+    if (profile) fs.rmSync(profile, { recursive: true, force: true });
+  }
+  console.log(`${results.passed} passed, ${results.failed} failed`);
+  process.exit(results.failed === 0 && results.passed > 0 ? 0 : 1);
+}
