@@ -25,8 +25,8 @@ use crate::scene::load::{LoadedScene, load_scene};
 use crate::scene::provenance::Provenance;
 use crate::shading::sampler::SamplerKind;
 use crate::systems::{
-    IdBuffer, apply_scene, assign_materials, geometry_changed, material_refs_changed, pick_ids,
-    rebuild_geometry, render_camera, render_frame, write_image,
+    IdBuffer, apply_scene, assign_materials, find_focus, geometry_changed, material_refs_changed,
+    pick_ids, rebuild_geometry, render_camera, render_frame, write_image,
 };
 
 /// Command-line overrides of a scene's settings.
@@ -469,6 +469,12 @@ impl Renderer {
     ) -> Option<Result<Film, crate::render::Cancelled>> {
         self.pool
             .install(|| render_camera(&self.world, camera, size, spp, cancel))
+    }
+
+    /// The focus distance of the point at `(x, y)` (fractions of the image) seen through
+    /// `camera` ([`find_focus`]): `Some(None)` for the sky, `None` before the first frame.
+    pub fn find_focus(&self, camera: &CameraDesc, at: (f32, f32)) -> Option<Option<f32>> {
+        find_focus(&self.world, camera, at)
     }
 
     /// The version of the scene in the world: it changes with every applied change.

@@ -759,3 +759,89 @@ fn previews_between_passes_leave_the_render_a_fresh_one() {
         "after {answered} previews the render is a fresh one"
     );
 }
+
+/// A focus request: the place `(x, y)` of the image seen through `camera`.
+fn focus(rondo: &Rondo, headers: &[(&str, String)], camera: &Value, (x, y): (f64, f64)) -> Value {
+    let body = json!({ "camera": camera, "x": x, "y": y }).to_string();
+    let reply = rondo.post_to("/focus", &body, headers);
+    assert_eq!(reply.status, 200, "{}", reply.text());
+    assert_eq!(reply.header("Content-Type"), Some("application/json"));
+    serde_json::from_slice(&reply.body).expect("JSON")
+}
+
+#[test]
+fn focus_is_the_depth_of_the_point_clicked_through_the_framed_camera() {
+    let rondo = Rondo::start("focus", &scene_text());
+    let token = rondo.token();
+    let headers = rondo.page_headers(&token);
+    let original = rondo.bytes();
+    // Not the file's camera (that one is at (0, 0.5, −5)): looking along +z from z = −5, with a
+    // lens, whose central ray is the pinhole's.
+    let camera = json!({
+        "position": [0.0, 0.0, -5.0], "look_at": [0.0, 0.0, 0.0], "up": [0.0, 1.0, 0.0],
+        "fov": 40.0, "aperture": 0.5, "focus_distance": 1.0,
+    });
+    let depth = |answer: &Value| f(&answer["focus_distance"]);
+
+    // Near a corner the ray meets the wall (the plane z = 5) 10 along the view, though it
+    // travels about 11.6 to get there: the focus distance is the depth, not the ray's length.
+    let corner = focus(&rondo, &headers, &camera, (0.05, 0.05));
+    assert!((depth(&corner) - 10.0).abs() < 1e-4, "{corner}");
+
+    // Through the ball's centre (0.5, 0.3, 0), radius 0.8: the ray meets it at |c| − r, at
+    // depth (|c| − r) · c.z / |c|. The place of the centre in the image: 24 × 16, fov 40°,
+    // the image's right being forward × up = −x.
+    let c = glam::DVec3::new(0.5, 0.3, 5.0);
+    let tan = (20.0f64).to_radians().tan();
+    let x = 0.5 - 0.5 * (c.x / c.z) / (tan * 1.5);
+    let y = 0.5 - 0.5 * (c.y / c.z) / tan;
+    let expected = (c.length() - 0.8) * c.z / c.length();
+    let ball = focus(&rondo, &headers, &camera, (x, y));
+    assert!(
+        (f64::from(depth(&ball)) - expected).abs() < 1e-4,
+        "{ball} against {expected}"
+    );
+
+    // Two steps back, the wall is two further.
+    let mut back = camera.clone();
+    back["position"] = json!([0.0, 0.0, -7.0]);
+    let far = focus(&rondo, &headers, &back, (0.05, 0.05));
+    assert!((depth(&far) - 12.0).abs() < 1e-4, "{far}");
+
+    // Looking away, nothing: null.
+    let mut away = camera.clone();
+    away["look_at"] = json!([0.0, 0.0, -10.0]);
+    let sky = focus(&rondo, &headers, &away, (0.5, 0.5));
+    assert!(sky["focus_distance"].is_null(), "{sky}");
+
+    // Refusals, and no file written.
+    let origin = format!("http://{}", rondo.addr);
+    let place = |x: Value, y: Value| json!({ "camera": camera, "x": x, "y": y }).to_string();
+    let cases: Vec<Case> = vec![
+        (
+            "no token",
+            place(json!(0.5), json!(0.5)),
+            vec![("Origin", origin.as_str())],
+            403,
+        ),
+        ("x 1.5", place(json!(1.5), json!(0.5)), vec![], 400),
+        ("y −0.1", place(json!(0.5), json!(-0.1)), vec![], 400),
+        (
+            "no y",
+            json!({ "camera": camera, "x": 0.5 }).to_string(),
+            vec![],
+            400,
+        ),
+    ];
+    for (what, body, extra, status) in cases {
+        let with: Vec<(&str, String)> = if extra.is_empty() {
+            headers.clone()
+        } else {
+            extra.iter().map(|&(k, v)| (k, v.to_string())).collect()
+        };
+        let reply = rondo.post_to("/focus", &body, &with);
+        assert_eq!(reply.status, status, "{what}: {}", reply.text());
+    }
+    assert_eq!(rondo.get("/focus").status, 405);
+    assert_eq!(rondo.bytes(), original, "focusing writes no file");
+}

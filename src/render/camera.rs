@@ -57,6 +57,13 @@ impl Camera {
         }
     }
 
+    /// The depth of point `p`: its distance from the eye along the view direction, the
+    /// `focus_distance` that makes it sharp.
+    #[inline]
+    pub fn depth(&self, p: Vec3) -> f32 {
+        (p - self.position).dot(self.forward)
+    }
+
     /// Whether rays start on a lens of non-zero radius (and so need a lens sample).
     #[inline]
     pub fn has_lens(&self) -> bool {

@@ -6,6 +6,8 @@
 //   right/shift-drag pan
 //   wheel           dolly (towards or away from the point looked at)
 //   W A S D Q E     fly: forward, left, back, right, down, up (with the pointer on the image)
+//   Focus, F        the next click on the image sets focus_distance to the depth of the point
+//                   clicked (POST /focus, through the framed camera)
 //   Escape          back to the scene's camera (the preview is dropped; the file is untouched)
 //
 // While framing, the page shows the preview (a quarter of the scene's width and height at 1
@@ -43,6 +45,10 @@ window.rondoFraming = (() => {
   const saveButton = button("Save camera", "write the framed camera into the scene file");
   const undoButton = button("Undo", "write back the camera before the last save");
   const resetButton = button("Reset", "back to the scene's camera (Escape)");
+  const focusButton = button("Focus", "then click a point of the image to focus the lens on it (F)");
+  focusButton.disabled = false;
+  // Whether the next click on the image sets the focus.
+  let focusArmed = false;
   const note = document.createElement("span");
   note.id = "framing";
   bar.appendChild(note);
@@ -70,6 +76,7 @@ window.rondoFraming = (() => {
 
   function update() {
     const framing = state.cam !== null;
+    focusButton.setAttribute("aria-pressed", String(focusArmed));
     saveButton.disabled = !framing || state.file === null;
     resetButton.disabled = !framing;
     document.body.dataset.framing = framing ? "1" : "";
@@ -158,6 +165,46 @@ window.rondoFraming = (() => {
     pump();
   }
 
+  function armFocus(on) {
+    focusArmed = on;
+    update();
+    if (on) show("focus: click the point to make sharp (Escape: cancel)");
+  }
+
+  // Sets the framed camera's focus distance to the depth of the point shown at the click.
+  async function focusAt(ev) {
+    armFocus(false);
+    const r = canvas.getBoundingClientRect();
+    const x = (ev.clientX - r.left) / r.width, y = (ev.clientY - r.top) / r.height;
+    if (!(x >= 0 && x <= 1 && y >= 0 && y <= 1)) return;
+    const cam = await begin();
+    if (!cam) return;
+    try {
+      const response = await fetch("/focus", {
+        method: "POST",
+        headers: { "Content-Type": "application/json", "X-Rondo-Token": token },
+        body: JSON.stringify({ camera: structuredClone(cam), x, y }),
+      });
+      if (!response.ok) {
+        show(`no focus: ${(await response.text()).trim()}`);
+        return;
+      }
+      const { focus_distance: depth } = await response.json();
+      if (depth === null || !(depth > 0)) {
+        show("no focus: nothing there (sky or background, or behind the camera)");
+        return;
+      }
+      if (state.cam !== cam) return;
+      cam.focus_distance = depth;
+      const pinhole = !(cam.aperture > 0) ? " (aperture 0: a pinhole shows no change)" : "";
+      show(`focus_distance ${depth.toPrecision(6)}${pinhole}`);
+      document.body.dataset.focus = String(depth);
+      moved();
+    } catch (e) {
+      show(`no focus: ${e.message}`);
+    }
+  }
+
   // Orbit, pan and dolly of the framed camera; distances scale with the distance looked at.
   function orbit(dx, dy) {
     const c = state.cam, up = unit(c.up);
@@ -225,9 +272,13 @@ window.rondoFraming = (() => {
     dragged = drag !== null && drag.moved;
     drag = null;
   });
-  // A drag is not a click: picking (pick.js) does not pin on the release of a drag.
+  // A drag is not a click, nor is a click that sets the focus: picking (pick.js) does not pin
+  // on them.
   window.addEventListener("click", (ev) => {
-    if (dragged && ev.target === canvas) ev.stopImmediatePropagation();
+    if (ev.target === canvas && (dragged || focusArmed)) {
+      ev.stopImmediatePropagation();
+      if (!dragged) focusAt(ev);
+    }
     dragged = false;
   }, true);
   canvas.addEventListener("wheel", async (ev) => {
@@ -239,8 +290,10 @@ window.rondoFraming = (() => {
   canvas.addEventListener("mouseenter", () => { hovering = true; });
   canvas.addEventListener("mouseleave", () => { hovering = false; });
   document.addEventListener("keydown", async (ev) => {
+    if (ev.key === "Escape" && focusArmed) { armFocus(false); show(""); return; }
     if (ev.key === "Escape" && state.cam) { end(); show(""); return; }
     const key = ev.key.toLowerCase();
+    if (key === "f" && !ev.ctrlKey && !ev.metaKey && !ev.altKey) { armFocus(!focusArmed); return; }
     if (!hovering || !"wasdqe".includes(key) || key.length !== 1 || ev.ctrlKey || ev.metaKey) return;
     if (!(await begin())) return;
     fly(key);
@@ -278,6 +331,7 @@ window.rondoFraming = (() => {
     }
   });
   resetButton.addEventListener("click", () => { end(); show(""); });
+  focusButton.addEventListener("click", () => armFocus(!focusArmed));
 
   // A reload may change the file's camera: it is read again when framing starts. After a save,
   // the first pass of a later reload ends the framing (its image is the saved view).

@@ -1,7 +1,7 @@
 //! The live viewer of `rondo watch --serve`: an HTTP server that shows every pass in a browser.
 //!
 //! Routes (anything else is `404 Not Found`; methods other than GET and HEAD are `405`, but for
-//! `/camera` and the previews, which take POST only; `HEAD` answers the same headers as `GET`, without a body):
+//! `/camera`, the previews and `/focus`, which take POST only; `HEAD` answers the same headers as `GET`, without a body):
 //!
 //! | route | content |
 //! |---|---|
@@ -19,6 +19,7 @@
 //! | `POST /camera` | writes a camera into the scene file: only its `camera:` value changes (`camera.rs`) |
 //! | `GET /camera_write.js` | the page's side of the camera write (`window.rondoCamera`) |
 //! | `POST /preview.f32`, `/preview.png` | a framing preview through the page's camera; writes nothing (`preview.rs`) |
+//! | `POST /focus` | the focus distance of a point of the image through the page's camera; writes nothing (`preview.rs`) |
 //! | `GET /frame.js` | the page's side of framing: mouse and keys, Save camera, Undo |
 //!
 //! The images answer `503` until the first pass exists; the denoised pass's images answer `404`

@@ -3,7 +3,8 @@
 // entity's full name, its material, the prefab and glTF placements that put it there and where
 // each is written (file:line:col; links with `watch --editor-url`). A click pins the entity,
 // outlines its pixels and copies its location; a second click on it, a click on the sky or
-// Escape unpins.
+// Escape unpins. While the user frames a camera (frame.js), the ids describe the scene's own
+// camera, not the preview shown: picking is off and nothing stays pinned.
 //
 // Data: `pick` events (relayed by the page as "rondo:event") say new ids exist; the ids come
 // from /pick/ids.u32 ("RONDOIDS", u32 width, height, reload, then width*height u32 ids,
@@ -84,10 +85,14 @@
     return e;
   }
 
-  // The id under a mouse event, or undefined off the image.
+  function framing() {
+    return document.body.dataset.framing === "1";
+  }
+
+  // The id under a mouse event, or undefined off the image (or while framing).
   function idAt(ev) {
     const ids = state.ids;
-    if (!ids || canvas.hidden) return undefined;
+    if (!ids || canvas.hidden || framing()) return undefined;
     const r = canvas.getBoundingClientRect();
     const x = Math.floor((ev.clientX - r.left) * ids.width / r.width);
     const y = Math.floor((ev.clientY - r.top) * ids.height / r.height);
@@ -277,6 +282,11 @@
   document.addEventListener("rondo:event", (ev) => {
     if (ev.detail.kind === "pick") fetchIds();
   });
+  new MutationObserver(() => {
+    if (!framing()) return;
+    unpin();
+    panel.hidden = true;
+  }).observe(document.body, { attributes: true, attributeFilter: ["data-framing"] });
   new MutationObserver(place).observe(canvas, { attributes: true, attributeFilter: ["style", "width", "height"] });
   window.addEventListener("resize", place);
   window.rondoPick = state;

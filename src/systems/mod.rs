@@ -2,6 +2,7 @@
 
 mod apply_scene;
 mod assign_materials;
+mod find_focus;
 mod pick_ids;
 mod rebuild_geometry;
 mod render_camera;
@@ -11,6 +12,7 @@ mod write_image;
 pub use crate::geometry::world::world_primitives;
 pub use apply_scene::apply_scene;
 pub use assign_materials::{assign_materials, material_refs_changed};
+pub use find_focus::find_focus;
 pub use pick_ids::{IdBuffer, pick_ids};
 pub use rebuild_geometry::{geometry_changed, rebuild_geometry};
 pub use render_camera::render_camera;

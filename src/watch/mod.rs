@@ -109,8 +109,8 @@ use pending::Pending;
 use pick::Picking;
 pub use pick::{PickSink, Picked};
 pub use preview::{
-    MAX_PREVIEW_DIVISOR, MAX_PREVIEW_SPP, PAUSE, PreviewImage, PreviewOutcome, PreviewRequest,
-    Previews, preview_size,
+    MAX_PREVIEW_DIVISOR, MAX_PREVIEW_SPP, PAUSE, PreviewAsk, PreviewImage, PreviewOutcome,
+    PreviewRequest, Previews, preview_size,
 };
 pub use report::*;
 pub use session::WatchSession;

@@ -1,5 +1,6 @@
 //! Framing previews for a viewer: quick images of the world as it is through a camera the
-//! viewer asks for (the user orbiting with the mouse), without touching the scene file.
+//! viewer asks for (the user orbiting with the mouse), and the focus distance of a point it
+//! shows (focus on click), without touching the scene file.
 //!
 //! The viewer's connection threads hand a [`PreviewRequest`] to [`Previews`] and wait; the
 //! watch loop, which owns the world, takes the newest request between passes and renders it
@@ -30,16 +31,34 @@ pub const MAX_PREVIEW_SPP: u32 = 16;
 /// The largest divisor of the scene's width and height a preview may ask for.
 pub const MAX_PREVIEW_DIVISOR: u32 = 8;
 
-/// What a viewer asks for: the world through `camera` at the scene's width and height divided
-/// by `divisor` ([`preview_size`]) with samples `0..spp`.
+/// What a viewer asks of the world seen through `camera`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PreviewRequest {
     /// The camera, checked as a written `Camera(…)` is.
     pub camera: CameraDesc,
-    /// Samples per pixel, 1..=[`MAX_PREVIEW_SPP`].
-    pub spp: u32,
-    /// The divisor of the width and height, 1..=[`MAX_PREVIEW_DIVISOR`].
-    pub divisor: u32,
+    /// What it wants of it.
+    pub ask: PreviewAsk,
+}
+
+/// The answers a viewer can ask for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PreviewAsk {
+    /// The image at the scene's width and height divided by `divisor` ([`preview_size`]) with
+    /// samples `0..spp`.
+    Image {
+        /// Samples per pixel, 1..=[`MAX_PREVIEW_SPP`].
+        spp: u32,
+        /// The divisor of the width and height, 1..=[`MAX_PREVIEW_DIVISOR`].
+        divisor: u32,
+    },
+    /// The focus distance of the point shown at `(x, y)`, fractions of the image's width and
+    /// height from its top-left corner ([`crate::Renderer::find_focus`]).
+    Focus {
+        /// Fraction of the width, in [0, 1].
+        x: f32,
+        /// Fraction of the height, in [0, 1].
+        y: f32,
+    },
 }
 
 /// The size of the preview of a `width` × `height` image at `divisor`: each divided (rounded
@@ -61,6 +80,9 @@ pub struct PreviewImage {
 pub enum PreviewOutcome {
     /// The image.
     Image(PreviewImage),
+    /// The focus distance (`None`: the point is sky or background) and the reload whose world
+    /// it was measured in.
+    Focus(Option<f32>, u64),
     /// A newer request replaced it before it was done.
     Superseded,
     /// No frame of a scene has run yet (or the loop stopped).
@@ -76,9 +98,8 @@ struct State {
     pending: Option<(u64, PreviewRequest)>,
     /// The number and cancel flag of the request in flight.
     in_flight: Option<(u64, Arc<AtomicBool>)>,
-    /// The newest answer, until its one waiter takes it: its request number and image
-    /// (`None`: not ready).
-    answer: Option<(u64, Option<PreviewImage>)>,
+    /// The newest answer, until its one waiter takes it: its request number and outcome.
+    answer: Option<(u64, PreviewOutcome)>,
     last_request: Option<Instant>,
     /// The scene's image size and the reload whose world is in the renderer, once a frame
     /// has run.
@@ -156,9 +177,9 @@ impl Previews {
             }
             if let Some((n, _)) = &state.answer
                 && *n == number
-                && let Some((_, image)) = state.answer.take()
+                && let Some((_, outcome)) = state.answer.take()
             {
-                return image.map_or(PreviewOutcome::NotReady, PreviewOutcome::Image);
+                return outcome;
             }
             let left = deadline.saturating_duration_since(Instant::now());
             if left.is_zero() {
@@ -216,27 +237,44 @@ impl Watch {
                 let scene = state.scene;
                 (number, request, cancel, scene)
             };
-            let image = scene.and_then(|((width, height), reload)| {
-                let size = preview_size(width, height, request.divisor);
-                match self
-                    .renderer
-                    .render_camera(&request.camera, size, request.spp, &cancel)?
-                {
-                    Ok(film) => Some(Ok(PreviewImage { reload, film })),
-                    Err(_) => Some(Err(())),
-                }
-            });
+            let outcome =
+                scene.and_then(|(size, reload)| self.answer(&request, size, reload, &cancel));
             let mut state = previews.state();
             state.in_flight = None;
-            match image {
+            match outcome {
                 // Cancelled by a newer request, which is pending now.
                 Some(Err(())) => continue,
-                Some(Ok(image)) => state.answer = Some((number, Some(image))),
-                None => state.answer = Some((number, None)),
+                Some(Ok(outcome)) => state.answer = Some((number, outcome)),
+                None => state.answer = Some((number, PreviewOutcome::NotReady)),
             }
             drop(state);
             previews.shared.answered.notify_all();
         }
         previews.paused_until()
+    }
+
+    /// The answer to `request` in the world of reload `reload`, whose image is `size`:
+    /// `None` before the first frame, `Err` if `cancel` rose.
+    fn answer(
+        &self,
+        request: &PreviewRequest,
+        (width, height): (u32, u32),
+        reload: u64,
+        cancel: &AtomicBool,
+    ) -> Option<Result<PreviewOutcome, ()>> {
+        let camera = &request.camera;
+        Some(match request.ask {
+            PreviewAsk::Image { spp, divisor } => {
+                let size = preview_size(width, height, divisor);
+                match self.renderer.render_camera(camera, size, spp, cancel)? {
+                    Ok(film) => Ok(PreviewOutcome::Image(PreviewImage { reload, film })),
+                    Err(_) => Err(()),
+                }
+            }
+            PreviewAsk::Focus { x, y } => {
+                let depth = self.renderer.find_focus(camera, (x, y))?;
+                Ok(PreviewOutcome::Focus(depth, reload))
+            }
+        })
     }
 }

@@ -1,7 +1,8 @@
 // Framing with the mouse in the live viewer, in a real browser (see harness.mjs): a drag shows
 // previews of a new camera without touching the file, "Save camera" changes only the camera's
 // bytes and the reload that follows equals a fresh render, Undo puts the file back, Escape
-// drops the framing, and a page of another origin cannot write. Then the time from a mouse move
+// drops the framing, focus on click sets the depth of the point clicked, and a page of another
+// origin cannot write. Then the time from a mouse move
 // to its preview drawn, on the Cornell box at 512×512.
 //
 //   node frame.test.mjs
@@ -69,6 +70,12 @@ function diffSpan(a, b) {
   while (end < a.length - start && end < b.length - start
          && a[a.length - 1 - end] === b[b.length - 1 - end]) end++;
   return [start, a.length - end, b.length - end];
+}
+
+// Moves the mouse to the place (fx, fy) of the canvas, fractions of its width and height.
+async function pointAt(page, fx, fy) {
+  const box = await page.locator("#canvas").boundingBox();
+  await page.mouse.move(box.x + fx * box.width, box.y + fy * box.height);
 }
 
 // Polls `GET route` until `ok(response)`; resolves to the response's bytes.
@@ -165,6 +172,36 @@ async function behaviour(context) {
     await waitFor(page, () => document.getElementById("canvas").dataset.kind === "raw");
     check("Escape ends the framing", (await framed(page)) === null);
     check("and writes nothing", fs.readFileSync(file, "utf8") === afterUndo);
+
+    // Focus on click. The image's right is −x: the box's front face (z = −0.5, 4.5 from the eye
+    // along the view) is at (0.2, 0.5) of the image, the wall (z = 5, depth 10) at (0.5, 0.15).
+    await pointAt(page, 0.2, 0.5);
+    await waitFor(page, () => !document.getElementById("pick").hidden);
+    await page.click('button:text-is("Focus")');
+    await pointAt(page, 0.2, 0.5);
+    await page.mouse.down();
+    await page.mouse.up();
+    await waitFor(page, () => document.body.dataset.focus !== undefined);
+    const onBox = Number(await page.evaluate(() => document.body.dataset.focus));
+    check("Focus, then a click, sets focus_distance to the depth of the point clicked (4.5)",
+      Math.abs(onBox - 4.5) < 1e-3, String(onBox));
+    check("the framed camera takes it", Math.abs((await framed(page)).focus_distance - 4.5) < 1e-3,
+      JSON.stringify(await framed(page)));
+    check("the click pins no pick",
+      (await page.evaluate(() => document.getElementById("pick").dataset.pinned)) !== "true");
+    await pointAt(page, 0.21, 0.52);
+    await pointAt(page, 0.5, 0.15);
+    check("while framing, hovering shows no pick (the ids are of the scene's camera)",
+      await page.evaluate(() => document.getElementById("pick").hidden));
+    await page.keyboard.press("f");
+    await page.mouse.down();
+    await page.mouse.up();
+    await waitFor(page, () => Number(document.body.dataset.focus) > 5);
+    const onWall = Number(await page.evaluate(() => document.body.dataset.focus));
+    check("F, then a click on the wall, focuses at 10", Math.abs(onWall - 10) < 1e-3, String(onWall));
+    await page.keyboard.press("Escape");
+    await waitFor(page, () => document.getElementById("canvas").dataset.kind === "raw");
+    check("focusing writes nothing", fs.readFileSync(file, "utf8") === afterUndo);
 
     // A page of another origin cannot write: the token header makes a preflight the server
     // never grants, and a plain POST lacks the token.
