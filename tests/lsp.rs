@@ -11,6 +11,7 @@ use std::sync::mpsc::{Receiver, channel};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use common::gltf_doc::{Bin, doc};
 use common::temp_dir;
 use serde_json::{Value, json};
 
@@ -631,4 +632,97 @@ fn a_header_that_does_not_parse_stops_the_server_with_a_message() {
         stderr.contains("Content-Length \"lots\" is not a number"),
         "{stderr}"
     );
+}
+
+/// A glTF file of one node "sign": the unit square [0, 1]² at z = 0, two triangles.
+fn panel_gltf() -> String {
+    let mut bin = Bin::default();
+    let v = bin.f32s(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0]);
+    let i = bin.u16s(&[0, 1, 2, 0, 2, 3]);
+    let parts = json!({
+        "accessors": [
+            {"bufferView": v, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]},
+            {"bufferView": i, "componentType": 5123, "count": 6, "type": "SCALAR"},
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "nodes": [{"mesh": 0, "name": "sign"}],
+        "scenes": [{"nodes": [0]}],
+        "scene": 0,
+    });
+    doc(&bin, parts).to_string()
+}
+
+#[test]
+fn gltf_placements_are_checked_completed_hovered_and_followed() {
+    let dir = temp_dir("lsp-gltf");
+    workspace(&dir);
+    std::fs::create_dir_all(dir.join("models")).expect("mkdir");
+    std::fs::write(dir.join("models/panel.gltf"), panel_gltf()).expect("gltf");
+    std::fs::write(dir.join("models/readme.txt"), "not a model").expect("notes");
+    let placement = "        Entity(name: \"panel\", gltf: \"models/panel.gltf\", transform: Transform(translate: (-0.5, 0.6, 2.5))),\n";
+    let end = SCENE.rfind("    ],").expect("end of entities");
+    let text = format!("{}{placement}{}", &SCENE[..end], &SCENE[end..]);
+    let scene = dir.join("gltf.ron");
+    std::fs::write(&scene, &text).expect("scene");
+    let uri = format!("file://{}", scene.display());
+    let mut c = Client::start();
+    c.initialize();
+    c.open(&uri, &text);
+    let first = c.diagnostics(&uri);
+    assert!(errors(&first).is_empty(), "{first:?}");
+    let at = |c: &mut Client, method: &str, text: &str, offset: usize| {
+        c.request(
+            method,
+            json!({"textDocument": {"uri": uri}, "position": pos_json(position(text, offset))}),
+        )["result"]
+            .clone()
+    };
+
+    // Hover on the placement: the unit square moved by (−0.5, 0.6, 2.5), and its one entity.
+    let name = find_in_line(&text, "\"panel\"", "panel");
+    let shown = at(&mut c, "textDocument/hover", &text, name);
+    let shown = shown["contents"]["value"].as_str().unwrap_or_default();
+    assert!(
+        shown.contains("min [-0.5, 0.6, 2.5] max [0.5, 1.6, 2.5]"),
+        "{shown}"
+    );
+    assert!(
+        shown.contains("places 1 entity") && shown.contains("`panel/sign`"),
+        "{shown}"
+    );
+
+    // Definition: the path goes to the file.
+    let path = find_in_line(&text, "\"panel\"", "panel.gltf");
+    let r = at(&mut c, "textDocument/definition", &text, path);
+    let gltf_uri = format!("file://{}", dir.join("models/panel.gltf").display());
+    assert_eq!(r["uri"], gltf_uri.as_str(), "{r}");
+
+    // Completion in the path: the glTF file beside it, not the text file.
+    let r = at(&mut c, "textDocument/completion", &text, path);
+    let labels: Vec<&str> = r
+        .as_array()
+        .unwrap_or_else(|| panic!("{r}"))
+        .iter()
+        .map(|i| i["label"].as_str().unwrap_or_default())
+        .collect();
+    assert_eq!(labels, ["panel.gltf"], "{r}");
+
+    // A typo in the path: an error over the path's string, naming it.
+    let typo = text.replacen("models/panel.gltf", "models/panell.gltf", 1);
+    c.notify(
+        "textDocument/didChange",
+        json!({"textDocument": {"uri": uri, "version": 2}, "contentChanges": [{"text": typo}]}),
+    );
+    let d = c.diagnostics(&uri);
+    let e = errors(&d);
+    assert_eq!(e.len(), 1, "{d:?}");
+    let quoted = find_in_line(&typo, "\"panel\"", "\"models/panell.gltf\"");
+    assert_eq!(
+        e[0]["range"]["start"],
+        pos_json(position(&typo, quoted)),
+        "{d:?}"
+    );
+    let message = e[0]["message"].as_str().unwrap_or_default();
+    assert!(message.contains("panell.gltf"), "{message}");
 }
