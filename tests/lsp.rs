@@ -726,3 +726,162 @@ fn gltf_placements_are_checked_completed_hovered_and_followed() {
     let message = e[0]["message"].as_str().unwrap_or_default();
     assert!(message.contains("panell.gltf"), "{message}");
 }
+
+/// The script headless Neovim runs (Lua, Neovim 0.7 and later): opens `RONDO_SCENE`, starts
+/// `RONDO_BIN lsp` as its language client, then as a user would: types a typo into the buffer
+/// and waits for the error, takes it back and waits for none, asks for a completion, a
+/// definition and a hover at the places the test gives; writes what it saw to `RONDO_OUT`.
+const NVIM_SCRIPT: &str = r#"
+local out = {}
+local function finish()
+  local f = io.open(vim.env.RONDO_OUT, "w")
+  f:write(vim.fn.json_encode(out))
+  f:close()
+  vim.cmd("qall!")
+end
+local ok, err = pcall(function()
+  vim.cmd("edit " .. vim.fn.fnameescape(vim.env.RONDO_SCENE))
+  local buf = vim.api.nvim_get_current_buf()
+  local id = vim.lsp.start_client({ name = "rondo", cmd = { vim.env.RONDO_BIN, "lsp" },
+                                    root_dir = vim.fn.fnamemodify(vim.env.RONDO_SCENE, ":h") })
+  vim.lsp.buf_attach_client(buf, id)
+  out.initialized = vim.wait(30000, function()
+    local c = vim.lsp.get_client_by_id(id)
+    return c ~= nil and c.initialized
+  end, 20)
+  local function errors()
+    return vim.diagnostic.get(buf, { severity = vim.diagnostic.severity.ERROR })
+  end
+  local line, col = tonumber(vim.env.RONDO_TYPO_LINE), tonumber(vim.env.RONDO_TYPO_COL)
+  vim.api.nvim_buf_set_text(buf, line, col, line, col + 8, { '"coppr"' })
+  out.typo_seen = vim.wait(30000, function() return #errors() > 0 end, 20)
+  local e = errors()[1]
+  if e then
+    out.typo = { lnum = e.lnum, col = e.col, end_col = e.end_col, message = e.message }
+  end
+  vim.api.nvim_buf_set_text(buf, line, col, line, col + 7, { '"copper"' })
+  out.fixed = vim.wait(30000, function() return #errors() == 0 end, 20)
+  local function ask(method, l, c)
+    local params = { textDocument = { uri = vim.uri_from_bufnr(buf) },
+                     position = { line = l, character = c } }
+    local answers = vim.lsp.buf_request_sync(buf, method, params, 30000) or {}
+    local answer = answers[id]
+    return answer and answer.result
+  end
+  local items = ask("textDocument/completion", line, col + 1) or {}
+  out.completion = {}
+  for _, item in ipairs(items.items or items) do table.insert(out.completion, item.label) end
+  table.sort(out.completion)
+  local def = ask("textDocument/definition", line, col + 3)
+  if def and def[1] then def = def[1] end
+  out.definition = def and def.range and def.range.start
+  local hover = ask("textDocument/hover", tonumber(vim.env.RONDO_HOVER_LINE),
+                    tonumber(vim.env.RONDO_HOVER_COL))
+  out.hover = hover and hover.contents and hover.contents.value
+end)
+if not ok then out.error = tostring(err) end
+finish()
+"#;
+
+/// Neovim's `nvim`, or `None` (after saying why) when it is missing and `RONDO_REQUIRE_NVIM`
+/// is not `1` (CI sets it, after installing Debian's `neovim`).
+fn nvim() -> Option<&'static str> {
+    let found = Command::new("nvim")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if found {
+        return Some("nvim");
+    }
+    assert!(
+        std::env::var("RONDO_REQUIRE_NVIM").as_deref() != Ok("1"),
+        "RONDO_REQUIRE_NVIM=1 but no nvim on the PATH (Debian: apt-get install neovim)"
+    );
+    eprintln!("skipped: no nvim on the PATH (Debian: apt-get install neovim)");
+    None
+}
+
+#[test]
+fn headless_neovim_shows_diagnostics_completes_follows_and_hovers() {
+    let Some(nvim) = nvim() else { return };
+    let dir = temp_dir("lsp-nvim");
+    let (scene, _) = workspace(&dir);
+    let script = dir.join("init.lua");
+    std::fs::write(&script, NVIM_SCRIPT).expect("script");
+    let out = dir.join("seen.json");
+    let typo = find_in_line(SCENE, "\"ball\"", "\"copper\"");
+    let (line, col) = position(SCENE, typo);
+    let (hover_line, hover_col) = position(SCENE, find_in_line(SCENE, "\"ball\"", "ball"));
+    let mut child = Command::new(nvim)
+        .args(["--headless", "-n", "-i", "NONE", "--noplugin", "-u"])
+        .arg(&script)
+        .env("RONDO_BIN", env!("CARGO_BIN_EXE_rondo"))
+        .env("RONDO_SCENE", &scene)
+        .env("RONDO_OUT", &out)
+        .env("RONDO_TYPO_LINE", line.to_string())
+        .env("RONDO_TYPO_COL", col.to_string())
+        .env("RONDO_HOVER_LINE", hover_line.to_string())
+        .env("RONDO_HOVER_COL", hover_col.to_string())
+        .env("XDG_STATE_HOME", &*dir)
+        .env("XDG_DATA_HOME", &*dir)
+        .current_dir(&*dir)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start nvim");
+    let deadline = std::time::Instant::now() + 3 * PATIENCE;
+    while child.try_wait().expect("wait").is_none() {
+        if std::time::Instant::now() > deadline {
+            let _ = child.kill();
+            panic!("nvim did not finish");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let seen: Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).expect("nvim wrote what it saw"))
+            .expect("JSON");
+    assert!(seen["error"].is_null(), "{seen}");
+    assert_eq!(seen["initialized"], true, "{seen}");
+    assert_eq!(seen["typo_seen"], true, "{seen}");
+    let e = &seen["typo"];
+    assert_eq!(
+        (e["lnum"].as_u64(), e["col"].as_u64()),
+        (Some(line), Some(col)),
+        "{seen}"
+    );
+    assert_eq!(
+        e["end_col"].as_u64(),
+        Some(col + "\"coppr\"".len() as u64),
+        "{seen}"
+    );
+    assert!(
+        e["message"]
+            .as_str()
+            .is_some_and(|m| m.contains("unknown material \"coppr\"")),
+        "{seen}"
+    );
+    assert_eq!(seen["fixed"], true, "{seen}");
+    assert_eq!(
+        seen["completion"],
+        json!(["copper", "lamp", "white"]),
+        "{seen}"
+    );
+    let defined = SCENE.find("\"copper\":").expect("definition");
+    assert_eq!(
+        seen["definition"],
+        pos_json(position(SCENE, defined)),
+        "{seen}"
+    );
+    let hover = seen["hover"].as_str().unwrap_or_default();
+    assert!(
+        hover.contains("min [0.5, 2.5, 2.5] max [1.5, 3.5, 3.5]"),
+        "{seen}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(&scene).expect("scene"),
+        SCENE,
+        "the file on disk is untouched"
+    );
+}
