@@ -13,7 +13,7 @@
 //!   output's directory, which therefore cannot be made to change).
 //! - On Unix the temporary is created with mode `0o666` less the umask, as `File::create`
 //!   would, so the output gets the usual permissions rather than the owner-only ones of a
-//!   temporary file.
+//!   temporary file; a regular file replaced passes its own permissions on to the new one.
 //! - A temporary is removed when the write fails, and, once
 //!   [`remove_temporaries_on_termination`] is installed, when SIGINT, SIGTERM or SIGHUP ends the
 //!   process in the middle of a write: live temporaries are kept in a registry that the signal
@@ -81,6 +81,13 @@ pub fn write_file(
     prefix.push(name);
     prefix.push(".");
     let (file, temporary) = Temporary::create(dir, &prefix)?;
+    // A file replaced keeps its permissions (a scene file the viewer writes a camera into, an
+    // image kept private); a symbolic link there is replaced as a new file would be.
+    if let Ok(old) = std::fs::symlink_metadata(path)
+        && old.is_file()
+    {
+        file.set_permissions(old.permissions())?;
+    }
     let mut out = BufWriter::new(file);
     encode(&mut out)?;
     out.flush()?;
@@ -227,6 +234,21 @@ mod tests {
         write_bytes(&out, b"x").expect("write");
         let mode = |p: &Path| std::fs::metadata(p).expect("meta").permissions().mode();
         assert_eq!(mode(&out), mode(&probe));
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_replaced_file_keeps_its_permissions() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().expect("temp dir");
+        let out = dir.path().join("scene.ron");
+        std::fs::write(&out, b"old").expect("write");
+        for mode in [0o600, 0o640, 0o664] {
+            std::fs::set_permissions(&out, std::fs::Permissions::from_mode(mode)).expect("chmod");
+            write_bytes(&out, b"new").expect("write");
+            let kept = std::fs::metadata(&out).expect("meta").permissions().mode() & 0o777;
+            assert_eq!(kept, mode, "{mode:o}");
+        }
     }
 
     #[test]
