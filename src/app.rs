@@ -26,7 +26,7 @@ use crate::scene::provenance::Provenance;
 use crate::shading::sampler::SamplerKind;
 use crate::systems::{
     IdBuffer, apply_scene, assign_materials, geometry_changed, material_refs_changed, pick_ids,
-    rebuild_geometry, render_frame, write_image,
+    rebuild_geometry, render_camera, render_frame, write_image,
 };
 
 /// Command-line overrides of a scene's settings.
@@ -455,6 +455,20 @@ impl Renderer {
     /// pixel, traced on the renderer's threads.
     pub fn pick_ids(&self) -> IdBuffer {
         self.pool.install(|| pick_ids(&self.world))
+    }
+
+    /// The world as it is seen through `camera` at `size` with samples `0..spp`
+    /// ([`render_camera`]), traced on the renderer's threads; the accumulated film is not
+    /// touched. `None` before the first frame.
+    pub fn render_camera(
+        &self,
+        camera: &CameraDesc,
+        size: (u32, u32),
+        spp: u32,
+        cancel: &AtomicBool,
+    ) -> Option<Result<Film, crate::render::Cancelled>> {
+        self.pool
+            .install(|| render_camera(&self.world, camera, size, spp, cancel))
     }
 
     /// The version of the scene in the world: it changes with every applied change.

@@ -59,6 +59,13 @@ impl Rondo {
 
     /// Watches `scene` (in `dir`), and waits for its first render.
     fn watch(dir: common::TestDir, scene: PathBuf) -> Self {
+        let rondo = Self::spawn(dir, scene);
+        rondo.done(0);
+        rondo
+    }
+
+    /// Watches `scene` (in `dir`), once its viewer is up.
+    fn spawn(dir: common::TestDir, scene: PathBuf) -> Self {
         let mut child = Command::new(env!("CARGO_BIN_EXE_rondo"))
             .arg("watch")
             .arg(&scene)
@@ -82,15 +89,13 @@ impl Rondo {
             .trim_end_matches('/')
             .parse()
             .expect("viewer: http://ADDR/");
-        let rondo = Self {
+        Self {
             child,
             dir,
             scene,
             addr,
             events: events(addr),
-        };
-        rondo.done(0);
-        rondo
+        }
     }
 
     /// Waits for the end of a render of reload `reload` or a later one (a save can be seen as
@@ -136,14 +141,19 @@ impl Rondo {
     }
 
     /// `POST /camera` with `body` and the extra header lines `headers`.
-    fn post(&self, body: &str, headers: &[(&str, &str)]) -> Reply {
+    fn post(&self, body: &str, headers: &[(&str, impl AsRef<str>)]) -> Reply {
+        self.post_to("/camera", body, headers)
+    }
+
+    /// `POST target` with `body` and the extra header lines `headers`.
+    fn post_to(&self, target: &str, body: &str, headers: &[(&str, impl AsRef<str>)]) -> Reply {
         let mut head = format!(
-            "POST /camera HTTP/1.1\r\nHost: {}\r\nContent-Type: application/json\r\nContent-Length: {}\r\n",
+            "POST {target} HTTP/1.1\r\nHost: {}\r\nContent-Type: application/json\r\nContent-Length: {}\r\n",
             self.addr,
             body.len()
         );
         for (name, value) in headers {
-            head.push_str(&format!("{name}: {value}\r\n"));
+            head.push_str(&format!("{name}: {}\r\n", value.as_ref()));
         }
         self.send(&format!("{head}\r\n{body}"))
     }
@@ -154,6 +164,14 @@ impl Rondo {
             ("Origin", format!("http://{}", self.addr)),
             ("X-Rondo-Token", token.to_string()),
         ]
+    }
+
+    /// Whether the image served is a fresh render of the scene file.
+    fn shows_a_fresh_render(&self) -> bool {
+        let shown = image::load_from_memory(&self.get("/image.png").body)
+            .expect("a PNG")
+            .to_rgb8();
+        shown == common::watch_diff::fresh(&self.scene).expect("a fresh render")
     }
 
     fn bytes(&self) -> Vec<u8> {
@@ -298,7 +316,6 @@ fn a_write_changes_only_the_camera_and_the_watch_shows_a_fresh_render() {
     let before_image = rondo.get("/image.png").body;
 
     let headers = rondo.page_headers(&token);
-    let headers: Vec<(&str, &str)> = headers.iter().map(|(n, v)| (*n, v.as_str())).collect();
     let camera = new_camera();
     let written = rondo.post(&body(base, &camera), &headers);
     assert_eq!(written.status, 200, "{}", written.text());
@@ -337,32 +354,26 @@ fn a_write_changes_only_the_camera_and_the_watch_shows_a_fresh_render() {
     // The answer's version is the file's, and the watch shows a fresh render of it.
     assert_eq!(rondo.camera()["base"], answer["base"]);
     rondo.done(1);
-    let shown = image::load_from_memory(&rondo.get("/image.png").body)
-        .expect("a PNG")
-        .to_rgb8();
-    let fresh = common::watch_diff::fresh(&rondo.scene).expect("a fresh render");
     assert!(
-        shown == fresh,
+        rondo.shows_a_fresh_render(),
         "the image after the write is a fresh render"
     );
     assert_ne!(rondo.get("/image.png").body, before_image, "the view moved");
 
-    // Undo: the page writes the camera it read before; the file is then as before but for
-    // the value, which now reads as that camera.
-    let base = answer["base"].as_str().expect("base");
-    let undone = rondo.post(&body(base, &read["camera"]), &headers);
-    assert_eq!(undone.status, 200, "{}", undone.text());
-    let after = String::from_utf8(rondo.bytes()).expect("text");
-    assert!(
-        after.starts_with(BEFORE) && after.ends_with(AFTER),
-        "{after}"
+    // Undo: the page writes back the text it read before; the file is then as it was, byte
+    // for byte, comments inside the value included.
+    assert_eq!(
+        answer["text"],
+        after[BEFORE.len()..after.len() - AFTER.len()]
     );
-    let scene: SceneDesc = parse(&rondo.scene, &after).expect("parses");
-    let SceneCamera::Camera(c) = scene.camera else {
-        panic!("a Camera")
-    };
-    assert_eq!(c.position, glam::Vec3::new(0.0, 0.5, -5.0));
-    assert_eq!(c.fov, 40.0);
+    let base = answer["base"].as_str().expect("base");
+    let undo = json!({ "base": base, "text": read["text"] }).to_string();
+    let undone = rondo.post(&undo, &headers);
+    assert_eq!(undone.status, 200, "{}", undone.text());
+    assert_eq!(rondo.bytes(), scene_text().as_bytes(), "the file as it was");
+    let answer: Value = serde_json::from_slice(&undone.body).expect("JSON");
+    assert_eq!(answer["text"], CAMERA);
+    assert_eq!(answer["camera"]["position"], json!([0.0, 0.5, -5.0]));
 }
 
 /// A refused write: what it is, its body, its headers, the status expected.
@@ -433,6 +444,25 @@ fn refused_writes_leave_the_file_untouched() {
             400,
         ),
         ("fov 180", with(json!({"fov": 180})), page.to_vec(), 400),
+        (
+            "a text that hides the comma",
+            json!({"base": base, "text": "Camera(position: (0, 0, -5)) // x"}).to_string(),
+            page.to_vec(),
+            400,
+        ),
+        (
+            "a text that is not a camera",
+            json!({"base": base, "text": "Camera(position: (0, 0, -5)), materials: {}"})
+                .to_string(),
+            page.to_vec(),
+            400,
+        ),
+        (
+            "a glTF camera's text",
+            json!({"base": base, "text": "Gltf(placement: \"x\")"}).to_string(),
+            page.to_vec(),
+            422,
+        ),
         (
             "a negative aperture",
             with(json!({"aperture": -0.5})),
@@ -520,7 +550,6 @@ fn a_gltf_camera_is_not_rewritten() {
     );
     let base = read["base"].as_str().expect("base");
     let headers = rondo.page_headers(&token);
-    let headers: Vec<(&str, &str)> = headers.iter().map(|(n, v)| (*n, v.as_str())).collect();
     let refused = rondo.post(&body(base, &new_camera()), &headers);
     assert_eq!(refused.status, 422, "{}", refused.text());
     assert_eq!(std::fs::read_to_string(&rondo.scene).expect("read"), gltf);
@@ -538,7 +567,6 @@ fn a_scene_behind_a_symbolic_link_is_not_replaced() {
     let token = rondo.token();
     let base = rondo.camera()["base"].as_str().expect("base").to_string();
     let headers = rondo.page_headers(&token);
-    let headers: Vec<(&str, &str)> = headers.iter().map(|(n, v)| (*n, v.as_str())).collect();
     let refused = rondo.post(&body(&base, &new_camera()), &headers);
     assert_eq!(refused.status, 409, "{}", refused.text());
     assert!(
@@ -567,4 +595,167 @@ fn the_page_s_script_is_served() {
     );
     let text = script.text();
     assert!(text.contains("window.rondoCamera") && text.contains("X-Rondo-Token"));
+}
+
+/// A preview request: `camera` at `spp` samples per pixel.
+fn preview_body(camera: &Value, spp: u32) -> String {
+    json!({ "camera": camera, "spp": spp }).to_string()
+}
+
+#[test]
+fn a_preview_is_the_render_of_the_file_with_that_camera_and_touches_nothing() {
+    let rondo = Rondo::start("preview", &scene_text());
+    let token = rondo.token();
+    let headers = rondo.page_headers(&token);
+    let (original, image) = (rondo.bytes(), rondo.get("/image.png").body);
+
+    let preview = rondo.post_to("/preview.png", &preview_body(&new_camera(), 4), &headers);
+    assert_eq!(preview.status, 200, "{}", preview.text());
+    assert_eq!(preview.header("Content-Type"), Some("image/png"));
+    assert_eq!(preview.header("X-Rondo-Samples"), Some("4"));
+    let raw = rondo.post_to("/preview.f32", &preview_body(&new_camera(), 4), &headers);
+    assert_eq!(raw.status, 200, "{}", raw.text());
+    assert_eq!(&raw.body[..8], b"RONDOF32");
+    let size: Vec<u32> = (0..2)
+        .map(|i| u32::from_le_bytes(raw.body[8 + 4 * i..12 + 4 * i].try_into().expect("u32")))
+        .collect();
+    assert_eq!(size, [12, 8], "half the scene's 24 × 16 by default");
+    let body = json!({ "camera": new_camera(), "spp": 1, "divisor": 4 }).to_string();
+    let quarter = rondo.post_to("/preview.f32", &body, &headers);
+    assert_eq!(quarter.status, 200, "{}", quarter.text());
+    assert_eq!(
+        quarter.body[8..16],
+        [6, 0, 0, 0, 4, 0, 0, 0],
+        "a quarter: 6 × 4"
+    );
+
+    // The scene file with that camera, written here by hand, rendered at the preview's size.
+    let framed = rondo.dir.join("framed.ron");
+    let camera = "Camera(position: (1.1, 0.7, -4.3), look_at: (0.1, 0.2, 0.0), \
+                  up: (0.05, 1.0, 0.0), fov: 33.3, aperture: 0.0, focus_distance: 4.5)";
+    std::fs::write(&framed, format!("{BEFORE}{camera}{AFTER}")).expect("write");
+    let out = rondo.dir.join("framed.png");
+    let status = Command::new(env!("CARGO_BIN_EXE_rondo"))
+        .arg("render")
+        .arg(&framed)
+        .args(["--width", "12", "--height", "8", "--spp", "4", "-o"])
+        .arg(&out)
+        .stderr(Stdio::null())
+        .status()
+        .expect("rondo render");
+    assert!(status.success());
+    assert!(
+        preview.body == std::fs::read(&out).expect("read"),
+        "the preview is the PNG `rondo render` writes of the file with that camera"
+    );
+
+    // Another camera, another image; the file and the watched image untouched.
+    let own = rondo.camera()["camera"].clone();
+    let other = rondo.post_to("/preview.png", &preview_body(&own, 4), &headers);
+    assert_eq!(other.status, 200, "{}", other.text());
+    assert_ne!(other.body, preview.body, "the camera is the one asked for");
+    assert_eq!(rondo.bytes(), original, "a preview writes no file");
+    assert_eq!(
+        rondo.get("/image.png").body,
+        image,
+        "nor changes the render"
+    );
+}
+
+#[test]
+fn refused_previews_cost_nothing_and_change_nothing() {
+    let rondo = Rondo::start("preview-refused", &scene_text());
+    let token = rondo.token();
+    let origin = format!("http://{}", rondo.addr);
+    let page = [
+        ("Origin", origin.as_str()),
+        ("X-Rondo-Token", token.as_str()),
+    ];
+    let good = preview_body(&new_camera(), 1);
+    let mut wide = new_camera();
+    wide["fov"] = json!(180);
+    let cases: Vec<Case> = vec![
+        ("no token", good.clone(), vec![page[0]], 403),
+        (
+            "a foreign origin",
+            good.clone(),
+            vec![("Origin", "http://evil.example"), page[1]],
+            403,
+        ),
+        ("spp 0", preview_body(&new_camera(), 0), page.to_vec(), 400),
+        (
+            "spp 17",
+            preview_body(&new_camera(), 17),
+            page.to_vec(),
+            400,
+        ),
+        ("fov 180", preview_body(&wide, 1), page.to_vec(), 400),
+        (
+            "divisor 9",
+            json!({ "camera": new_camera(), "spp": 1, "divisor": 9 }).to_string(),
+            page.to_vec(),
+            400,
+        ),
+        (
+            "no spp",
+            json!({ "camera": new_camera() }).to_string(),
+            page.to_vec(),
+            400,
+        ),
+        (
+            "a flat camera",
+            new_camera().to_string(),
+            page.to_vec(),
+            400,
+        ),
+    ];
+    let original = rondo.bytes();
+    for (what, body, headers, status) in cases {
+        for target in ["/preview.png", "/preview.f32"] {
+            let reply = rondo.post_to(target, &body, &headers);
+            assert_eq!(reply.status, status, "{what} {target}: {}", reply.text());
+        }
+    }
+    let get = rondo.get("/preview.png");
+    assert_eq!(get.status, 405);
+    assert_eq!(get.header("Allow"), Some("POST"));
+    assert_eq!(rondo.bytes(), original, "the file is untouched");
+    let accepted = rondo.post_to("/preview.png", &good, &page);
+    assert_eq!(accepted.status, 200, "{}", accepted.text());
+}
+
+#[test]
+fn previews_between_passes_leave_the_render_a_fresh_one() {
+    // 256 spp at 48 × 32: passes long enough for previews to land between them.
+    let text = scene_text().replace(
+        "width: 24, height: 16, spp: 2,",
+        "width: 48, height: 32, spp: 256,",
+    );
+    let dir = common::temp_dir("serve-camera-previews-between");
+    let scene = dir.join("scene.ron");
+    std::fs::write(&scene, &text).expect("write scene");
+    let rondo = Rondo::spawn(dir, scene);
+    let token = rondo.token();
+    let headers = rondo.page_headers(&token);
+    // Previews while the progressive render runs: back to back, they keep it paused; after 200
+    // of them, the render goes on where it was and must end as a fresh one.
+    let mut answered = 0;
+    let mut done = false;
+    while !done {
+        let body = json!({ "camera": new_camera(), "spp": 2, "divisor": 1 }).to_string();
+        let reply = rondo.post_to("/preview.f32", &body, &headers);
+        answered += usize::from(reply.status == 200);
+        while let Ok(e) = rondo.events.try_recv() {
+            done |= e["kind"] == "done";
+        }
+        if answered > 200 {
+            rondo.done(0);
+            break;
+        }
+    }
+    assert!(answered > 0, "previews were rendered");
+    assert!(
+        rondo.shows_a_fresh_render(),
+        "after {answered} previews the render is a fresh one"
+    );
 }

@@ -49,10 +49,13 @@ pub fn run(
             let fall_back = addr.is_none();
             let addr =
                 rondo::serve::parse_addr(addr.as_deref().unwrap_or(rondo::serve::DEFAULT_ADDR))?;
+            let previews = rondo::watch::Previews::default();
+            watch.set_previews(previews.clone());
             let serve_options = rondo::serve::Options {
                 allowed_hosts,
                 editor_url,
                 scene: Some(scene.to_path_buf()),
+                previews: Some(previews),
                 ..Default::default()
             };
             let (viewer, feed) = rondo::serve::Viewer::start(addr, fall_back, serve_options)?;

@@ -263,10 +263,51 @@ pub fn replace_camera(text: &str, camera: &CameraValues) -> Result<String, Camer
     Ok(out)
 }
 
+/// The scene text `text` with the value of its top-level `camera:` replaced by `value`, as
+/// written (an undo puts a camera's earlier text back, comments and all). `value` must read as
+/// a scene's own `Camera(…)` and end where the value ends: nothing in it may swallow the text
+/// that follows (a trailing `//` comment would hide the field's comma).
+pub fn restore_camera(text: &str, value: &str) -> Result<String, CameraEditError> {
+    match parse::<SceneCamera>(Path::new("camera"), value) {
+        Ok(SceneCamera::Camera(_)) => {}
+        Ok(SceneCamera::Gltf(_)) => return Err(CameraEditError::NotOwn(Some("Gltf".into()))),
+        Err(e) => return Err(CameraEditError::Invalid(e.message)),
+    }
+    let span = camera_span(text)?;
+    let mut out = String::with_capacity(text.len() + value.len());
+    out.push_str(&text[..span.value.start]);
+    out.push_str(value);
+    out.push_str(&text[span.value.end..]);
+    let end = span.value.start + value.len();
+    if camera_span(&out).ok().map(|s| s.value) != Some(span.value.start..end) {
+        return Err(CameraEditError::Invalid(
+            "the camera's text does not end where its value ends".into(),
+        ));
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::scene::format::SceneDesc;
+
+    #[test]
+    fn a_camera_s_text_goes_back_byte_for_byte_and_cannot_swallow_what_follows() {
+        let old = "Camera(\n        // the eye\n        position: (0, 1, -5),\n        direction: (0, 0, 1), focus_on: (0, 0, 3), aperture: 0.1,\n    )";
+        let written = replace_camera(SCENE, &values()).expect("written");
+        assert_ne!(written, SCENE);
+        assert_eq!(restore_camera(&written, old).as_deref(), Ok(SCENE));
+        for bad in [
+            "Camera(position: (0, 1, -5)) // hides the comma",
+            "Camera(position: (0, 1, -5)) /* unclosed",
+            "Gltf(placement: \"x\")",
+            "Camera(position: (0, 1, -5)), materials: {}",
+            "Camera(fov: 200, position: (0, 0, 0))",
+        ] {
+            assert!(restore_camera(&written, bad).is_err(), "{bad}");
+        }
+    }
 
     const SCENE: &str = r#"#![enable(implicit_some)]
 // A scene: the camera below is rewritten, nothing else.

@@ -18,8 +18,11 @@
 //! `POST /camera` takes the same camera fields and the `base` the page read, as a JSON object
 //! of at most [`MAX_BODY`] bytes, and replaces the text of the scene file's `camera:` value
 //! (and nothing else: [`crate::scene::camera_edit`]) through
-//! [`crate::output_file::write_bytes`]. The watch loop then sees the file change and reloads it
-//! as after any save. Refused, the file untouched:
+//! [`crate::output_file::write_bytes`]; it answers the new `base`, `camera` and `text`. Instead
+//! of the fields, `{"base":…,"text":"Camera(…)"}` writes that text as it is (an undo puts an
+//! earlier value back byte for byte; it must read as a `Camera(…)` and end where the value
+//! ends, [`crate::scene::camera_edit::restore_camera`]). The watch loop then sees the file
+//! change and reloads it as after any save. Refused, the file untouched:
 //!
 //! - `403`: an `Origin` header other than `http://<Host>`, or no `X-Rondo-Token` header holding
 //!   the session's secret (`secret.rs`: only the served page knows it);
@@ -31,7 +34,8 @@
 //!   be read, or is a symbolic link (the atomic write would replace the link by a file);
 //! - `422`: the file's camera is not a `Camera(…)` of its own (a `Gltf(…)`, none).
 //!
-//! An undo is a write of the camera before (the page keeps it): the server keeps no history.
+//! An undo is a write of the camera's text before (the page keeps it): the server keeps no
+//! history.
 //! Writes are one at a time; the check of `base` and the rename are not atomic together, so an
 //! editor's save in between them is overwritten (the rename never writes into another file).
 
@@ -46,11 +50,11 @@ use glam::Vec3;
 use serde::Deserialize;
 use serde_json::{Value, json};
 
-use super::http::{self, BodyError, Header, Request};
+use super::http::{self, Request};
 use super::secret::Secret;
 use crate::scene::bounded_read::read_text;
 use crate::scene::camera_edit::{
-    CameraEditError, CameraValues, camera_span, check_camera, replace_camera,
+    CameraEditError, CameraValues, camera_span, check_camera, replace_camera, restore_camera,
 };
 use crate::scene::format::{SceneCamera, parse};
 
@@ -111,11 +115,11 @@ impl SceneFile {
     }
 }
 
-/// The body of `POST /camera`.
+/// A camera as the page sends it: the body of `POST /camera` (with its `base`), the `camera`
+/// of a preview request.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct WriteBody {
-    base: String,
+pub struct CameraFields {
     position: [f64; 3],
     look_at: [f64; 3],
     up: [f64; 3],
@@ -124,10 +128,10 @@ struct WriteBody {
     focus_distance: f64,
 }
 
-impl WriteBody {
+impl CameraFields {
     /// The camera in `f32`, as the scene holds it (a number out of range becomes infinite, and
     /// is refused by [`check_camera`]).
-    fn camera(&self) -> CameraValues {
+    pub fn values(&self) -> CameraValues {
         let v = |[x, y, z]: [f64; 3]| Vec3::new(x as f32, y as f32, z as f32);
         CameraValues {
             position: v(self.position),
@@ -138,6 +142,33 @@ impl WriteBody {
             focus_distance: self.focus_distance as f32,
         }
     }
+}
+
+/// What `POST /camera` writes.
+enum NewCamera {
+    /// A camera of these numbers, written one field per line.
+    Values(CameraValues),
+    /// This text of a `Camera(…)`, as it is (an undo).
+    Text(String),
+}
+
+/// The body of `POST /camera`: the `base` the page read and either the camera's fields or
+/// (an undo) the `text` of an earlier value, in one object.
+fn write_body(body: &[u8]) -> Result<(String, NewCamera), Refusal> {
+    let not = |e: serde_json::Error| (400, format!("not a camera: {e}"));
+    let mut fields: serde_json::Map<String, Value> = serde_json::from_slice(body).map_err(not)?;
+    let Some(Value::String(base)) = fields.remove("base") else {
+        return Err((400, "not a camera: no \"base\" string".into()));
+    };
+    if fields.len() == 1
+        && let Some(Value::String(text)) = fields.remove("text")
+    {
+        return Ok((base, NewCamera::Text(text)));
+    }
+    let camera: CameraFields = serde_json::from_value(Value::Object(fields)).map_err(not)?;
+    let camera = camera.values();
+    check_camera(&camera).map_err(|e| (400, e.to_string()))?;
+    Ok((base, NewCamera::Values(camera)))
 }
 
 /// A camera as JSON, each number the shortest decimal that reads back as its `f32` (`33.3`, not
@@ -256,60 +287,36 @@ fn write(
     timeout: Duration,
 ) -> Result<Option<Value>, Refusal> {
     let refuse = |status: u16, text: &str| Err((status, text.to_string()));
-    match request.header("origin") {
-        Header::Absent => {}
-        Header::One(origin) if origin.eq_ignore_ascii_case(&format!("http://{host}")) => {}
-        _ => {
-            return refuse(
-                403,
-                "a write is accepted only from the viewer's own page (Origin)",
-            );
-        }
-    }
-    match request.header("x-rondo-token") {
-        Header::One(token) if secret.matches(token) => {}
-        _ => {
-            return refuse(
-                403,
-                "a write needs the session's X-Rondo-Token (from the viewer page)",
-            );
-        }
+    if let Err(why) = secret.admits(request, host) {
+        return refuse(403, &format!("no write: {why}"));
     }
     let Some(path) = scene.path.as_deref() else {
         return refuse(404, "no scene file");
     };
     let body = match http::read_body(stream, request, MAX_BODY, timeout) {
         Ok(body) => body,
-        Err(BodyError::Closed) => return Ok(None),
-        Err(BodyError::LengthRequired) => return refuse(411, "a body with a Content-Length"),
-        Err(BodyError::BadLength) => return refuse(400, "a bad Content-Length"),
-        Err(BodyError::TooLarge) => {
-            return refuse(413, &format!("the body is longer than {MAX_BODY} bytes"));
-        }
-        Err(BodyError::Timeout) => return refuse(408, "the body took too long"),
+        Err(e) => return e.refusal(MAX_BODY).map_or(Ok(None), Err),
     };
-    let body: WriteBody =
-        serde_json::from_slice(&body).map_err(|e| (400, format!("not a camera: {e}")))?;
-    let camera = body.camera();
-    check_camera(&camera).map_err(|e| (400, e.to_string()))?;
+    let (base, camera) = write_body(&body)?;
     let _writing = scene.writing.lock().unwrap_or_else(PoisonError::into_inner);
-    let new_text = edit(path, scene, &body.base, &camera)?;
+    let new_text = edit(path, scene, &base, &camera)?;
     crate::output_file::write_bytes(path, new_text.as_bytes())
         .map_err(|e| (500, format!("cannot write {}: {e}", path.display())))?;
+    let (read, value) = own_camera(path, &new_text).map_err(|e| (500, e))?;
+    let camera = match camera {
+        NewCamera::Values(camera) => camera,
+        NewCamera::Text(_) => read,
+    };
     Ok(Some(json!({
         "base": scene.version(new_text.as_bytes()),
         "camera": camera_json(&camera),
+        "text": value,
     })))
 }
 
 /// The text of the scene file at `path` with `camera` written in, if the file is a regular file
 /// (not a symbolic link) whose version is still `base` and whose camera is its own.
-fn edit(
-    path: &Path,
-    scene: &SceneFile,
-    base: &str,
-    camera: &CameraValues,
-) -> Result<String, Refusal> {
+fn edit(path: &Path, scene: &SceneFile, base: &str, camera: &NewCamera) -> Result<String, Refusal> {
     let link = std::fs::symlink_metadata(path)
         .map_err(|e| (409, format!("cannot read {}: {e}", path.display())))?
         .file_type()
@@ -330,7 +337,11 @@ fn edit(
             "the scene file changed since its camera was read: read it again".to_string(),
         ));
     }
-    replace_camera(&text, camera).map_err(|e| match e {
+    match camera {
+        NewCamera::Values(camera) => replace_camera(&text, camera),
+        NewCamera::Text(value) => restore_camera(&text, value),
+    }
+    .map_err(|e| match e {
         CameraEditError::Invalid(_) => (400, e.to_string()),
         _ => (422, e.to_string()),
     })

@@ -2,7 +2,7 @@
 //
 //   const cam = await rondoCamera.load();  // the scene file's camera; remembers its version
 //   await rondoCamera.save({...cam, position: [0, 2, -6]});  // writes it into the scene file
-//   await rondoCamera.undo();  // writes back the camera before the last save
+//   await rondoCamera.undo();  // writes back the camera's text before the last save, as it was
 //
 // A camera is {position: [x, y, z], look_at: [x, y, z], up: [x, y, z], fov, aperture,
 // focus_distance}. Each call resolves to the camera now in the file, or rejects with an Error
@@ -14,10 +14,11 @@
 window.rondoCamera = (() => {
   const meta = document.querySelector('meta[name="rondo-token"]');
   const token = meta ? meta.content : "";
-  // The version of the scene file last read or written, the camera in it, and the cameras
-  // before each save (for undo).
+  // The version of the scene file last read or written, the camera in it and its text, and the
+  // texts before each save (for undo).
   let base = null;
   let current = null;
+  let text = null;
   const history = [];
 
   async function reply(response) {
@@ -34,6 +35,7 @@ window.rondoCamera = (() => {
     const answer = await reply(await fetch("/camera.json", { cache: "no-store" }));
     base = answer.base;
     current = answer.camera;
+    text = answer.text;
     if (current === null) {
       const error = new Error(answer.error);
       error.status = 422;
@@ -42,19 +44,12 @@ window.rondoCamera = (() => {
     return current;
   }
 
-  async function write(cam) {
+  // Writes `fields` (the camera's numbers, or {text} of an earlier value) with the base.
+  async function write(fields) {
     if (base === null) {
       await load();
     }
-    const body = JSON.stringify({
-      base,
-      position: cam.position,
-      look_at: cam.look_at,
-      up: cam.up,
-      fov: cam.fov,
-      aperture: cam.aperture,
-      focus_distance: cam.focus_distance,
-    });
+    const body = JSON.stringify({ base, ...fields });
     const answer = await reply(
       await fetch("/camera", {
         method: "POST",
@@ -64,6 +59,7 @@ window.rondoCamera = (() => {
     );
     base = answer.base;
     current = answer.camera;
+    text = answer.text;
     return current;
   }
 
@@ -71,8 +67,15 @@ window.rondoCamera = (() => {
     if (current === null) {
       await load();
     }
-    const before = current;
-    const written = await write(cam);
+    const before = text;
+    const written = await write({
+      position: cam.position,
+      look_at: cam.look_at,
+      up: cam.up,
+      fov: cam.fov,
+      aperture: cam.aperture,
+      focus_distance: cam.focus_distance,
+    });
     history.push(before);
     return written;
   }
@@ -81,7 +84,7 @@ window.rondoCamera = (() => {
     if (history.length === 0) {
       return current;
     }
-    const written = await write(history[history.length - 1]);
+    const written = await write({ text: history[history.length - 1] });
     history.pop();
     return written;
   }

@@ -69,6 +69,20 @@ pub enum BodyError {
     Closed,
 }
 
+impl BodyError {
+    /// The status and text that refuse a body read with limit `max`; `None` for
+    /// [`BodyError::Closed`] (no one to answer).
+    pub fn refusal(self, max: usize) -> Option<(u16, String)> {
+        Some(match self {
+            Self::Closed => return None,
+            Self::LengthRequired => (411, "a body with a Content-Length".into()),
+            Self::BadLength => (400, "a bad Content-Length".into()),
+            Self::TooLarge => (413, format!("the body is longer than {max} bytes")),
+            Self::Timeout => (408, "the body took too long".into()),
+        })
+    }
+}
+
 /// Why no request could be read.
 #[derive(Debug, PartialEq, Eq)]
 pub enum HeadError {

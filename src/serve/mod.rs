@@ -1,7 +1,7 @@
 //! The live viewer of `rondo watch --serve`: an HTTP server that shows every pass in a browser.
 //!
 //! Routes (anything else is `404 Not Found`; methods other than GET and HEAD are `405`, but for
-//! `/camera`, which takes POST only; `HEAD` answers the same headers as `GET`, without a body):
+//! `/camera` and the previews, which take POST only; `HEAD` answers the same headers as `GET`, without a body):
 //!
 //! | route | content |
 //! |---|---|
@@ -18,6 +18,8 @@
 //! | `GET /camera.json` | the scene file's camera and the file's version (`camera.rs`) |
 //! | `POST /camera` | writes a camera into the scene file: only its `camera:` value changes (`camera.rs`) |
 //! | `GET /camera_write.js` | the page's side of the camera write (`window.rondoCamera`) |
+//! | `POST /preview.f32`, `/preview.png` | a framing preview through the page's camera; writes nothing (`preview.rs`) |
+//! | `GET /frame.js` | the page's side of framing: mouse and keys, Save camera, Undo |
 //!
 //! The images answer `503` until the first pass exists; the denoised pass's images answer `404`
 //! while there is none for the render shown (none yet, denoising off, or no denoiser). Each
@@ -29,9 +31,9 @@
 //! `--allow-host` (any port, so SSH port forwards work), and `403` to the rest: a web page
 //! elsewhere cannot rebind its own name to the server's address and read the images.
 //!
-//! The one route that changes a file, `POST /camera`, also needs the session's secret in
-//! `X-Rondo-Token` (`secret.rs`; the page gets it in its HTML), refuses an `Origin` other than
-//! `http://<Host>`, writes only the watched scene file itself (never a prefab, never through a
+//! The one route that changes a file, `POST /camera`, and the previews, which cost render time,
+//! also need the session's secret in `X-Rondo-Token` (`secret.rs`; the page gets it in its HTML)
+//! and refuse an `Origin` other than `http://<Host>`; `POST /camera` writes only the watched scene file itself (never a prefab, never through a
 //! symbolic link) and only if it is still the version the page read (see `camera.rs`).
 //!
 //! The server is `http.rs`: std sockets, one thread and one request per connection, every
@@ -53,6 +55,7 @@ mod feed;
 mod http;
 mod images;
 mod pick;
+mod preview;
 mod secret;
 
 use std::io::Write;
@@ -62,6 +65,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::thread::JoinHandle;
 use std::time::Duration;
+
+use crate::watch::Previews;
 
 pub use camera::MAX_BODY;
 pub use event_text::{CUT, MAX_MESSAGE, MAX_SOURCE_LINE, changed_text};
@@ -127,6 +132,9 @@ pub struct Options {
     /// The watched scene file, whose camera `POST /camera` may rewrite (`None`: the camera
     /// routes answer `404`).
     pub scene: Option<PathBuf>,
+    /// Where framing previews are asked of the render loop ([`crate::watch::Watch::set_previews`]
+    /// with a clone; `None`: the preview routes answer `404`).
+    pub previews: Option<Previews>,
 }
 
 /// Why the server could not start.
@@ -445,6 +453,7 @@ enum Route {
     Events,
     Pick(pick::Route),
     Camera(camera::Route),
+    Frame(preview::Route),
 }
 
 impl Route {
@@ -464,7 +473,8 @@ impl Route {
             _ => {
                 return pick::Route::of(path)
                     .map(Self::Pick)
-                    .or_else(|| camera::Route::of(path).map(Self::Camera));
+                    .or_else(|| camera::Route::of(path).map(Self::Camera))
+                    .or_else(|| preview::Route::of(path).map(Self::Frame));
             }
         })
     }
@@ -493,7 +503,12 @@ fn answer(
     let Some(route) = Route::of(&request.target) else {
         return text(stream, 404, "not found\n");
     };
-    if route == Route::Camera(camera::Route::Write) {
+    let posts = match route {
+        Route::Camera(route) => route == camera::Route::Write,
+        Route::Frame(route) => route.posts(),
+        _ => false,
+    };
+    if posts {
         if request.method != "POST" {
             return http::respond(
                 stream,
@@ -538,6 +553,11 @@ fn answer(
             let shared = (&context.scene, &context.secret);
             let timeout = context.options.limits.head_timeout;
             return camera::answer(stream, route, request, shared, host, timeout);
+        }
+        Route::Frame(route) => {
+            let shared = (context.options.previews.as_ref(), &context.secret);
+            let timeout = context.options.limits.head_timeout;
+            return preview::answer(stream, route, request, shared, host, timeout);
         }
         Route::Page => {
             return http::respond(

@@ -7,6 +7,8 @@
 //! a CORS preflight, which the server never answers with a grant (`OPTIONS` gets `405`), so a
 //! cross-site form or `fetch` cannot write.
 
+use super::http::{Header, Request};
+
 /// A 128-bit secret, written as 32 lower-case hex digits.
 pub struct Secret(String);
 
@@ -17,6 +19,21 @@ impl Secret {
         getrandom::fill(&mut bytes)
             .map_err(|e| format!("no random numbers from the system: {e}"))?;
         Ok(Self(bytes.iter().map(|b| format!("{b:02x}")).collect()))
+    }
+
+    /// Whether `request` comes from the viewer's own page: an `Origin`, if sent, of
+    /// `http://<host>` (`host`: the request's `Host`, already checked), and an `X-Rondo-Token`
+    /// holding this secret. `Err` says which is missing, for a `403`.
+    pub fn admits(&self, request: &Request, host: &str) -> Result<(), &'static str> {
+        match request.header("origin") {
+            Header::Absent => {}
+            Header::One(origin) if origin.eq_ignore_ascii_case(&format!("http://{host}")) => {}
+            _ => return Err("only the viewer's own page may ask (Origin)"),
+        }
+        match request.header("x-rondo-token") {
+            Header::One(token) if self.matches(token) => Ok(()),
+            _ => Err("the session's X-Rondo-Token (from the viewer page) is missing or wrong"),
+        }
     }
 
     /// Whether `given` is the secret, compared in a time that does not depend on where they

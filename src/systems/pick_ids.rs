@@ -5,11 +5,10 @@
 
 use bevy_ecs::world::World;
 
-use super::render_frame::{camera_of, method};
+use super::render_frame::{camera_of, scene_view};
 use crate::ecs::components::SceneOrder;
 use crate::ecs::resources::{ActiveCamera, OwnerMaterials, PackedGeometry, RenderSettings};
 use crate::render::pick::{SKY, first_owners};
-use crate::render::{SceneView, has_masks};
 
 /// One id per pixel, rows from the top: the entity's scene order, or [`SKY`].
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -37,19 +36,7 @@ pub fn pick_ids(world: &World) -> IdBuffer {
         };
     }
     let camera = camera_of(&world.resource::<ActiveCamera>().0);
-    let view = SceneView {
-        geometry: &packed.geometry,
-        materials: &materials.materials,
-        owner_material: &materials.owner_material,
-        lights: &materials.lights,
-        camera: &camera,
-        background: s.background,
-        max_depth: s.max_depth,
-        method: method(s.method),
-        roulette: true,
-        sampler: s.sampler,
-        masked: has_masks(&materials.materials),
-    };
+    let view = scene_view(&packed.geometry, materials, &camera, s, true);
     let order: Vec<u32> = packed
         .owners
         .iter()

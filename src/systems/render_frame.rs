@@ -13,11 +13,11 @@ use crate::ecs::resources::{
     RenderControl, RenderSettings, SceneVersion, Timings,
 };
 use crate::film::shift_for;
-use crate::geometry::layout::{Aos, Hybrid, LayoutKind, Soa, SoaSimd};
-use crate::geometry::packed::LayoutCache;
+use crate::geometry::layout::{Aos, Hybrid, Layout, LayoutKind, Soa, SoaSimd};
+use crate::geometry::packed::{Geometry, LayoutCache};
 use crate::render::camera::Camera;
 use crate::render::{Method, SceneView, has_masks, render_pass, render_preview};
-use crate::scene::format::{self, CameraDesc};
+use crate::scene::format::{self, CameraDesc, SettingsDesc};
 use crate::shading::material::Material;
 
 /// Paths a live preview traces at most, unless the smallest block gives more: about 9 ms on the
@@ -48,6 +48,41 @@ pub fn method(m: format::Method) -> Method {
         format::Method::Mis => Method::Mis,
         format::Method::Caustics => Method::Caustics,
     }
+}
+
+/// The kernels' view of the scene in the world: `geometry` (in any layout) seen through
+/// `camera`, with the world's materials and lights and the settings `s`.
+pub fn scene_view<'a, L: Layout>(
+    geometry: &'a Geometry<L>,
+    materials: &'a OwnerMaterials,
+    camera: &'a Camera,
+    s: &SettingsDesc,
+    roulette: bool,
+) -> SceneView<'a, L> {
+    SceneView {
+        geometry,
+        materials: &materials.materials,
+        owner_material: &materials.owner_material,
+        lights: &materials.lights,
+        camera,
+        background: s.background,
+        max_depth: s.max_depth,
+        method: method(s.method),
+        roulette,
+        sampler: s.sampler,
+        masked: has_masks(&materials.materials),
+    }
+}
+
+/// The film shift ([`film_shift`]) of the scene in the world: from its brightest material, sky,
+/// punctual light or `background`.
+pub fn scene_film_shift(materials: &OwnerMaterials, background: Vec3) -> i32 {
+    film_shift(
+        &materials.materials,
+        background
+            .max(Vec3::splat(materials.lights.sky_max_radiance()))
+            .max(Vec3::splat(materials.lights.punctual_max_intensity())),
+    )
 }
 
 /// The camera a description places.
@@ -90,12 +125,7 @@ pub fn render_frame(
         acc.reset(
             s.width,
             s.height,
-            film_shift(
-                &materials.materials,
-                s.background
-                    .max(Vec3::splat(materials.lights.sky_max_radiance()))
-                    .max(Vec3::splat(materials.lights.punctual_max_intensity())),
-            ),
+            scene_film_shift(&materials, s.background),
         );
         acc.preview = Preview::Due;
         timings.render = Default::default();
@@ -146,19 +176,8 @@ pub fn render_frame(
     let builds = counters.bvh_builds + counters.bvh_refits;
     macro_rules! pass {
         ($layout:ty) => {{
-            let view = SceneView {
-                geometry: relaid.get::<$layout>(&packed.geometry, builds),
-                materials: &materials.materials,
-                owner_material: &materials.owner_material,
-                lights: &materials.lights,
-                camera: &cam,
-                background: s.background,
-                max_depth: s.max_depth,
-                method: method(s.method),
-                roulette: control.roulette,
-                sampler: s.sampler,
-                masked: has_masks(&materials.materials),
-            };
+            let geometry = relaid.get::<$layout>(&packed.geometry, builds);
+            let view = scene_view(geometry, &materials, &cam, s, control.roulette);
             if preview {
                 render_preview(
                     &view,

@@ -10,7 +10,7 @@
 //!   thread for tests and tools.
 //!
 //! One file per concept: the loop in `mod.rs`; file events and the watched set in `files.rs`;
-//! the changes waiting to be loaded in `pending.rs`; loading them in `reload.rs`; the render of
+//! the changes waiting to be loaded in `pending.rs`; the viewer's framing previews in `preview.rs`; loading them in `reload.rs`; the render of
 //! each pass in `job.rs`; [`Report`]s in `report.rs`; the thread harness in `session.rs`.
 //! The denoise thread beside the loop is [`crate::denoise::DenoiseWorker`].
 //!
@@ -94,6 +94,7 @@ mod job;
 mod options;
 mod pending;
 mod pick;
+mod preview;
 mod reload;
 mod report;
 mod session;
@@ -107,6 +108,10 @@ pub use options::WatchOptions;
 use pending::Pending;
 use pick::Picking;
 pub use pick::{PickSink, Picked};
+pub use preview::{
+    MAX_PREVIEW_DIVISOR, MAX_PREVIEW_SPP, PAUSE, PreviewImage, PreviewOutcome, PreviewRequest,
+    Previews, preview_size,
+};
 pub use report::*;
 pub use session::WatchSession;
 
@@ -180,6 +185,8 @@ pub struct Watch {
     denoiser: Option<DenoiseWorker>,
     /// Where the ids of each scene go (the viewer's picking), if anywhere.
     picking: Option<Picking>,
+    /// Where the viewer asks for framing previews, if anywhere.
+    previews: Option<Previews>,
 }
 
 impl Watch {
@@ -251,6 +258,7 @@ impl Watch {
             denoising: Denoising::Off,
             denoiser: None,
             picking: None,
+            previews: None,
         })
     }
 
@@ -294,6 +302,7 @@ impl Watch {
             if self.stop.is_stopped() {
                 break;
             }
+            let paused = self.serve_previews();
             // Times and permissions cannot change what a good scene renders (a `touch`, or the
             // `chmod` that ends a vim save); they matter only to a load that failed.
             if self.last_error.is_none() && !self.missing {
@@ -313,12 +322,14 @@ impl Watch {
                 pending = self.act(p, &mut out);
                 continue;
             }
-            // Render while waiting, unless a change cancelled the pass.
-            if self.job.is_some() && !self.cancel.load(Ordering::SeqCst) {
+            // Render while waiting, unless a change cancelled the pass or the viewer is framing.
+            if self.job.is_some() && !self.cancel.load(Ordering::SeqCst) && paused.is_none() {
                 self.step(&mut out);
                 continue;
             }
-            let until = due.unwrap_or(now + IDLE_POLL);
+            let until = due
+                .unwrap_or(now + IDLE_POLL)
+                .min(paused.unwrap_or(now + IDLE_POLL));
             if let Ok(event) = self
                 .events
                 .recv_timeout(until.saturating_duration_since(now))

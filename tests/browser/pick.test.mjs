@@ -8,31 +8,18 @@
 // number of timed hovers (default 40). Every wait is bounded; any failure exits non-zero. The
 // last line is "N passed, N failed". Times are reported, never asserted.
 
-import { spawn } from "node:child_process";
 import fs from "node:fs";
 import os from "node:os";
 import path from "node:path";
-import { fileURLToPath } from "node:url";
-import { chromium } from "playwright-core";
+import { WAIT, check, root, runSteps, startRondo, stopRondo } from "./harness.mjs";
 
-const here = path.dirname(fileURLToPath(import.meta.url));
-const root = path.resolve(here, "../..");
-const bin = process.env.RONDO_BIN || path.join(root, "target/release/rondo");
-const browserPath = process.env.CHROMIUM || "/usr/bin/chromium";
 const screenshot = (() => {
   const i = process.argv.indexOf("--screenshot");
   return i > 0 ? path.resolve(process.argv[i + 1]) : null;
 })();
-const WAIT = 30_000;
 const HOVERS = Number(process.env.RONDO_PICK_HOVERS) || 40;
 const EDITOR = "vscode://file/{path}:{line}:{col}";
 const SKY = 4294967295;
-
-let passed = 0, failed = 0;
-function check(name, ok, detail = "") {
-  if (ok) { passed++; console.log(`ok   ${name}`); }
-  else { failed++; console.log(`FAIL ${name}${detail ? `: ${detail}` : ""}`); }
-}
 
 // 64×64, camera at (0, 0, −5) looking at the origin (+z), up +y, fov 40°: image x grows along
 // forward × up = −x, 17.6 pixels per unit at z = 0. Pixel (49, 32) sees only the ball (x = −1),
@@ -69,48 +56,6 @@ function locate(file, after, needle) {
   const line = before.split("\n").length;
   const col = [...before.slice(before.lastIndexOf("\n") + 1)].length + 1;
   return `${file}:${line}:${col}`;
-}
-
-function startRondo(scenePath, args = []) {
-  const child = spawn(bin, ["watch", scenePath, "--serve", "127.0.0.1:0", ...args], {
-    stdio: ["ignore", "ignore", "pipe"],
-  });
-  const log = [];
-  const url = new Promise((resolve, reject) => {
-    const timer = setTimeout(() => reject(new Error(`no viewer line: ${log.join("")}`)), WAIT);
-    child.stderr.setEncoding("utf8");
-    child.stderr.on("data", (text) => {
-      log.push(text);
-      const m = /viewer: (http:\/\/\S+)/.exec(log.join(""));
-      if (m) { clearTimeout(timer); resolve(m[1]); }
-    });
-    child.on("exit", (code) => reject(new Error(`rondo exited (${code}): ${log.join("")}`)));
-    child.on("error", reject);
-  });
-  return { child, url, log };
-}
-
-async function stopRondo(child) {
-  if (child.exitCode !== null) return child.exitCode;
-  const exited = new Promise((resolve) => child.on("exit", (code, signal) => resolve(code ?? signal)));
-  child.kill("SIGINT");
-  const timer = setTimeout(() => child.kill("SIGKILL"), WAIT);
-  const code = await exited;
-  clearTimeout(timer);
-  return code;
-}
-
-async function launch() {
-  if (!fs.existsSync(browserPath)) throw new Error(`${browserPath} missing: apt-get install chromium`);
-  const profile = fs.mkdtempSync(path.join(os.tmpdir(), "rondo-chromium-"));
-  const context = await chromium.launchPersistentContext(profile, {
-    executablePath: browserPath,
-    headless: true,
-    viewport: { width: 1000, height: 760 },
-    args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-           "--disable-background-networking", "--disable-component-update", "--disable-sync"],
-  });
-  return { context, profile };
 }
 
 // The ids the server hands out, read here: { width, height, ids }.
@@ -318,16 +263,4 @@ async function latency(context) {
   console.log(`  to the frame that paints it (all)  ${stats(frames)}`);
 }
 
-let context, profile;
-try {
-  ({ context, profile } = await launch());
-  await behaviour(context);
-  await latency(context);
-} catch (e) {
-  check("the picking test ran to the end", false, e.stack || String(e));
-} finally {
-  if (context) await context.close();
-  if (profile) fs.rmSync(profile, { recursive: true, force: true });
-}
-console.log(`${passed} passed, ${failed} failed`);
-process.exit(failed === 0 && passed > 0 ? 0 : 1);
+await runSteps("the picking test ran to the end", [behaviour, latency]);

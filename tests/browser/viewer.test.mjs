@@ -10,29 +10,16 @@
 // Image Denoise (scripts/fetch-oidn.sh): without it its checks are skipped, unless
 // RONDO_REQUIRE_OIDN=1 (as in CI), when they fail.
 
-import { spawn } from "node:child_process";
 import fs from "node:fs";
 import os from "node:os";
 import path from "node:path";
-import { fileURLToPath } from "node:url";
-import { chromium } from "playwright-core";
+import { WAIT, check, root, runSteps, startRondo, stopRondo } from "./harness.mjs";
 
-const here = path.dirname(fileURLToPath(import.meta.url));
-const root = path.resolve(here, "../..");
-const bin = process.env.RONDO_BIN || path.join(root, "target/release/rondo");
-const browserPath = process.env.CHROMIUM || "/usr/bin/chromium";
 const screenshot = (() => {
   const i = process.argv.indexOf("--screenshot");
   return i > 0 ? path.resolve(process.argv[i + 1]) : null;
 })();
-const WAIT = 30_000;
 const LATENCY_EDITS = Number(process.env.RONDO_LATENCY_EDITS) || 5;
-
-let passed = 0, failed = 0;
-function check(name, ok, detail = "") {
-  if (ok) { passed++; console.log(`ok   ${name}`); }
-  else { failed++; console.log(`FAIL ${name}${detail ? `: ${detail}` : ""}`); }
-}
 
 // A scene whose centre pixel sees only the `wall` emitter, so its colour is exactly the wall's
 // emission (any sample count, preview included). Line 5 holds the wall's material. Pixel
@@ -52,36 +39,6 @@ function scene(wall, settings = "") {
     ],
 )
 `;
-}
-
-// Starts `rondo watch SCENE --serve 127.0.0.1:0 ARGS` and resolves with the viewer's URL.
-function startRondo(scenePath, args = []) {
-  const child = spawn(bin, ["watch", scenePath, "--serve", "127.0.0.1:0", ...args], {
-    stdio: ["ignore", "ignore", "pipe"],
-  });
-  const log = [];
-  const url = new Promise((resolve, reject) => {
-    const timer = setTimeout(() => reject(new Error(`no viewer line: ${log.join("")}`)), WAIT);
-    child.stderr.setEncoding("utf8");
-    child.stderr.on("data", (text) => {
-      log.push(text);
-      const m = /viewer: (http:\/\/\S+)/.exec(log.join(""));
-      if (m) { clearTimeout(timer); resolve(m[1]); }
-    });
-    child.on("exit", (code) => reject(new Error(`rondo exited (${code}): ${log.join("")}`)));
-    child.on("error", reject);
-  });
-  return { child, url, log };
-}
-
-async function stopRondo(child) {
-  if (child.exitCode !== null) return child.exitCode;
-  const exited = new Promise((resolve) => child.on("exit", (code, signal) => resolve(code ?? signal)));
-  child.kill("SIGINT");
-  const timer = setTimeout(() => child.kill("SIGKILL"), WAIT);
-  const code = await exited;
-  clearTimeout(timer);
-  return code;
 }
 
 // Saves like an editor that writes a temporary file and renames it over the original; resolves
@@ -152,19 +109,6 @@ const canvasDigest = (page) => page.evaluate(() => {
   for (let i = 0; i < d.length; i++) h = Math.imul(h ^ d[i], 16777619);
   return `${c.width}x${c.height}:${h >>> 0}`;
 });
-
-async function launch() {
-  if (!fs.existsSync(browserPath)) throw new Error(`${browserPath} missing: apt-get install chromium`);
-  const profile = fs.mkdtempSync(path.join(os.tmpdir(), "rondo-chromium-"));
-  const context = await chromium.launchPersistentContext(profile, {
-    executablePath: browserPath,
-    headless: true,
-    viewport: { width: 1000, height: 760 },
-    args: ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-           "--disable-background-networking", "--disable-component-update", "--disable-sync"],
-  });
-  return { context, profile };
-}
 
 async function behaviour(context) {
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), "rondo-viewer-"));
@@ -407,18 +351,7 @@ async function takeScreenshot(context, out) {
   }
 }
 
-let context, profile;
-try {
-  ({ context, profile } = await launch());
-  await behaviour(context);
-  await denoising(context);
-  await latency(context);
-  if (screenshot) await takeScreenshot(context, screenshot);
-} catch (e) {
-  check("the browser test ran to the end", false, e.stack || String(e));
-} finally {
-  if (context) await context.close();
-  if (profile) fs.rmSync(profile, { recursive: true, force: true });
-}
-console.log(`${passed} passed, ${failed} failed`);
-process.exit(failed === 0 && passed > 0 ? 0 : 1);
+await runSteps("the browser test ran to the end", [
+  behaviour, denoising, latency,
+  ...(screenshot ? [(context) => takeScreenshot(context, screenshot)] : []),
+]);
