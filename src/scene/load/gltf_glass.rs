@@ -74,12 +74,16 @@ pub(super) fn transmission(m: &GltfMaterial) -> Transmission {
 fn glass(m: &GltfMaterial, mixed: bool) -> (Box<Material>, Vec<String>) {
     let mut notes = Vec::new();
     if m.transmission_texture {
-        notes.push("transmissionTexture is ignored".into());
+        notes.push(format!(
+            "transmissionTexture is ignored: the transmission is {} everywhere",
+            m.transmission
+        ));
     }
     if m.metallic_roughness_texture.is_some() {
         notes.push(if mixed {
             format!(
-                "metallicRoughnessTexture does not reach the transmitted part: it has roughness                  {} and a share of transmission {} × (1 − metallic {}) everywhere",
+                "metallicRoughnessTexture does not reach the transmitted part: it has \
+                 roughness {} and a share of transmission {} × (1 − metallic {}) everywhere",
                 m.roughness, m.transmission, m.metallic
             )
         } else {
