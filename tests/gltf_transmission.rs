@@ -63,6 +63,31 @@ fn write_gltf(dir: &Path, name: &str, positions: &[f32], materials: &[serde_json
     std::fs::write(dir.join(name), doc(&bin, parts).to_string()).expect("write glTF");
 }
 
+/// The triangles of the closed box between corners `lo` and `hi`, each face as two triangles,
+/// counter-clockwise seen from outside (normals out).
+fn box_positions(lo: [f32; 3], hi: [f32; 3]) -> Vec<f32> {
+    let corner = |k: usize| {
+        [
+            if k & 1 == 0 { lo[0] } else { hi[0] },
+            if k & 2 == 0 { lo[1] } else { hi[1] },
+            if k & 4 == 0 { lo[2] } else { hi[2] },
+        ]
+    };
+    let faces = [
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+    ];
+    faces
+        .iter()
+        .flat_map(|f| [f[0], f[1], f[2], f[0], f[2], f[3]])
+        .flat_map(corner)
+        .collect()
+}
+
 fn load(path: &Path) -> LoadedScene {
     load_scene(path, &mut AssetCache::default()).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -235,6 +260,104 @@ fn a_partly_transmissive_surface_renders_the_weighted_mean_of_its_glass_and_opaq
 }
 
 #[test]
+fn smooth_partial_glass_passes_its_share_of_the_fresnel_transmitted_light_behind_it() {
+    // Closed form: a camera looks head-on at a smooth glTF surface (ior 1.5) with only a lamp
+    // of radiance L = 2 behind it, on black. The glass part (probability w = t·(1 − m))
+    // transmits 1 − F = 1 − ((1.5 − 1)/(1.5 + 1))² = 0.96 at normal incidence, and the
+    // refraction into the denser side scales radiance by (1/1.5)²; its reflection sees black.
+    // The opaque part only reflects black. So the radiance is w · 0.96 / 2.25 · L exactly
+    // (rounding to 0 or to the full glass would give 0 or 0.853).
+    let dir = temp_dir("gltf-transmission-closed-form");
+    for (t, m) in [(0.3, 0.0), (0.7, 0.0), (0.6, 0.5)] {
+        let w = t * (1.0 - m);
+        let name = format!("t{t}-m{m}");
+        let gltf = format!("{name}.gltf");
+        write_gltf(
+            &dir,
+            &gltf,
+            &[-20.0, -20.0, 0.0, 20.0, -20.0, 0.0, 0.0, 20.0, 0.0],
+            &[material(t, m, 0.0, serde_json::Value::Null)],
+        );
+        let path = write_scene(
+            &dir,
+            &format!("{name}.ron"),
+            &format!(
+                "Scene(camera: {}, settings: Settings(width: 32, height: 32, max_depth: 4, \
+                 background: (0, 0, 0)), materials: {{ \
+                 \"lamp\": Light(emit: Constant((1, 1, 1)), intensity: 2) }}, \
+                 entities: [Entity(name: \"t\", gltf: \"{gltf}\"), \
+                 Entity(material: \"lamp\", shape: Sphere(center: (0, 0, -3), radius: 1.5))])",
+                point_camera("(0, 0, 5)", "(0, 0, 0)", "(0, 1, 0)"),
+            ),
+        );
+        let expected = w * 0.96 / 2.25 * 2.0;
+        for method in [Method::Mis, Method::Naive, Method::Caustics] {
+            let (mean, se) = common::point_estimate(&render(&path, with(method, 64), None));
+            assert!(
+                se > 0.0 && common::within(mean, se, expected, 4.0),
+                "t {t}, m {m}, {method}: {mean} ± {se}, expected {expected}"
+            );
+        }
+    }
+}
+
+#[test]
+fn caustics_through_a_partly_transmissive_slab_agree_with_path_tracing() {
+    // A floor lit by a small lamp through a closed slab, half smooth glass, half opaque, seen
+    // beside the slab at a point under it. Light tracing takes the caustic paths that cross
+    // the glass part (picked per hit as the path tracer picks it), the path tracer the rest:
+    // the sum must be what path tracing alone finds.
+    let dir = temp_dir("gltf-transmission-caustics");
+    write_gltf(
+        &dir,
+        "slab.gltf",
+        &box_positions([-1.5, 1.0, -1.5], [1.5, 1.2, 1.5]),
+        &[material(0.5, 0.0, 0.0, serde_json::Value::Null)],
+    );
+    let scene = write_scene(
+        &dir,
+        "slab.ron",
+        &format!(
+            "Scene(camera: {}, settings: Settings(width: 16, height: 16, max_depth: 8, \
+             background: (0, 0, 0)), materials: {{ \
+             \"floor\": Diffuse(albedo: Constant((0.8, 0.8, 0.8))), \
+             \"lamp\": Light(emit: Constant((1, 1, 1)), intensity: 20) }}, \
+             entities: [Entity(name: \"slab\", gltf: \"slab.gltf\"), \
+             Entity(material: \"floor\", shape: Quad(a: (-3, 0, -3), b: (-3, 0, 3), c: (3, 0, 3), d: (3, 0, -3))), \
+             Entity(material: \"lamp\", shape: Sphere(center: (0, 3, 0), radius: 0.4))])",
+            "Camera(position: (4, 0.5, 0), look_at: (0, 0, 0), up: (0, 1, 0), fov: 40)",
+        ),
+    );
+    // Light tracing splats are not independent per pixel: the image mean's error comes from
+    // independent seeds (8 each: Student's t with 7 degrees of freedom, 4 standard errors).
+    let over_seeds = |method: Method, spp: u32| {
+        let v: Vec<f64> = (0..8u64)
+            .map(|seed| {
+                let o = Overrides {
+                    seed: Some(100 + seed),
+                    ..with(method, spp)
+                };
+                let px = render(&scene, o, None).film().mean();
+                px.iter().map(|p| f64::from(p.x)).sum::<f64>() / px.len() as f64
+            })
+            .collect();
+        let n = v.len() as f64;
+        let mean = v.iter().sum::<f64>() / n;
+        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        (mean, (var / n).sqrt())
+    };
+    let (mis, light) = (
+        over_seeds(Method::Mis, 64),
+        over_seeds(Method::Caustics, 16),
+    );
+    let se = (mis.1 * mis.1 + light.1 * light.1).sqrt();
+    assert!(
+        mis.0 > 0.01 && (mis.0 - light.0).abs() <= 4.0 * se,
+        "mis {mis:?}, caustics {light:?}"
+    );
+}
+
+#[test]
 fn a_partly_transmissive_emitter_emits_in_full_whichever_part_shades() {
     // The spec adds the emission whatever the transmission: on black, with nothing to reflect
     // or transmit, every sample sees exactly the emitted radiance.
@@ -258,28 +381,7 @@ fn the_methods_agree_inside_a_closed_box_partly_of_tinted_glass() {
     // on its side; one that refracted through the glass crosses the tinted inside. Shadow rays
     // must cross the walls as the BSDF-sampled paths do, or the methods disagree.
     let dir = temp_dir("gltf-transmission-box");
-    let (lo, hi) = ([-2.0f32, -1.0, -2.0], [2.0f32, 3.0, 2.0]);
-    let corner = |k: usize| {
-        [
-            if k & 1 == 0 { lo[0] } else { hi[0] },
-            if k & 2 == 0 { lo[1] } else { hi[1] },
-            if k & 4 == 0 { lo[2] } else { hi[2] },
-        ]
-    };
-    // Each face as two triangles, counter-clockwise seen from outside.
-    let faces = [
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-    ];
-    let positions: Vec<f32> = faces
-        .iter()
-        .flat_map(|f| [f[0], f[1], f[2], f[0], f[2], f[3]])
-        .flat_map(corner)
-        .collect();
+    let positions = box_positions([-2.0, -1.0, -2.0], [2.0, 3.0, 2.0]);
     let volume = serde_json::json!({"thicknessFactor": 1.0, "attenuationColor": [0.7, 0.8, 0.9],
                                     "attenuationDistance": 2.0});
     write_gltf(
