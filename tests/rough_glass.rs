@@ -479,19 +479,16 @@ fn gltf_transmission_ior_and_volume_become_rough_tinted_glass() {
         _ => false,
     };
     assert!(close(&material(0), &tinted), "{:?}", material(0));
-    // Partial transmission: glass at a weight of 0.5 or more, opaque below, each with a warning.
-    assert!(close(&material(1), &tinted), "{:?}", material(1));
-    assert!(
-        matches!(material(2), Material::Pbr { .. }),
-        "{:?}",
-        material(2)
-    );
+    // Partial transmission: a mix whose glass part is the same tinted glass (its weights are
+    // checked in tests/gltf_transmission.rs).
+    for k in [1, 2] {
+        assert!(
+            matches!(&material(k), Material::Transmissive { glass, .. } if close(glass, &tinted)),
+            "{:?}",
+            material(k)
+        );
+    }
     let warned = |what: &str| scene.warnings.iter().any(|w| w.contains(what));
-    assert!(
-        warned("= 0.7 is rendered as full transmission") && warned("= 0.3 is below 0.5"),
-        "{:?}",
-        scene.warnings
-    );
     // Thickness 0 (the volume's default) is thin-walled: no absorption, and a warning.
     assert_eq!(material(3), rough(1.45, 0.4));
     assert!(warned("thin-walled"), "{:?}", scene.warnings);

@@ -10,7 +10,8 @@
 //!   "background": [r, g, b] | null,
 //!   "environment": { path, strength, world_from_map (3×3, rows), convention } | null,
 //!   "sun": { direction (towards the sun), angular_diameter_degrees, radiance } | null,
-//!   "materials": { key: { kind, ... textures ... } },
+//!   "materials": { key: { kind, ... textures ... } }  (kind "transmissive": { weight, glass,
+//!                base }, two materials mixed),
 //!   "spheres": [ { center, radius, world_from_object_rotation, material } ],
 //!   "planes": [ { point, normal, tangent, bitangent, material, proxy_half_size } ],
 //!   "meshes": [ { file, material, vertices, triangles, normals, uvs } ],
@@ -229,6 +230,17 @@ fn material(m: &Material, images: &ImageFiles) -> Result<Value, ExportError> {
             }
             pbr
         }
+        Material::Transmissive {
+            weight,
+            glass,
+            base,
+        } => json!({
+            "kind": "transmissive",
+            // f = weight · f_glass + (1 − weight) · f_base.
+            "weight": weight,
+            "glass": material(glass, images)?,
+            "base": material(base, images)?,
+        }),
     })
 }
 

@@ -129,14 +129,13 @@ fn material_images(materials: &[&Material]) -> Vec<Arc<ImageTexture>> {
             Texture::Scaled(inner, _) | Texture::Mapped(inner, _) => walk(inner, out),
         }
     }
-    let mut out = Vec::new();
-    for m in materials {
+    fn images(m: &Material, out: &mut Vec<Arc<ImageTexture>>) {
         match m {
             Material::Diffuse { albedo }
             | Material::Metal { albedo, .. }
-            | Material::Glossy { albedo, .. } => walk(albedo, &mut out),
+            | Material::Glossy { albedo, .. } => walk(albedo, out),
             Material::Dielectric { .. } => {}
-            Material::Light { emit, .. } => walk(emit, &mut out),
+            Material::Light { emit, .. } => walk(emit, out),
             Material::Pbr {
                 base_color,
                 metallic_roughness,
@@ -146,22 +145,30 @@ fn material_images(materials: &[&Material]) -> Vec<Arc<ImageTexture>> {
                 layer_maps,
                 ..
             } => {
-                walk(base_color, &mut out);
+                walk(base_color, out);
                 for (_, _, t) in layer_maps.iter().flat_map(|m| m.channels()) {
-                    walk(&t, &mut out);
+                    walk(&t, out);
                 }
-                walk(emissive, &mut out);
+                walk(emissive, out);
                 if let Some(t) = metallic_roughness {
-                    walk(t, &mut out);
+                    walk(t, out);
                 }
                 if let Some(n) = normal_map {
-                    walk(&n.texture, &mut out);
+                    walk(&n.texture, out);
                 }
                 if let Some((image, _)) = alpha.as_ref().and_then(|a| a.image.as_ref()) {
                     out.push(image.clone());
                 }
             }
+            Material::Transmissive { glass, base, .. } => {
+                images(glass, out);
+                images(base, out);
+            }
         }
+    }
+    let mut out = Vec::new();
+    for m in materials {
+        images(m, &mut out);
     }
     out
 }

@@ -5,9 +5,9 @@ use glam::Vec3;
 
 use super::medium::Medium;
 use super::{
-    BOUNCE_DIMENSIONS, BSDF_DIMENSION, LIGHT_CHOICE_DIMENSION, LIGHT_POINT_DIMENSION,
-    MAX_PASS_THROUGHS, Method, ROULETTE_DIMENSION, SceneView, TEXEL_DIMENSION,
-    TRANSPARENCY_DIMENSION, TraceStats,
+    BOUNCE_DIMENSIONS, BSDF_DIMENSION, COMPONENT_DIMENSION, LIGHT_CHOICE_DIMENSION,
+    LIGHT_POINT_DIMENSION, MAX_PASS_THROUGHS, Method, ROULETTE_DIMENSION, SceneView,
+    TEXEL_DIMENSION, TRANSPARENCY_DIMENSION, TraceStats,
 };
 use crate::cpu::{Lanes, Sse};
 use crate::film::FeatureSample;
@@ -175,6 +175,11 @@ fn first_present<L: Layout, W: Lanes>(
 /// law over each segment, bounce and shadow rays alike ([`Medium`], which says what is
 /// approximated).
 ///
+/// A mix ([`crate::shading::material::Material::Transmissive`]) shades at each hit as one of
+/// its components, picked from the bounce's [`COMPONENT_DIMENSION`]: a one-sample estimate of
+/// the mixture, unbiased because light sampling, the bounce and the medium beyond all use the
+/// component picked. The surface emits as the whole mix.
+///
 /// Emission seen by the camera or after a glass/mirror bounce always counts in full. Russian
 /// roulette (after a few bounces, survival probability = the path's throughput without the
 /// (n1/n2)² radiance scale of refractions, as pbrt-v4's `etaScale`) ends paths early without
@@ -269,10 +274,18 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         if !medium.is_clear() {
             throughput *= medium.transmittance((s.p - start).length());
         }
-        let material = &view.materials[view.owner_material[s.owner as usize] as usize];
-        let bsdf = material.bsdf(ray.direction, s.n, s.ns, s.tex_coords(), || {
+        let whole = &view.materials[view.owner_material[s.owner as usize] as usize];
+        // A mix shades as one component, NEE and bounce alike; the medium beyond is that one's.
+        let material = whole.component(|| {
+            sampler.seek(COMPONENT_DIMENSION + depth);
+            sampler.next_1d()
+        });
+        let mut bsdf = material.bsdf(ray.direction, s.n, s.ns, s.tex_coords(), || {
             view.geometry.uv_tangent(&hit).map(|t| (t.tangent, t.sign))
         });
+        if whole.is_mix() {
+            bsdf = bsdf.with_emission(whole.emission());
+        }
         if features.is_none() && (!bsdf.is_specular() || depth + 1 == view.max_depth) {
             let n = bsdf.shading_normal();
             features = Some(FeatureSample {

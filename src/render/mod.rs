@@ -171,3 +171,6 @@ pub const TEXEL_DIMENSION: u32 = EXTRA_DIMENSION + 1;
 /// shadow ray. One value serves every blended surface along the ray (see `first_present`);
 /// drawn only where a ray meets one.
 pub const TRANSPARENCY_DIMENSION: u32 = TEXEL_DIMENSION + MAX_DEPTH;
+/// Bounce `b`'s choice of the component a mix shades as ([`Material::component`]), 1D, at
+/// `COMPONENT_DIMENSION + b`; drawn only where the bounce's hit is a mix.
+pub const COMPONENT_DIMENSION: u32 = TRANSPARENCY_DIMENSION + 2 * MAX_DEPTH;

@@ -179,6 +179,13 @@ impl<'a> Bsdf<'a> {
         }
     }
 
+    /// The BSDF with `emission` as what the surface emits: that of a whole mix whose component
+    /// the BSDF is ([`super::material::Material::component`]).
+    #[inline]
+    pub fn with_emission(self, emission: Option<Emission<'a>>) -> Self {
+        Self { emission, ..self }
+    }
+
     /// Whether a path may continue from the surface (false for a pure emitter).
     #[inline]
     pub fn scatters(&self) -> bool {

@@ -104,6 +104,22 @@ pub enum Material {
         /// everywhere, and no lookup is made).
         layer_maps: Option<Box<LayerMaps>>,
     },
+    /// glTF's metallic–roughness material made partly transmissive by
+    /// `KHR_materials_transmission`: the spec's mix f = w·f_glass + (1 − w)·f_base, estimated
+    /// with one sample of the mixture. Each hit shades as `glass` with probability `weight` w,
+    /// else as `base`, drawn from the path's own random numbers ([`Material::component`]);
+    /// next-event estimation and the bounce at that hit use the same component, so the
+    /// estimate is unbiased. A path enters the glass's volume only where it refracted through
+    /// the glass component. It emits, is masked and covers as its base, whichever component
+    /// shades. Built by the glTF loader (w strictly between 0 and 1), not written in RON.
+    Transmissive {
+        /// The probability w of the glass component, transmission × (1 − metallic).
+        weight: f32,
+        /// The transmissive component (a [`Material::Dielectric`]).
+        glass: Box<Material>,
+        /// The opaque component (a [`Material::Pbr`]).
+        base: Box<Material>,
+    },
 }
 
 impl Material {
@@ -122,8 +138,36 @@ impl Material {
     pub fn interior_absorption(&self) -> Option<Vec3> {
         match self {
             Self::Dielectric { absorption, .. } => Some(*absorption),
+            Self::Transmissive { glass, .. } => glass.interior_absorption(),
             _ => None,
         }
+    }
+
+    /// The material a hit shades as: for a [`Material::Transmissive`] its glass if `u()` (uniform
+    /// in [0, 1)) is below its weight, else its base; every other material is itself and draws
+    /// no `u`.
+    #[inline(always)]
+    pub fn component(&self, u: impl FnOnce() -> f32) -> &Self {
+        match self {
+            Self::Transmissive {
+                weight,
+                glass,
+                base,
+            } => {
+                if u() < *weight {
+                    glass
+                } else {
+                    base
+                }
+            }
+            _ => self,
+        }
+    }
+
+    /// Whether the material is a mix of components ([`Material::component`]).
+    #[inline]
+    pub fn is_mix(&self) -> bool {
+        matches!(self, Self::Transmissive { .. })
     }
 
     /// What the material emits: a `Light`'s emission, a `Pbr`'s if it is not black; `None`
@@ -150,6 +194,7 @@ impl Material {
                 two_sided: true,
             })
             .filter(|e| e.max() > 0.0),
+            Self::Transmissive { base, .. } => base.emission(),
             _ => None,
         }
     }
@@ -198,13 +243,20 @@ impl Material {
                     || alpha.is_some()
                     || layer_maps.is_some()
             }
+            Self::Transmissive { glass, base, .. } => {
+                glass.reads_tex_coords() || base.reads_tex_coords()
+            }
         }
     }
 
     /// Whether the material has an alpha mask (a `Pbr` with `alpha`): only then may
     /// [`Material::coverage`] be below 1.
     pub fn is_masked(&self) -> bool {
-        matches!(self, Self::Pbr { alpha: Some(_), .. })
+        match self {
+            Self::Pbr { alpha, .. } => alpha.is_some(),
+            Self::Transmissive { base, .. } => base.is_masked(),
+            _ => false,
+        }
     }
 
     /// The probability that the surface is there at `uv` ([`AlphaMask::coverage`]): 0 where a
@@ -216,6 +268,7 @@ impl Material {
             Self::Pbr {
                 alpha: Some(mask), ..
             } => mask.coverage(uv.into()),
+            Self::Transmissive { base, .. } => base.coverage(uv),
             _ => 1.0,
         }
     }
@@ -225,6 +278,8 @@ impl Material {
     /// [`TexCoords`]): the textures looked up, a normal map applied with the texture tangent and handedness `tangent()` gives
     /// (asked only by a normal-mapped material; `None` where the surface has none). Glass
     /// shades with `n`, so that its refraction follows the true surface and stays watertight.
+    /// A [`Material::Transmissive`] shades here as its base: a hit first picks its component
+    /// ([`Material::component`]) and builds that one's BSDF.
     #[inline(always)]
     pub fn bsdf(
         &self,
@@ -269,6 +324,7 @@ impl Material {
                 }
             }
             Self::Light { .. } => (Lobe::None, ns, false),
+            Self::Transmissive { base, .. } => return base.bsdf(d, n, ns, uv, tangent),
             Self::Pbr {
                 base_color,
                 metallic,
@@ -336,7 +392,8 @@ impl Material {
     }
 
     /// One sampled bounce of a ray along unit `d` off a flat point of unit normal `n` (see
-    /// [`Material::bsdf_at`]); `None` if the path ends here.
+    /// [`Material::bsdf_at`]), a mix's component picked first by `sampler`'s next value;
+    /// `None` if the path ends here.
     pub fn scatter(
         &self,
         d: Vec3,
@@ -344,7 +401,9 @@ impl Material {
         uv: Vec2,
         sampler: &mut impl Sampler,
     ) -> Option<Scatter> {
-        self.bsdf_at(d, n, uv).sample(sampler)
+        self.component(|| sampler.next_1d())
+            .bsdf_at(d, n, uv)
+            .sample(sampler)
     }
 }
 

@@ -60,6 +60,9 @@ pub fn may_be_specular(m: &Material) -> bool {
             metallic_roughness,
             ..
         } => metallic_roughness.is_some() || Pbr::new(Vec3::ZERO, *metallic, *roughness).is_delta(),
+        Material::Transmissive { glass, base, .. } => {
+            may_be_specular(glass) || may_be_specular(base)
+        }
         Material::Diffuse { .. } | Material::Light { .. } => false,
     }
 }

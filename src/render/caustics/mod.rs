@@ -8,6 +8,8 @@
 //! perfect specular vertices only (from a finite emitter or a distant light) is not counted
 //! (see [`super::integrator`]). Both sides decide by the same tests, so their sum converges to
 //! what `Mis` converges to, with the caustics sampled from the light, where they are easy.
+//! At a mix (`Material::Transmissive`) both sides pick the component with the same
+//! probabilities and test the one picked, so they split the same path space.
 //!
 //! A light path starts at a light aimed at the specular surfaces ([`emit`]), follows the
 //! specular vertices by their BSDF sampling (the (n1/n2)² compression of radiance at
@@ -152,9 +154,11 @@ fn light_path<L: Layout>(
         if !medium.is_clear() {
             beta *= medium.transmittance((s.p - ray.origin).length());
         }
+        // A mix's component, picked as the path tracer picks it (see `trace_path`).
         let material = view
             .materials
-            .get(*view.owner_material.get(s.owner as usize)? as usize)?;
+            .get(*view.owner_material.get(s.owner as usize)? as usize)?
+            .component(|| sampler.next_1d());
         let bsdf = material.bsdf(ray.direction, s.n, s.ns, s.tex_coords(), || {
             view.geometry.uv_tangent(&hit).map(|t| (t.tangent, t.sign))
         });

@@ -137,7 +137,7 @@ pub(super) fn coplanar_pairs(scene: &LoadedScene) -> (BTreeSet<(usize, usize)>, 
     let see_through = |entity: usize| {
         matches!(
             scene.materials.get(&scene.entities[entity].material),
-            Some(Material::Dielectric { .. })
+            Some(Material::Dielectric { .. } | Material::Transmissive { .. })
         )
     };
     let mut pairs = BTreeSet::new();

@@ -1,15 +1,24 @@
 //! glTF's transmissive materials as rondo's glass: `KHR_materials_transmission` (its factor; the
 //! roughness is the material's own roughness factor, as the extension says),
 //! `KHR_materials_ior` and `KHR_materials_volume` (attenuation colour and distance) become a
-//! [`Material::Dielectric`]; what rondo's glass cannot show comes back as notes for warnings.
+//! [`Material::Dielectric`], alone where the material is fully transmissive, mixed with the
+//! opaque metallic–roughness material where it is partly so ([`Material::Transmissive`]); what
+//! rondo's glass cannot show comes back as notes for warnings.
+//!
+//! The spec's BSDF is mix(dielectric, metal, m) with dielectric = fresnel_mix(specular_brdf,
+//! mix(diffuse, specular_btdf, t)), t the transmission and m the metalness. It splits exactly
+//! into w · glass + (1 − w) · base with w = t·(1 − m), the glass being the specular reflection
+//! plus the transmission of the same Fresnel, and the base the metallic–roughness material of
+//! metalness m / (1 − w): the metal's share m and the diffuse's (1 − m)(1 − t), each with its
+//! own part of the specular reflection, in proportion. So a material whose w is strictly
+//! between 0 and 1 is the mix; w = 1 is glass alone, w = 0 the opaque material alone.
 //!
 //! How this differs from the extensions:
-//! - the spec mixes the transmissive lobe with the opaque one by `transmission × (1 −
-//!   metallic)`; rondo has no such mix, so a material is glass where that weight is at least
-//!   0.5 and opaque below (the nearer of the two), with a note when the weight is strictly
-//!   between 0 and 1;
-//! - transmission, thickness and metallic–roughness textures are not read (the factors are);
+//! - transmission, thickness and metallic–roughness textures are not read by the glass nor by
+//!   the weight (the factors are; the mix's base still reads its metallic–roughness texture);
 //! - the base colour does not tint the transmitted light (the volume's attenuation does);
+//! - the glass part reflects with the exact Fresnel of its ior, the base's specular lobe with
+//!   Schlick's, so the mix's reflection is the spec's only up to that difference;
 //! - every glass surface is a volume boundary: a thin-walled material (`thicknessFactor` 0, the
 //!   volume extension's default) refracts as solid glass and absorbs nothing; with a thickness
 //!   above 0 the attenuation applies inside the closed mesh, whatever the thickness's value.
@@ -22,9 +31,21 @@ use crate::shading::material::{Material, absorption_coefficient};
 /// What a glTF material's transmission makes of it.
 #[derive(Debug, PartialEq)]
 pub(super) enum Transmission {
-    /// Opaque: the metallic–roughness material, with a note if transmission was dropped.
-    Opaque(Option<String>),
-    /// Glass, with notes on what of the file it does not show.
+    /// Opaque: the metallic–roughness material alone (no transmission).
+    Opaque,
+    /// Partly transmissive: glass with probability `weight` (strictly between 0 and 1), else
+    /// the metallic–roughness material with metalness `base_metallic`.
+    Mix {
+        /// The glass component's probability, transmission × (1 − metallic).
+        weight: f32,
+        /// The glass component.
+        glass: Box<Material>,
+        /// The metalness of the opaque component, metallic / (1 − weight).
+        base_metallic: f32,
+        /// What of the file the glass component does not show.
+        notes: Vec<String>,
+    },
+    /// Glass alone, with notes on what of the file it does not show.
     Glass(Box<Material>, Vec<String>),
 }
 
@@ -32,31 +53,45 @@ pub(super) enum Transmission {
 pub(super) fn transmission(m: &GltfMaterial) -> Transmission {
     let weight = m.transmission * (1.0 - m.metallic);
     if weight <= 0.0 {
-        return Transmission::Opaque(None);
+        return Transmission::Opaque;
     }
-    if weight < 0.5 {
-        return Transmission::Opaque(Some(format!(
-            "transmission {} × (1 − metallic {}) = {weight} is below 0.5: rendered opaque \
-             (rondo does not mix glass with the opaque material)",
-            m.transmission, m.metallic
-        )));
+    let mixed = weight < 1.0;
+    let (glass, notes) = glass(m, mixed);
+    if mixed {
+        return Transmission::Mix {
+            weight,
+            glass,
+            // m ≤ 1 − w, as w = t·(1 − m) ≤ 1 − m: at most 1.
+            base_metallic: (m.metallic / (1.0 - weight)).min(1.0),
+            notes,
+        };
     }
+    Transmission::Glass(glass, notes)
+}
+
+/// The glass of glTF material `m`, and notes on what of the file it does not show (`mixed`: as
+/// the transmitted part of a mix, whose opaque part shows the rest).
+fn glass(m: &GltfMaterial, mixed: bool) -> (Box<Material>, Vec<String>) {
     let mut notes = Vec::new();
-    if weight < 1.0 {
-        notes.push(format!(
-            "transmission {} × (1 − metallic {}) = {weight} is rendered as full transmission \
-             (rondo does not mix glass with the opaque material)",
-            m.transmission, m.metallic
-        ));
-    }
     if m.transmission_texture {
-        notes.push("transmissionTexture is ignored".into());
+        notes.push(format!(
+            "transmissionTexture is ignored: the transmission is {} everywhere",
+            m.transmission
+        ));
     }
     if m.metallic_roughness_texture.is_some() {
-        notes.push(format!(
-            "metallicRoughnessTexture is ignored: the glass has roughness {}",
-            m.roughness
-        ));
+        notes.push(if mixed {
+            format!(
+                "metallicRoughnessTexture does not reach the transmitted part: it has \
+                 roughness {} and a share of transmission {} × (1 − metallic {}) everywhere",
+                m.roughness, m.transmission, m.metallic
+            )
+        } else {
+            format!(
+                "metallicRoughnessTexture is ignored: the glass has roughness {}",
+                m.roughness
+            )
+        });
     }
     let tinted = m.base_color_factor[..3].iter().any(|&c| c != 1.0);
     if tinted || m.base_color_texture.is_some() {
@@ -67,7 +102,11 @@ pub(super) fn transmission(m: &GltfMaterial) -> Transmission {
         );
     }
     if m.normal_texture.is_some() {
-        notes.push("normalTexture is ignored on glass".into());
+        notes.push(if mixed {
+            "normalTexture is ignored by the transmitted part".into()
+        } else {
+            "normalTexture is ignored on glass".into()
+        });
     }
     let absorbs = m.attenuation_distance.is_finite() && m.attenuation_color != Vec3::ONE;
     let absorption = if m.thickness > 0.0 {
@@ -82,12 +121,10 @@ pub(super) fn transmission(m: &GltfMaterial) -> Transmission {
         }
         Vec3::ZERO
     };
-    Transmission::Glass(
-        Box::new(Material::Dielectric {
-            ior: m.ior,
-            roughness: m.roughness,
-            absorption,
-        }),
-        notes,
-    )
+    let glass = Material::Dielectric {
+        ior: m.ior,
+        roughness: m.roughness,
+        absorption,
+    };
+    (Box::new(glass), notes)
 }

@@ -287,16 +287,27 @@ impl Expander<'_> {
         };
         let what = format!("material \"{label}\"");
         let factor = Vec3::from_slice(&m.base_color_factor[..3]);
-        match transmission(m) {
+        // The glass part of a partly transmissive material, its share and the base's metalness.
+        let (mix, metallic) = match transmission(m) {
             Transmission::Glass(glass, notes) => {
                 for note in notes {
                     self.warn(path, &format!("{what}: {note}"));
                 }
                 return Ok(*glass);
             }
-            Transmission::Opaque(Some(note)) => self.warn(path, &format!("{what}: {note}")),
-            Transmission::Opaque(None) => {}
-        }
+            Transmission::Mix {
+                weight,
+                glass,
+                base_metallic,
+                notes,
+            } => {
+                for note in notes {
+                    self.warn(path, &format!("{what}: {note}"));
+                }
+                (Some((weight, glass)), base_metallic)
+            }
+            Transmission::Opaque => (None, m.metallic),
+        };
         for note in &m.layer_notes {
             self.warn(path, &format!("{what}: {note}"));
         }
@@ -361,9 +372,9 @@ impl Expander<'_> {
             map,
         });
         let layer_maps = self.gltf_layer_maps(asset, path, m, &what)?;
-        Ok(Material::Pbr {
+        let base = Material::Pbr {
             base_color,
-            metallic: m.metallic,
+            metallic,
             roughness: m.roughness,
             metallic_roughness,
             emissive,
@@ -372,6 +383,14 @@ impl Expander<'_> {
             alpha,
             layers: m.layers,
             layer_maps,
+        };
+        Ok(match mix {
+            None => base,
+            Some((weight, glass)) => Material::Transmissive {
+                weight,
+                glass,
+                base: Box::new(base),
+            },
         })
     }
 
