@@ -11,8 +11,8 @@ Needs numpy and the OpenEXR module (`pip install numpy OpenEXR`) in the Python r
 
 - Reference per scene: `--method caustics`, `--reference-spp` spp, seed 99, all threads. Its
   image mean is checked against `mis` at the same spp (four renders of a quarter each, seeds
-  101-104, whose spread gives the mean's standard error, taken as the reference's too): the
-  `z` column.
+  101-104; the standard error of the mean from each pixel's variance over the four, taken as
+  the reference's too): the `z` column.
 - Timed renders: `--width` wide (the scene's aspect kept), `--spp`, each seed of `--seeds`,
   `--threads 1`, methods alternated, each timed `--repeat` times (same seed, same image). The
   time is the process's CPU time (user + system, from `wait4`, as `/usr/bin/time -f %U+%S`
@@ -45,6 +45,8 @@ from image_metrics import metrics  # noqa: E402
 
 SUITE = ["cornell", "veach_mis", "envmap", "gltf", "dof", "bunnies", "bigmesh"]
 CAUSTIC = ["caustic", "sunlit", "sun_caustics"]
+# Beyond the suite: scenes/bunnies.ron itself (the suite's `bunnies` is 1,000 of them).
+EXTRA = ["bunnies5"]
 LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
@@ -63,6 +65,9 @@ def scene_path(name, out):
             subprocess.run([sys.executable, os.path.join(HERE, "suite", "make_bunnies.py"),
                             gen], check=True)
         return path
+    if name == "bunnies5":
+        # scenes/bunnies.ron itself (5 placements); the suite's `bunnies` is the 1,000.
+        return os.path.join(ROOT, "scenes", "bunnies.ron")
     return os.path.join(ROOT, "scenes", name + ".ron")
 
 
@@ -107,15 +112,18 @@ def references(args, name, scene, size, work):
         render(args.rondo, scene, ref_path, size, args.reference_spp, 99, "caustics", 0)
     ref = read_exr(ref_path)
     quarter = args.reference_spp // 4
-    means = []
+    parts = []
     for k in range(4):
         path = os.path.join(work, "check_mis_%dx%d_%d_seed%d.exr" % (size + (quarter, 101 + k)))
         if not os.path.isfile(path):
             render(args.rondo, scene, path, size, quarter, 101 + k, "mis", 0)
-        means.append(read_exr(path).mean())
-    mis_mean = float(np.mean(means))
-    se = float(np.std(means, ddof=1) / 2)
-    # The reference's own mean is as noisy as `mis`'s at as many samples, or more: sqrt(2).
+        parts.append(read_exr(path).mean(axis=-1))
+    parts = np.array(parts)
+    mis_mean = float(parts.mean())
+    # The standard error of the image mean from each pixel's variance over the four parts
+    # (pixels are independent under `mis`): steadier than the spread of four image means.
+    se = float(np.sqrt(parts.var(axis=0, ddof=1).sum() / 4) / parts[0].size)
+    # The reference's own mean is taken as noisy as `mis`'s at as many samples: sqrt(2).
     z = (ref.mean() - mis_mean) / (se * np.sqrt(2)) if se > 0 else float("inf")
     return ref, {"mean_caustics": float(ref.mean()), "mean_mis": mis_mean, "se_mis": se,
                  "z": float(z)}
@@ -140,7 +148,7 @@ def main():
     ap.add_argument("--rondo", default=os.path.join(ROOT, "target", "release", "rondo"))
     ap.add_argument("--pilot-rondo", default="")
     ap.add_argument("--out", default=os.path.join(ROOT, "bench", "caustics_default"))
-    ap.add_argument("--scenes", default=",".join(SUITE + CAUSTIC))
+    ap.add_argument("--scenes", default=",".join(SUITE + EXTRA + CAUSTIC))
     ap.add_argument("--width", type=int, default=120)
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--seeds", default="1,2,3")
