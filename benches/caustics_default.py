@@ -219,8 +219,8 @@ def main():
         mis, ca = r["mis"], r["caustics"]
         p = r["pilot"]
         if p and all(p):
-            pp = sorted({"1/%.0f" % (1 / x["per_pixel"]) for x in p})
-            paths = "/".join(pp)
+            lo, hi = min(x["per_pixel"] for x in p), max(x["per_pixel"] for x in p)
+            paths = "1/%.0f" % (1 / hi) + ("" if lo == hi else "–1/%.0f" % (1 / lo))
         else:
             paths = "-"
         print("| %s | %s | %.3f | %.3f | %.3f | %.4f | %.4f | **%.2f** | %.1f | %.1f | %s | %+.1f |"
