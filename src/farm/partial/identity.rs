@@ -186,6 +186,7 @@ mod tests {
     fn settings_text_reads_back_only_in_its_canonical_form() {
         let s = SettingsDesc {
             background: glam::Vec3::new(0.1, 1e-10, 5e9),
+            method: Method::Mis,
             sampler: SamplerKind::Independent,
             ..SettingsDesc::default()
         };

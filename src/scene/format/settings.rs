@@ -34,11 +34,12 @@ pub enum Method {
     #[serde(alias = "nee")]
     Nee,
     /// NEE and BSDF sampling combined by the power heuristic (Veach 1997).
-    #[default]
     #[serde(alias = "mis")]
     Mis,
     /// `Mis` with the caustics (camera → diffuse → perfect mirrors and glass → light) found by
-    /// light tracing instead.
+    /// light tracing instead. The default: where no caustic shows it costs about what `Mis`
+    /// does (BENCHMARKS.md, "Caustics as the default?").
+    #[default]
     #[serde(alias = "caustics")]
     Caustics,
 }
@@ -111,7 +112,7 @@ impl Default for SettingsDesc {
             environment: None,
             sun: None,
             seed: 0,
-            method: Method::Mis,
+            method: Method::default(),
             sampler: SamplerKind::default(),
             denoise: None,
         }
