@@ -11,7 +11,7 @@ use std::sync::mpsc::{Receiver, channel};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use common::gltf_doc::{Bin, doc};
+use common::gltf_doc::square_panel;
 use common::temp_dir;
 use serde_json::{Value, json};
 
@@ -634,31 +634,12 @@ fn a_header_that_does_not_parse_stops_the_server_with_a_message() {
     );
 }
 
-/// A glTF file of one node "sign": the unit square [0, 1]² at z = 0, two triangles.
-fn panel_gltf() -> String {
-    let mut bin = Bin::default();
-    let v = bin.f32s(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0]);
-    let i = bin.u16s(&[0, 1, 2, 0, 2, 3]);
-    let parts = json!({
-        "accessors": [
-            {"bufferView": v, "componentType": 5126, "count": 4, "type": "VEC3",
-             "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]},
-            {"bufferView": i, "componentType": 5123, "count": 6, "type": "SCALAR"},
-        ],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
-        "nodes": [{"mesh": 0, "name": "sign"}],
-        "scenes": [{"nodes": [0]}],
-        "scene": 0,
-    });
-    doc(&bin, parts).to_string()
-}
-
 #[test]
 fn gltf_placements_are_checked_completed_hovered_and_followed() {
     let dir = temp_dir("lsp-gltf");
     workspace(&dir);
     std::fs::create_dir_all(dir.join("models")).expect("mkdir");
-    std::fs::write(dir.join("models/panel.gltf"), panel_gltf()).expect("gltf");
+    std::fs::write(dir.join("models/panel.gltf"), square_panel()).expect("gltf");
     std::fs::write(dir.join("models/readme.txt"), "not a model").expect("notes");
     let placement = "        Entity(name: \"panel\", gltf: \"models/panel.gltf\", transform: Transform(translate: (-0.5, 0.6, 2.5))),\n";
     let end = SCENE.rfind("    ],").expect("end of entities");

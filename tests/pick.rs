@@ -19,7 +19,7 @@ use rondo::watch::Picked;
 use rondo::{PassPlan, Renderer};
 use serde_json::{Value, json};
 
-use common::gltf_doc::{Bin, doc};
+use common::gltf_doc::square_panel;
 use common::temp_dir;
 
 const WIDTH: u32 = 48;
@@ -72,31 +72,12 @@ const STACK: &str = r#"Prefab(
 )
 "#;
 
-/// A glTF file of one node "sign": the unit square [0, 1]² at z = 0, two triangles.
-fn panel_gltf() -> String {
-    let mut bin = Bin::default();
-    let v = bin.f32s(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0]);
-    let i = bin.u16s(&[0, 1, 2, 0, 2, 3]);
-    let parts = json!({
-        "accessors": [
-            {"bufferView": v, "componentType": 5126, "count": 4, "type": "VEC3",
-             "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]},
-            {"bufferView": i, "componentType": 5123, "count": 6, "type": "SCALAR"},
-        ],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
-        "nodes": [{"mesh": 0, "name": "sign"}],
-        "scenes": [{"nodes": [0]}],
-        "scene": 0,
-    });
-    doc(&bin, parts).to_string()
-}
-
 /// Writes the scene's files under `dir`; returns the scene's path.
 fn write_files(dir: &Path, lens: &str) -> PathBuf {
     std::fs::create_dir_all(dir.join("prefabs")).expect("mkdir");
     std::fs::write(dir.join("prefabs/crate.ron"), CRATE).expect("write");
     std::fs::write(dir.join("prefabs/stack.ron"), STACK).expect("write");
-    std::fs::write(dir.join("panel.gltf"), panel_gltf()).expect("write");
+    std::fs::write(dir.join("panel.gltf"), square_panel()).expect("write");
     let scene = dir.join("scene.ron");
     std::fs::write(&scene, scene_text(lens)).expect("write");
     scene

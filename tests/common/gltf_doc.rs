@@ -88,3 +88,22 @@ pub fn glb(bin: &Bin, parts: Value) -> Vec<u8> {
     out.extend(data);
     out
 }
+
+/// A glTF file of one node "sign": the unit square [0, 1]² at z = 0, two triangles.
+pub fn square_panel() -> String {
+    let mut bin = Bin::default();
+    let v = bin.f32s(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0]);
+    let i = bin.u16s(&[0, 1, 2, 0, 2, 3]);
+    let parts = json!({
+        "accessors": [
+            {"bufferView": v, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]},
+            {"bufferView": i, "componentType": 5123, "count": 6, "type": "SCALAR"},
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "nodes": [{"mesh": 0, "name": "sign"}],
+        "scenes": [{"nodes": [0]}],
+        "scene": 0,
+    });
+    doc(&bin, parts).to_string()
+}
