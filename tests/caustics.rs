@@ -269,3 +269,30 @@ fn scenes_without_perfect_specular_surfaces_render_as_mis() {
         assert_eq!(mis.film().sum == light.film().sum, same, "{scene}");
     }
 }
+
+#[test]
+fn a_scene_that_names_no_method_renders_with_caustics_and_one_that_says_mis_keeps_it() {
+    // caustic.ron names no method: its render is `--method caustics`'s, bit for bit, not
+    // `mis`'s (which differ there, above). The same scene saying `method: Mis` is `mis`'s.
+    let size = (40, 30);
+    let path = scenes_dir().join("caustic.ron");
+    let text = std::fs::read_to_string(&path).expect("caustic.ron");
+    assert!(!text.contains("method:"), "caustic.ron names no method");
+    let plain = Overrides {
+        method: None,
+        ..overrides(Method::Mis, 2, 5, size)
+    };
+    let default = render(&path, plain, None);
+    let caustics = render(&path, overrides(Method::Caustics, 2, 5, size), None);
+    let mis = render(&path, overrides(Method::Mis, 2, 5, size), None);
+    assert!(default.film().sum == caustics.film().sum);
+    assert!(default.film().sum != mis.film().sum);
+
+    let dir = temp_dir("caustics-default");
+    let settings =
+        text.find("settings: Settings(").expect("settings") + "settings: Settings(".len();
+    let says_mis = format!("{}method: Mis, {}", &text[..settings], &text[settings..]);
+    let written = write_scene(dir.path(), "mis.ron", &says_mis);
+    let kept = render(&written, plain, None);
+    assert!(kept.film().sum == mis.film().sum);
+}
