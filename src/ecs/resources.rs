@@ -69,6 +69,14 @@ pub struct PackedGeometry {
     pub provisional: bool,
 }
 
+impl PackedGeometry {
+    /// Whether side renders of the world may trace it: the BVHs are built (not only refitted)
+    /// and `materials` has a material for every owner slot (a frame has run since the rebuild).
+    pub fn traceable_with(&self, materials: &OwnerMaterials) -> bool {
+        !self.provisional && materials.owner_material.len() >= self.owners.len()
+    }
+}
+
 impl Default for PackedGeometry {
     fn default() -> Self {
         Self {

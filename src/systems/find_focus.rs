@@ -18,7 +18,7 @@ pub fn find_focus(world: &World, camera: &CameraDesc, (x, y): (f32, f32)) -> Opt
     let packed = world.resource::<PackedGeometry>();
     let materials = world.resource::<OwnerMaterials>();
     let s = &world.resource::<RenderSettings>().0;
-    if packed.provisional || materials.owner_material.len() < packed.owners.len() {
+    if !packed.traceable_with(materials) {
         return None;
     }
     let camera = camera_of(camera);

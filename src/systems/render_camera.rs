@@ -27,7 +27,7 @@ pub fn render_camera(
     let materials = world.resource::<OwnerMaterials>();
     let control = world.resource::<RenderControl>();
     let s = &world.resource::<RenderSettings>().0;
-    if packed.provisional || materials.owner_material.len() < packed.owners.len() {
+    if !packed.traceable_with(materials) {
         return None;
     }
     let camera = camera_of(camera);
