@@ -146,6 +146,7 @@ fn partial_transmission_loads_as_a_mix_weighted_by_transmission_times_one_minus_
             weight,
             glass: g,
             base,
+            texture: None,
         } = material_of(&scene, k)
         else {
             panic!("t {t}, m {m}: {:?}", material_of(&scene, k));

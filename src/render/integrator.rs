@@ -276,7 +276,7 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         }
         let whole = &view.materials[view.owner_material[s.owner as usize] as usize];
         // A mix shades as one component, NEE and bounce alike; the medium beyond is that one's.
-        let material = whole.component(|| {
+        let material = whole.component(s.tex_coords(), || {
             sampler.seek(COMPONENT_DIMENSION + depth);
             sampler.next_1d()
         });

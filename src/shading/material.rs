@@ -109,17 +109,45 @@ pub enum Material {
     /// with one sample of the mixture. Each hit shades as `glass` with probability `weight` w,
     /// else as `base`, drawn from the path's own random numbers ([`Material::component`]);
     /// next-event estimation and the bounce at that hit use the same component, so the
-    /// estimate is unbiased. A path enters the glass's volume only where it refracted through
-    /// the glass component. It emits, is masked and covers as its base, whichever component
-    /// shades. Built by the glTF loader (w strictly between 0 and 1), not written in RON.
+    /// estimate is unbiased. With a `texture` the glass's probability varies over the surface
+    /// ([`TransmissionTexture`]). A path enters the glass's volume only where it refracted
+    /// through the glass component. It emits, is masked and covers as its base, whichever
+    /// component shades. Built by the glTF loader (w strictly between 0 and 1, or up to 1 with a
+    /// texture), not written in RON.
     Transmissive {
-        /// The probability w of the glass component, transmission × (1 − metallic).
+        /// The probability w of the glass component, transmission × (1 − metallic) (with a
+        /// texture: where its red channel is 1).
         weight: f32,
         /// The transmissive component (a [`Material::Dielectric`]).
         glass: Box<Material>,
         /// The opaque component (a [`Material::Pbr`]).
         base: Box<Material>,
+        /// `KHR_materials_transmission`'s `transmissionTexture` (`None`: the weight holds
+        /// everywhere, and no lookup is made).
+        texture: Option<Box<TransmissionTexture>>,
     },
+}
+
+/// A transmission texture on a [`Material::Transmissive`]: at a point whose red texel is r,
+/// the glass takes the share w·r of the mix, and the `opaque` material the w·(1 − r) the
+/// texture takes from it. For glTF (transmission t, metallic m, w = t·(1 − m)) that is the
+/// spec's mix exactly: f = m·f_metal + (1 − m)·(t·r·f_glass + (1 − t·r)·f_dielectric), with
+/// `base` the metal share m and the dielectric share (1 − m)(1 − t) over 1 − w (as without a
+/// texture) and `opaque` the metallic–roughness material with metalness 0 (the dielectric).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransmissionTexture {
+    /// A linear texture whose red channel scales the weight.
+    pub texture: Texture,
+    /// What shades where the texture lowers the transmission (a [`Material::Pbr`]).
+    pub opaque: Material,
+}
+
+impl TransmissionTexture {
+    /// The red channel at `uv`, clamped to [0, 1].
+    #[inline]
+    pub fn red(&self, uv: TexCoords) -> f32 {
+        self.texture.eval(uv).x.clamp(0.0, 1.0)
+    }
 }
 
 impl Material {
@@ -143,21 +171,28 @@ impl Material {
         }
     }
 
-    /// The material a hit shades as: for a [`Material::Transmissive`] its glass if `u()` (uniform
-    /// in [0, 1)) is below its weight, else its base; every other material is itself and draws
-    /// no `u`.
+    /// The material a hit at texture coordinates `uv` shades as: for a
+    /// [`Material::Transmissive`] of weight w its base if `u()` (uniform in [0, 1)) is at least
+    /// w, else its glass, or with a [`TransmissionTexture`] of red r at `uv` its glass if `u()` is
+    /// below w·r and the texture's opaque material otherwise. So the glass is picked with
+    /// probability w·r, the weight at that point, from one number. Every other material is
+    /// itself and draws no `u`.
     #[inline(always)]
-    pub fn component(&self, u: impl FnOnce() -> f32) -> &Self {
+    pub fn component(&self, uv: impl Into<TexCoords>, u: impl FnOnce() -> f32) -> &Self {
         match self {
             Self::Transmissive {
                 weight,
                 glass,
                 base,
+                texture,
             } => {
-                if u() < *weight {
-                    glass
-                } else {
-                    base
+                let u = u();
+                if u >= *weight {
+                    return base;
+                }
+                match texture {
+                    Some(t) if u >= *weight * t.red(uv.into()) => &t.opaque,
+                    _ => glass,
                 }
             }
             _ => self,
@@ -243,8 +278,17 @@ impl Material {
                     || alpha.is_some()
                     || layer_maps.is_some()
             }
-            Self::Transmissive { glass, base, .. } => {
-                glass.reads_tex_coords() || base.reads_tex_coords()
+            Self::Transmissive {
+                glass,
+                base,
+                texture,
+                ..
+            } => {
+                glass.reads_tex_coords()
+                    || base.reads_tex_coords()
+                    || texture
+                        .as_ref()
+                        .is_some_and(|t| t.texture.reads_uv() || t.opaque.reads_tex_coords())
             }
         }
     }
@@ -401,7 +445,7 @@ impl Material {
         uv: Vec2,
         sampler: &mut impl Sampler,
     ) -> Option<Scatter> {
-        self.component(|| sampler.next_1d())
+        self.component(uv, || sampler.next_1d())
             .bsdf_at(d, n, uv)
             .sample(sampler)
     }

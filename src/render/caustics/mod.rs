@@ -158,7 +158,7 @@ fn light_path<L: Layout>(
         let material = view
             .materials
             .get(*view.owner_material.get(s.owner as usize)? as usize)?
-            .component(|| sampler.next_1d());
+            .component(s.tex_coords(), || sampler.next_1d());
         let bsdf = material.bsdf(ray.direction, s.n, s.ns, s.tex_coords(), || {
             view.geometry.uv_tangent(&hit).map(|t| (t.tangent, t.sign))
         });
