@@ -395,8 +395,11 @@ impl Expander<'_> {
                 if let Material::Pbr { metallic, .. } = &mut opaque {
                     *metallic = 0.0;
                 }
+                let (img, sampling) = self
+                    .gltf_image(asset, path, t, Encoding::Linear)
+                    .map_err(|e| format!("{what}: transmissionTexture: {e}"))?;
                 Some(Box::new(TransmissionTexture {
-                    texture: textured(self, t, Encoding::Linear)?,
+                    texture: mapped(Texture::Image(img, sampling), uv_map(m, t)),
                     opaque,
                 }))
             }
