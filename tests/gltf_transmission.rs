@@ -10,7 +10,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::gltf_doc::{Bin, doc};
-use common::two_texel::{fresnel_ior, half_residual, png, quad_file, render_quad};
+use common::two_texel::{fresnel_ior, half_residual, png, quad_file, render_quad_with};
 use common::{point_camera, render, temp_dir, with, write_scene};
 use glam::Vec3;
 use rondo::app::Overrides;
@@ -332,33 +332,36 @@ fn caustics_through_a_partly_transmissive_slab_agree_with_path_tracing() {
             "Camera(position: (4, 0.5, 0), look_at: (0, 0, 0), up: (0, 1, 0), fov: 40)",
         ),
     );
-    // Light tracing splats are not independent per pixel: the image mean's error comes from
-    // independent seeds (8 each: Student's t with 7 degrees of freedom, 4 standard errors).
-    let over_seeds = |method: Method, spp: u32| {
-        let v: Vec<f64> = (0..8u64)
-            .map(|seed| {
-                let o = Overrides {
-                    seed: Some(100 + seed),
-                    ..with(method, spp)
-                };
-                let px = render(&scene, o, None).film().mean();
-                px.iter().map(|p| f64::from(p.x)).sum::<f64>() / px.len() as f64
-            })
-            .collect();
-        let n = v.len() as f64;
-        let mean = v.iter().sum::<f64>() / n;
-        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        (mean, (var / n).sqrt())
-    };
     let (mis, light) = (
-        over_seeds(Method::Mis, 64),
-        over_seeds(Method::Caustics, 16),
+        over_seeds(&scene, Method::Mis, 64),
+        over_seeds(&scene, Method::Caustics, 16),
     );
     let se = (mis.1 * mis.1 + light.1 * light.1).sqrt();
     assert!(
         mis.0 > 0.01 && (mis.0 - light.0).abs() <= 4.0 * se,
         "mis {mis:?}, caustics {light:?}"
     );
+}
+
+/// The mean of the red channel over the image of `scene` rendered with `method` at `spp`,
+/// with its standard error over 8 seeds. Light tracing splats are not independent per pixel:
+/// the image mean's error comes from independent seeds (Student's t with 7 degrees of
+/// freedom: 4 standard errors are a safe bound).
+fn over_seeds(scene: &Path, method: Method, spp: u32) -> (f64, f64) {
+    let v: Vec<f64> = (0..8u64)
+        .map(|seed| {
+            let o = Overrides {
+                seed: Some(100 + seed),
+                ..with(method, spp)
+            };
+            let px = render(scene, o, None).film().mean();
+            px.iter().map(|p| f64::from(p.x)).sum::<f64>() / px.len() as f64
+        })
+        .collect();
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
 }
 
 #[test]
@@ -503,8 +506,13 @@ fn a_transmission_texture_lets_the_sky_through_only_where_its_red_channel_says()
         (1.0, 0.0, set_1, true),
         (1.0, 0.0, mirrored, true),
     ];
-    for (t, m, info, swapped) in cases {
-        let pixels = render_quad(
+    let methods = [Method::Naive, Method::Mis, Method::Caustics];
+    for ((t, m, info, swapped), method) in cases
+        .iter()
+        .flat_map(|case| methods.map(|method| (case.clone(), method)))
+    {
+        let pixels = render_quad_with(
+            method,
             &dir,
             textured_material(t, m, info.clone()),
             &TEXTURED,
@@ -519,11 +527,11 @@ fn a_transmission_texture_lets_the_sky_through_only_where_its_red_channel_says()
                 [m * metal(c) + (1.0 - m) * dielectric; 3]
             };
             let (mean, se, _, want) = half_residual(&pixels, right, expected);
-            println!("t {t}, m {m}, {info}, right {right}: {want:?} {mean:?} ± {se:?}");
+            println!("{method}, t {t}, m {m}, {info}, right {right}: {want:?} {mean:?} ± {se:?}");
             for k in 0..3 {
                 assert!(
                     mean[k].abs() <= 4.0 * se[k] + 1e-4,
-                    "t {t}, m {m}, {info}, right half {right}: expected {want:?}, off by \
+                    "{method}, t {t}, m {m}, {info}, right half {right}: expected {want:?}, off by \
                      {mean:?} ± {se:?}"
                 );
             }
@@ -628,4 +636,43 @@ fn crc32(bytes: &[u8]) -> u32 {
         }
     }
     !crc
+}
+
+#[test]
+fn caustics_through_a_transmission_texture_agree_with_path_tracing() {
+    // A floor lit by a small lamp through a smooth panel that is glass on one half
+    // (transmission texture red 1) and an opaque black dielectric on the other (red 0), seen
+    // from the side. Light tracing must pick the panel's part where its light path hits it as
+    // the path tracer does there (the texel at that point), or the caustic under the glass
+    // half is counted twice or not at all.
+    let dir = temp_dir("gltf-transmission-texture-caustics");
+    std::fs::write(dir.join("t.png"), png([0, 0, 0, 255], [255, 0, 0, 255])).expect("write");
+    let material = textured_material(1.0, 0.0, serde_json::json!({"index": 0}));
+    std::fs::write(
+        dir.join("q.gltf"),
+        quad_file(material, &TEXTURED).to_string(),
+    )
+    .expect("write");
+    let scene = write_scene(
+        &dir,
+        "floor.ron",
+        "Scene(camera: Camera(position: (4, 0, -0.3), look_at: (0, 0, -1), up: (0, 0, 1), \
+         fov: 40), settings: Settings(width: 16, height: 16, max_depth: 6, \
+         background: (0, 0, 0)), materials: { \
+         \"floor\": Diffuse(albedo: Constant((0.8, 0.8, 0.8))), \
+         \"lamp\": Light(emit: Constant((1, 1, 1)), intensity: 20) }, \
+         entities: [Entity(name: \"q\", gltf: \"q.gltf\"), \
+         Entity(material: \"floor\", shape: Quad(a: (-3, -3, -1), b: (3, -3, -1), c: (3, 3, -1), d: (-3, 3, -1))), \
+         Entity(material: \"lamp\", shape: Sphere(center: (0, 0, 2.5), radius: 0.3))])",
+    );
+    let (mis, light) = (
+        over_seeds(&scene, Method::Mis, 256),
+        over_seeds(&scene, Method::Caustics, 64),
+    );
+    let se = (mis.1 * mis.1 + light.1 * light.1).sqrt();
+    println!("mis {mis:?}, caustics {light:?}");
+    assert!(
+        mis.0 > 0.01 && (mis.0 - light.0).abs() <= 4.0 * se,
+        "mis {mis:?}, caustics {light:?}"
+    );
 }

@@ -229,7 +229,9 @@ class Builder:
             if t["kind"] == "mapped" and t["set"] == 0 and t["transform"] is None:
                 t = t["texture"]
             if t["kind"] == "image":
-                img = self.image_node(tree, t, "Non-Color")
+                # The colour space the export found the file read in (rondo reads it linear;
+                # the two agree on its texels).
+                img = self.image_node(tree, t)
                 sep = tree.nodes.new("ShaderNodeSeparateColor")
                 tree.links.new(img.outputs["Color"], sep.inputs[0])
                 tree.links.new(sep.outputs["Red"], inner.inputs["Fac"])

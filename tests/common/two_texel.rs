@@ -63,6 +63,18 @@ pub fn render_quad(
     dir: &Path,
     material: Value,
     used: &[&str],
+    texels: ([u8; 4], [u8; 4]),
+    spp: u32,
+) -> Vec<[f64; 3]> {
+    render_quad_with(Method::Naive, dir, material, used, texels, spp)
+}
+
+/// [`render_quad`] with `method`.
+pub fn render_quad_with(
+    method: Method,
+    dir: &Path,
+    material: Value,
+    used: &[&str],
     (left, right): ([u8; 4], [u8; 4]),
     spp: u32,
 ) -> Vec<[f64; 3]> {
@@ -77,7 +89,7 @@ pub fn render_quad(
              entities: [Entity(name: \"q\", gltf: \"q.gltf\")])"
         ),
     );
-    let r = render(&scene, with(Method::Naive, spp), None);
+    let r = render(&scene, with(method, spp), None);
     assert_eq!(r.stats().nonfinite, 0);
     r.film()
         .mean()
