@@ -644,6 +644,58 @@ mod tests {
         assert_eq!(two.emitted(Vec3::Y, Vec3::Y, Vec2::ZERO), Vec3::splat(2.0));
     }
 
+    #[test]
+    fn a_textured_mix_picks_its_glass_with_the_weight_times_the_red_texel_at_the_point() {
+        // Weight 0.6; red 0.25 on the checker's odd cells (uv (0, 0)), 1 on its even ones.
+        // Over u stratified in [0, 1), the glass must come up 0.6 · red of the time, the
+        // texture's opaque material 0.6 · (1 − red), the base 0.4, at each point.
+        let pbr = |metallic| Material::Pbr {
+            base_color: Texture::Constant(Vec3::splat(0.5)),
+            metallic,
+            roughness: 0.5,
+            metallic_roughness: None,
+            emissive: Texture::Constant(Vec3::ZERO),
+            emissive_strength: 1.0,
+            normal_map: None,
+            alpha: None,
+            layers: Layers::NONE,
+            layer_maps: None,
+        };
+        let mix = Material::Transmissive {
+            weight: 0.6,
+            glass: Box::new(Material::glass(1.5)),
+            base: Box::new(pbr(0.5)),
+            texture: Some(Box::new(TransmissionTexture {
+                texture: Texture::Checker {
+                    scale: 10.0,
+                    even: Box::new(Texture::Constant(Vec3::new(1.0, 0.0, 0.0))),
+                    odd: Box::new(Texture::Constant(Vec3::new(0.25, 0.0, 0.0))),
+                },
+                opaque: pbr(0.0),
+            })),
+        };
+        assert!(mix.reads_tex_coords());
+        let n = 10_000;
+        for (uv, red) in [(Vec2::ZERO, 0.25), (Vec2::new(0.15, 0.05), 1.0)] {
+            let mut counts = [0usize; 3];
+            for k in 0..n {
+                let u = (k as f32 + 0.5) / n as f32;
+                let picked = mix.component(uv, || u);
+                let slot = match picked {
+                    Material::Dielectric { .. } => 0,
+                    Material::Pbr { metallic, .. } if *metallic == 0.0 => 1,
+                    _ => 2,
+                };
+                counts[slot] += 1;
+            }
+            let expected = [0.6 * red, 0.6 * (1.0 - red), 0.4];
+            for (count, share) in counts.iter().zip(expected) {
+                let got = *count as f64 / n as f64;
+                assert!((got - share).abs() < 2e-4, "{uv}: {counts:?}, {expected:?}");
+            }
+        }
+    }
+
     /// Every material kind with `texture` in each of its colour slots.
     fn every_kind(texture: &Texture) -> Vec<Material> {
         vec![

@@ -9,7 +9,8 @@
 //! (see [`super::integrator`]). Both sides decide by the same tests, so their sum converges to
 //! what `Mis` converges to, with the caustics sampled from the light, where they are easy.
 //! At a mix (`Material::Transmissive`) both sides pick the component with the same
-//! probabilities and test the one picked, so they split the same path space.
+//! probabilities at the hit point (its transmission texture read there) and test the one
+//! picked, so they split the same path space.
 //!
 //! A light path starts at a light aimed at the specular surfaces ([`emit`]), follows the
 //! specular vertices by their BSDF sampling (the (n1/n2)² compression of radiance at
