@@ -312,3 +312,50 @@ fn image_textures_name_their_files_and_encodings() {
         Path::new(normal["path"].as_str().unwrap()).starts_with(std::path::absolute(&out).unwrap())
     );
 }
+
+#[test]
+fn a_transmission_texture_is_exported_with_the_opaque_part_it_hands_the_rest_to() {
+    // A glTF quad of transmission 0.8 × a texture (red 0 | 128, read linear: 128/255 is 0.50
+    // linear, 0.22 through sRGB, so the file's encoding is found as linear), metallic 0.
+    let dir = temp_dir("export-transmission-texture");
+    std::fs::write(
+        dir.join("t.png"),
+        common::two_texel::png([0, 0, 0, 255], [128, 0, 0, 255]),
+    )
+    .expect("write");
+    let material = serde_json::json!({
+        "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0,
+                                 "roughnessFactor": 0.2},
+        "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.8,
+                                                      "transmissionTexture": {"index": 0}}},
+    });
+    let file = common::two_texel::quad_file(material, &["KHR_materials_transmission"]);
+    std::fs::write(dir.join("q.gltf"), file.to_string()).expect("write");
+    let scene = write_scene(
+        &dir,
+        "q.ron",
+        "Scene(camera: Camera(position: (0, 0, 2), look_at: (0, 0, 0)), \
+         entities: [Entity(name: \"q\", gltf: \"q.gltf\")])",
+    );
+    let json = export_ok(&scene, &dir.join("out"));
+    let (_, m) = json["materials"]
+        .as_object()
+        .expect("materials")
+        .iter()
+        .next()
+        .expect("one material");
+    assert_eq!(m["kind"], "transmissive");
+    assert!((m["weight"].as_f64().expect("weight") - 0.8).abs() < 1e-6);
+    assert_eq!(m["glass"]["kind"], "dielectric");
+    assert_eq!(m["base"]["kind"], "pbr");
+    let texture = &m["transmission_texture"]["texture"];
+    assert_eq!(texture["kind"], "image", "{m}");
+    assert_eq!(texture["encoding"], "linear");
+    let want = std::path::absolute(dir.join("t.png")).expect("absolute");
+    assert_eq!(Path::new(texture["path"].as_str().expect("path")), want);
+    let opaque = &m["transmission_texture"]["opaque"];
+    assert_eq!(
+        (&opaque["kind"], &opaque["metallic"]),
+        (&"pbr".into(), &0.0.into())
+    );
+}

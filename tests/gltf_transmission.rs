@@ -1,13 +1,16 @@
 //! Partial transmission (`KHR_materials_transmission` with transmission × (1 − metallic)
 //! strictly between 0 and 1) as the spec's mix of glass and the opaque material: the loader's
 //! weights, the rendered mix against the same mixture of the two pure renders (statistics),
-//! the methods' agreement inside a closed mix of tinted glass, and determinism.
+//! the methods' agreement inside a closed mix of tinted glass, and determinism; the
+//! transmission texture's share of glass point by point (closed forms under a white sky) and
+//! its bad images.
 
 mod common;
 
 use std::path::{Path, PathBuf};
 
 use common::gltf_doc::{Bin, doc};
+use common::two_texel::{fresnel_ior, half_residual, png, quad_file, render_quad_with};
 use common::{point_camera, render, temp_dir, with, write_scene};
 use glam::Vec3;
 use rondo::app::Overrides;
@@ -146,6 +149,7 @@ fn partial_transmission_loads_as_a_mix_weighted_by_transmission_times_one_minus_
             weight,
             glass: g,
             base,
+            texture: None,
         } = material_of(&scene, k)
         else {
             panic!("t {t}, m {m}: {:?}", material_of(&scene, k));
@@ -328,33 +332,36 @@ fn caustics_through_a_partly_transmissive_slab_agree_with_path_tracing() {
             "Camera(position: (4, 0.5, 0), look_at: (0, 0, 0), up: (0, 1, 0), fov: 40)",
         ),
     );
-    // Light tracing splats are not independent per pixel: the image mean's error comes from
-    // independent seeds (8 each: Student's t with 7 degrees of freedom, 4 standard errors).
-    let over_seeds = |method: Method, spp: u32| {
-        let v: Vec<f64> = (0..8u64)
-            .map(|seed| {
-                let o = Overrides {
-                    seed: Some(100 + seed),
-                    ..with(method, spp)
-                };
-                let px = render(&scene, o, None).film().mean();
-                px.iter().map(|p| f64::from(p.x)).sum::<f64>() / px.len() as f64
-            })
-            .collect();
-        let n = v.len() as f64;
-        let mean = v.iter().sum::<f64>() / n;
-        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        (mean, (var / n).sqrt())
-    };
     let (mis, light) = (
-        over_seeds(Method::Mis, 64),
-        over_seeds(Method::Caustics, 16),
+        over_seeds(&scene, Method::Mis, 64),
+        over_seeds(&scene, Method::Caustics, 16),
     );
     let se = (mis.1 * mis.1 + light.1 * light.1).sqrt();
     assert!(
         mis.0 > 0.01 && (mis.0 - light.0).abs() <= 4.0 * se,
         "mis {mis:?}, caustics {light:?}"
     );
+}
+
+/// The mean of the red channel over the image of `scene` rendered with `method` at `spp`,
+/// with its standard error over 8 seeds. Light tracing splats are not independent per pixel:
+/// the image mean's error comes from independent seeds (Student's t with 7 degrees of
+/// freedom: 4 standard errors are a safe bound).
+fn over_seeds(scene: &Path, method: Method, spp: u32) -> (f64, f64) {
+    let v: Vec<f64> = (0..8u64)
+        .map(|seed| {
+            let o = Overrides {
+                seed: Some(100 + seed),
+                ..with(method, spp)
+            };
+            let px = render(scene, o, None).film().mean();
+            px.iter().map(|p| f64::from(p.x)).sum::<f64>() / px.len() as f64
+        })
+        .collect();
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
 }
 
 #[test]
@@ -441,4 +448,231 @@ fn a_partly_transmissive_scene_renders_the_same_bits_on_any_thread_count() {
         let two = render(&mix, o, Some(2));
         assert_eq!(one.film().sum, two.film().sum, "{method}");
     }
+}
+
+/// A glTF material over a black, smooth base of metalness `metallic`, transmission factor
+/// `factor` of ior 1.5 scaled by `transmissionTexture` (texture 0) read as `texture_info`
+/// says (`{"index": 0}` and any `texCoord` or transform).
+fn textured_material(
+    factor: f64,
+    metallic: f64,
+    texture_info: serde_json::Value,
+) -> serde_json::Value {
+    serde_json::json!({
+        "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": metallic,
+                                 "roughnessFactor": 0},
+        "extensions": {
+            "KHR_materials_transmission": {"transmissionFactor": factor,
+                                           "transmissionTexture": texture_info},
+            "KHR_materials_ior": {"ior": 1.5},
+        },
+    })
+}
+
+/// The extensions the textured quads use.
+const TEXTURED: [&str; 3] = [
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_texture_transform",
+];
+
+#[test]
+fn a_transmission_texture_lets_the_sky_through_only_where_its_red_channel_says() {
+    // A quad seen face-on under a white sky (radiance 1), its transmission texture's red 0 on
+    // the left half and 1 on the right. Closed forms at view cosine c, F the exact Fresnel
+    // reflectance of ior 1.5: the smooth glass reflects the sky with probability F and
+    // refracts into the sky beyond with the rest, its radiance scaled by (1/1.5)², so
+    // G = F + (1 − F)/2.25; the black smooth dielectric base reflects F (its black diffuse
+    // nothing); a black metal reflects Schlick's (1 − c)⁵ (F0 = 0), below 10⁻⁶ here.
+    // With transmission t, metallic m and red r the spec's mix is
+    // m·metal + (1 − m)·(t·r·G + (1 − t·r)·F). Ignoring the texture gives the left half the
+    // right half's value.
+    let dir = temp_dir("gltf-transmission-texture");
+    let glass = |c: f64| {
+        let f = fresnel_ior(c);
+        f + (1.0 - f) / 2.25
+    };
+    let metal = |c: f64| (1.0 - c).powi(5);
+    let plain = serde_json::json!({"index": 0});
+    // The texture through TEXCOORD_1 (u = (1 − x)/2 on this quad) or through a transform
+    // u ↦ 1 − u sees the halves the other way round.
+    let set_1 = serde_json::json!({"index": 0, "texCoord": 1});
+    let mirrored = serde_json::json!({"index": 0, "extensions": {
+        "KHR_texture_transform": {"offset": [1, 0], "scale": [-1, 1]}}});
+    let cases = [
+        // (transmission, metallic, texture reference, whether the halves swap)
+        (1.0, 0.0, plain.clone(), false),
+        (0.6, 0.5, plain, false),
+        (1.0, 0.0, set_1, true),
+        (1.0, 0.0, mirrored, true),
+    ];
+    let methods = [Method::Naive, Method::Mis, Method::Caustics];
+    for ((t, m, info, swapped), method) in cases
+        .iter()
+        .flat_map(|case| methods.map(|method| (case.clone(), method)))
+    {
+        let pixels = render_quad_with(
+            method,
+            &dir,
+            textured_material(t, m, info.clone()),
+            &TEXTURED,
+            ([0, 0, 0, 255], [255, 0, 0, 255]),
+            64,
+        );
+        for right in [false, true] {
+            let r = if right != swapped { 1.0 } else { 0.0 };
+            let expected = |c: f64| {
+                let share = t * r;
+                let dielectric = share * glass(c) + (1.0 - share) * fresnel_ior(c);
+                [m * metal(c) + (1.0 - m) * dielectric; 3]
+            };
+            let (mean, se, _, want) = half_residual(&pixels, right, expected);
+            println!("{method}, t {t}, m {m}, {info}, right {right}: {want:?} {mean:?} ± {se:?}");
+            for k in 0..3 {
+                assert!(
+                    mean[k].abs() <= 4.0 * se[k] + 1e-4,
+                    "{method}, t {t}, m {m}, {info}, right half {right}: expected {want:?}, off by \
+                     {mean:?} ± {se:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_transmission_texture_makes_the_mix_even_at_full_transmission_and_is_not_warned_of() {
+    // transmission 1, metallic 0 is glass alone without a texture; with one that can lower
+    // it, the mix of weight 1 whose texture hands what it takes from the glass to the opaque
+    // material without metal.
+    let dir = temp_dir("gltf-transmission-texture-load");
+    std::fs::write(dir.join("t.png"), png([0, 0, 0, 255], [255, 0, 0, 255])).expect("write");
+    let material = textured_material(1.0, 0.0, serde_json::json!({"index": 0}));
+    let file = quad_file(material, &TEXTURED);
+    std::fs::write(dir.join("q.gltf"), file.to_string()).expect("write");
+    let path = write_scene(
+        &dir,
+        "q.ron",
+        "Scene(camera: Camera(position: (0, 0, 2), look_at: (0, 0, 0)), \
+         entities: [Entity(name: \"q\", gltf: \"q.gltf\")])",
+    );
+    let scene = load(&path);
+    let e = scene.entities.first().expect("the quad");
+    let Material::Transmissive {
+        weight,
+        glass,
+        base,
+        texture: Some(texture),
+    } = &scene.materials[&e.material]
+    else {
+        panic!("{:?}", scene.materials[&e.material]);
+    };
+    assert_eq!(*weight, 1.0);
+    assert!(matches!(**glass, Material::Dielectric { ior: 1.5, .. }));
+    assert!(matches!(**base, Material::Pbr { metallic: 0.0, .. }));
+    assert!(matches!(
+        texture.opaque,
+        Material::Pbr { metallic: 0.0, .. }
+    ));
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .all(|w| !w.contains("transmissionTexture")),
+        "{:?}",
+        scene.warnings
+    );
+}
+
+#[test]
+fn a_broken_or_oversized_transmission_texture_is_an_error_naming_its_image() {
+    // Not a PNG at all, and a PNG header announcing 10⁵ × 10⁵ pixels with no data: errors
+    // that name the material and the image, never a panic, never an allocation for the size.
+    let dir = temp_dir("gltf-transmission-texture-broken");
+    let mut huge = b"\x89PNG\r\n\x1a\n".to_vec();
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend(100_000u32.to_be_bytes());
+    ihdr.extend(100_000u32.to_be_bytes());
+    ihdr.extend([8, 2, 0, 0, 0]);
+    huge.extend(13u32.to_be_bytes());
+    huge.extend(&ihdr);
+    huge.extend(crc32(&ihdr).to_be_bytes());
+    let material = textured_material(0.5, 0.0, serde_json::json!({"index": 0}));
+    let file = quad_file(material, &TEXTURED);
+    std::fs::write(dir.join("q.gltf"), file.to_string()).expect("write");
+    let path = write_scene(
+        &dir,
+        "q.ron",
+        "Scene(camera: Camera(position: (0, 0, 2), look_at: (0, 0, 0)), \
+         entities: [Entity(name: \"q\", gltf: \"q.gltf\")])",
+    );
+    for bytes in [b"not an image".to_vec(), huge] {
+        std::fs::write(dir.join("t.png"), &bytes).expect("write");
+        let result = std::panic::catch_unwind(|| load_scene(&path, &mut AssetCache::default()));
+        let error = match result {
+            Ok(Err(e)) => e.to_string(),
+            Ok(Ok(_)) => panic!("{} bytes loaded", bytes.len()),
+            Err(_) => panic!("the loader panicked on {} bytes", bytes.len()),
+        };
+        println!("{error}");
+        assert!(
+            error.contains("material \"#0\": transmissionTexture: image")
+                && error.contains("t.png"),
+            "{error}"
+        );
+    }
+}
+
+/// CRC-32 as PNG chunks use it (ISO 3309, reflected polynomial 0xEDB88320).
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 {
+                (crc >> 1) ^ 0xedb8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+#[test]
+fn caustics_through_a_transmission_texture_agree_with_path_tracing() {
+    // A floor lit by a small lamp through a smooth panel that is glass on one half
+    // (transmission texture red 1) and an opaque black dielectric on the other (red 0), seen
+    // from the side. Light tracing must pick the panel's part where its light path hits it as
+    // the path tracer does there (the texel at that point), or the caustic under the glass
+    // half is counted twice or not at all.
+    let dir = temp_dir("gltf-transmission-texture-caustics");
+    std::fs::write(dir.join("t.png"), png([0, 0, 0, 255], [255, 0, 0, 255])).expect("write");
+    let material = textured_material(1.0, 0.0, serde_json::json!({"index": 0}));
+    std::fs::write(
+        dir.join("q.gltf"),
+        quad_file(material, &TEXTURED).to_string(),
+    )
+    .expect("write");
+    let scene = write_scene(
+        &dir,
+        "floor.ron",
+        "Scene(camera: Camera(position: (4, 0, -0.3), look_at: (0, 0, -1), up: (0, 0, 1), \
+         fov: 40), settings: Settings(width: 16, height: 16, max_depth: 6, \
+         background: (0, 0, 0)), materials: { \
+         \"floor\": Diffuse(albedo: Constant((0.8, 0.8, 0.8))), \
+         \"lamp\": Light(emit: Constant((1, 1, 1)), intensity: 20) }, \
+         entities: [Entity(name: \"q\", gltf: \"q.gltf\"), \
+         Entity(material: \"floor\", shape: Quad(a: (-3, -3, -1), b: (3, -3, -1), c: (3, 3, -1), d: (-3, 3, -1))), \
+         Entity(material: \"lamp\", shape: Sphere(center: (0, 0, 2.5), radius: 0.3))])",
+    );
+    let (mis, light) = (
+        over_seeds(&scene, Method::Mis, 256),
+        over_seeds(&scene, Method::Caustics, 64),
+    );
+    let se = (mis.1 * mis.1 + light.1 * light.1).sqrt();
+    println!("mis {mis:?}, caustics {light:?}");
+    assert!(
+        mis.0 > 0.01 && (mis.0 - light.0).abs() <= 4.0 * se,
+        "mis {mis:?}, caustics {light:?}"
+    );
 }

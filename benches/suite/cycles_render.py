@@ -164,6 +164,12 @@ class Builder:
         tree = mat.node_tree
         tree.nodes.clear()
         out = tree.nodes.new("ShaderNodeOutputMaterial")
+        tree.links.new(self.shader(tree, out, m), out.inputs["Surface"])
+        self.materials[key] = mat
+        return mat
+
+    def shader(self, tree, out, m):
+        """The surface shader socket of material m (a glass's absorption linked to out)."""
         k = m["kind"]
         if k == "diffuse":
             b = tree.nodes.new("ShaderNodeBsdfDiffuse")
@@ -205,11 +211,49 @@ class Builder:
                 shader = mix.outputs[0]
         elif k == "pbr":
             shader = self.pbr(tree, m)
+        elif k == "transmissive":
+            shader = self.transmissive(tree, out, m)
         else:
             raise SystemExit("unknown material kind %r" % k)
-        tree.links.new(shader, out.inputs["Surface"])
-        self.materials[key] = mat
-        return mat
+        return shader
+
+    def transmissive(self, tree, out, m):
+        """rondo's mix weight * glass + (1 - weight) * base as a Mix Shader (its Fac the
+        second shader's share); a transmission texture mixes the glass part again, by the
+        texture's red channel, with the opaque material it hands the rest to."""
+        glass = self.shader(tree, out, m["glass"])
+        tt = m.get("transmission_texture")
+        if tt is not None:
+            inner = tree.nodes.new("ShaderNodeMixShader")
+            t = tt["texture"]
+            if t["kind"] == "mapped" and t["set"] == 0 and t["transform"] is None:
+                t = t["texture"]
+            if t["kind"] == "image":
+                # The colour space the export found the file read in (rondo reads it linear;
+                # the two agree on its texels).
+                img = self.image_node(tree, t)
+                sep = tree.nodes.new("ShaderNodeSeparateColor")
+                tree.links.new(img.outputs["Color"], sep.inputs[0])
+                tree.links.new(sep.outputs["Red"], inner.inputs["Fac"])
+            else:
+                sock, const = self.color(tree, t)
+                if sock is None:
+                    inner.inputs["Fac"].default_value = const[0]
+                else:
+                    sep = tree.nodes.new("ShaderNodeSeparateColor")
+                    tree.links.new(sock, sep.inputs[0])
+                    tree.links.new(sep.outputs["Red"], inner.inputs["Fac"])
+            tree.links.new(self.shader(tree, out, tt["opaque"]), inner.inputs[1])
+            tree.links.new(glass, inner.inputs[2])
+            glass = inner.outputs[0]
+        e = m["base"].get("emissive")
+        if e is not None and not (e["kind"] == "constant" and max(e["value"]) == 0):
+            self.notes.add("transmissive emission mixed by the weights (rondo's is in full)")
+        mix = tree.nodes.new("ShaderNodeMixShader")
+        mix.inputs["Fac"].default_value = m["weight"]
+        tree.links.new(self.shader(tree, out, m["base"]), mix.inputs[1])
+        tree.links.new(glass, mix.inputs[2])
+        return mix.outputs[0]
 
     def absorption(self, tree, out, absorption):
         """Beer–Lambert absorption inside glass: a Volume Absorption node, whose coefficient

@@ -79,6 +79,8 @@ class Converter:
             return 0.5 * (self.mean(t["even"]) + self.mean(t["odd"]))
         if k == "scaled":
             return self.mean(t["texture"]) * np.asarray(t["factor"])
+        if k == "mapped":
+            return self.mean(t["texture"])
         return load_rgba(t["path"], t["encoding"])[..., :3].reshape(-1, 3).mean(axis=0)
 
     def array_bitmap(self, arr, like):
@@ -93,7 +95,9 @@ class Converter:
 
     # Materials ----------------------------------------------------------------------------
     def bsdf(self, key):
-        m = self.json["materials"][key]
+        return self.material_bsdf(self.json["materials"][key])
+
+    def material_bsdf(self, m):
         k = m["kind"]
         if k == "diffuse":
             return {"type": "twosided", "bsdf": {"type": "diffuse",
@@ -124,7 +128,33 @@ class Converter:
             return {"type": "diffuse", "reflectance": _rgb((0, 0, 0))}
         if k == "pbr":
             return self.pbr(m)
+        if k == "transmissive":
+            return self.transmissive(m)
         raise SystemExit("unknown material kind %r" % k)
+
+    def transmissive(self, m):
+        """rondo's mix weight * glass + (1 - weight) * base as blendbsdf (its weight the
+        probability of bsdf_1); a transmission texture mixes the glass part again, by the
+        texture's red channel, with the opaque material it hands the rest to."""
+        glass = self.material_bsdf(m["glass"])
+        tt = m.get("transmission_texture")
+        if tt is not None:
+            glass = {"type": "blendbsdf", "weight": self.red(tt["texture"]),
+                     "bsdf_0": self.material_bsdf(tt["opaque"]), "bsdf_1": glass}
+        return {"type": "blendbsdf", "weight": float(m["weight"]),
+                "bsdf_0": self.material_bsdf(m["base"]), "bsdf_1": glass}
+
+    def red(self, t):
+        """The red channel of colour texture t as a float texture (a blend weight)."""
+        k = t["kind"]
+        if k == "mapped" and t["set"] == 0 and t["transform"] is None:
+            return self.red(t["texture"])
+        if k == "constant":
+            return float(t["value"][0])
+        if k == "image":
+            return self.array_bitmap(load_rgba(t["path"], t["encoding"])[..., 0:1], t)
+        self.notes.add("transmission texture %s approximated by its mean red" % k)
+        return float(self.mean(t)[0])
 
     def pbr(self, m):
         p = {"type": "principled", "base_color": self.texture(m["base_color"]),
@@ -166,6 +196,9 @@ class Converter:
     def emitter(self, key):
         """The area emitter of a material, if it emits, and whether it emits on both sides."""
         m = self.json["materials"][key]
+        if m["kind"] == "transmissive":
+            # A mix emits as its base, whichever part shades.
+            m = m["base"]
         if m["kind"] == "light":
             return self.scaled_emission(m["emit"], m["intensity"]), m["two_sided"]
         if m["kind"] == "pbr":
@@ -185,6 +218,9 @@ class Converter:
     def interior(self, key):
         """The absorbing medium inside a dielectric with Beer–Lambert absorption, if any."""
         m = self.json["materials"][key]
+        if m["kind"] == "transmissive":
+            # Only paths that refract through the glass part get inside.
+            m = m["glass"]
         if m["kind"] != "dielectric":
             return None
         # σa per unit length and channel; rondo writes an opaque (infinite) channel as null.

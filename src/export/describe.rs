@@ -11,7 +11,10 @@
 //!   "environment": { path, strength, world_from_map (3×3, rows), convention } | null,
 //!   "sun": { direction (towards the sun), angular_diameter_degrees, radiance } | null,
 //!   "materials": { key: { kind, ... textures ... } }  (kind "transmissive": { weight, glass,
-//!                base }, two materials mixed),
+//!                base, transmission_texture? }, two materials mixed: f = weight · glass +
+//!                (1 − weight) · base; with transmission_texture { texture, opaque } the glass
+//!                part is itself mixed, f = weight · (r · glass + (1 − r) · opaque) +
+//!                (1 − weight) · base, r the texture's red channel at the point),
 //!   "spheres": [ { center, radius, world_from_object_rotation, material } ],
 //!   "planes": [ { point, normal, tangent, bitangent, material, proxy_half_size } ],
 //!   "meshes": [ { file, material, vertices, triangles, normals, uvs } ],
@@ -234,13 +237,24 @@ fn material(m: &Material, images: &ImageFiles) -> Result<Value, ExportError> {
             weight,
             glass,
             base,
-        } => json!({
-            "kind": "transmissive",
-            // f = weight · f_glass + (1 − weight) · f_base.
-            "weight": weight,
-            "glass": material(glass, images)?,
-            "base": material(base, images)?,
-        }),
+            texture,
+        } => {
+            let mut mix = json!({
+                "kind": "transmissive",
+                // f = weight · f_glass + (1 − weight) · f_base.
+                "weight": weight,
+                "glass": material(glass, images)?,
+                "base": material(base, images)?,
+            });
+            // Only a textured mix describes its texture, so other scenes export as before.
+            if let Some(t) = texture {
+                mix["transmission_texture"] = json!({
+                    "texture": self::texture(&t.texture, images)?,
+                    "opaque": material(&t.opaque, images)?,
+                });
+            }
+            mix
+        }
     })
 }
 

@@ -160,9 +160,18 @@ fn material_images(materials: &[&Material]) -> Vec<Arc<ImageTexture>> {
                     out.push(image.clone());
                 }
             }
-            Material::Transmissive { glass, base, .. } => {
+            Material::Transmissive {
+                glass,
+                base,
+                texture,
+                ..
+            } => {
                 images(glass, out);
                 images(base, out);
+                if let Some(t) = texture {
+                    walk(&t.texture, out);
+                    images(&t.opaque, out);
+                }
             }
         }
     }

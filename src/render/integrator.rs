@@ -176,9 +176,10 @@ fn first_present<L: Layout, W: Lanes>(
 /// approximated).
 ///
 /// A mix ([`crate::shading::material::Material::Transmissive`]) shades at each hit as one of
-/// its components, picked from the bounce's [`COMPONENT_DIMENSION`]: a one-sample estimate of
-/// the mixture, unbiased because light sampling, the bounce and the medium beyond all use the
-/// component picked. The surface emits as the whole mix.
+/// its components, picked from the bounce's [`COMPONENT_DIMENSION`] with the probabilities at
+/// the hit point (a transmission texture varies them): a one-sample estimate of the mixture,
+/// unbiased because light sampling, the bounce and the medium beyond all use the component
+/// picked. The surface emits as the whole mix.
 ///
 /// Emission seen by the camera or after a glass/mirror bounce always counts in full. Russian
 /// roulette (after a few bounces, survival probability = the path's throughput without the
@@ -276,7 +277,7 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         }
         let whole = &view.materials[view.owner_material[s.owner as usize] as usize];
         // A mix shades as one component, NEE and bounce alike; the medium beyond is that one's.
-        let material = whole.component(|| {
+        let material = whole.component(s.tex_coords(), || {
             sampler.seek(COMPONENT_DIMENSION + depth);
             sampler.next_1d()
         });

@@ -109,17 +109,45 @@ pub enum Material {
     /// with one sample of the mixture. Each hit shades as `glass` with probability `weight` w,
     /// else as `base`, drawn from the path's own random numbers ([`Material::component`]);
     /// next-event estimation and the bounce at that hit use the same component, so the
-    /// estimate is unbiased. A path enters the glass's volume only where it refracted through
-    /// the glass component. It emits, is masked and covers as its base, whichever component
-    /// shades. Built by the glTF loader (w strictly between 0 and 1), not written in RON.
+    /// estimate is unbiased. With a `texture` the glass's probability varies over the surface
+    /// ([`TransmissionTexture`]). A path enters the glass's volume only where it refracted
+    /// through the glass component. It emits, is masked and covers as its base, whichever
+    /// component shades. Built by the glTF loader (w strictly between 0 and 1, or up to 1 with a
+    /// texture), not written in RON.
     Transmissive {
-        /// The probability w of the glass component, transmission × (1 − metallic).
+        /// The probability w of the glass component, transmission × (1 − metallic) (with a
+        /// texture: where its red channel is 1).
         weight: f32,
         /// The transmissive component (a [`Material::Dielectric`]).
         glass: Box<Material>,
         /// The opaque component (a [`Material::Pbr`]).
         base: Box<Material>,
+        /// `KHR_materials_transmission`'s `transmissionTexture` (`None`: the weight holds
+        /// everywhere, and no lookup is made).
+        texture: Option<Box<TransmissionTexture>>,
     },
+}
+
+/// A transmission texture on a [`Material::Transmissive`]: at a point whose red texel is r,
+/// the glass takes the share w·r of the mix, and the `opaque` material the w·(1 − r) the
+/// texture takes from it. For glTF (transmission t, metallic m, w = t·(1 − m)) that is the
+/// spec's mix exactly: f = m·f_metal + (1 − m)·(t·r·f_glass + (1 − t·r)·f_dielectric), with
+/// `base` the metal share m and the dielectric share (1 − m)(1 − t) over 1 − w (as without a
+/// texture) and `opaque` the metallic–roughness material with metalness 0 (the dielectric).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransmissionTexture {
+    /// A linear texture whose red channel scales the weight.
+    pub texture: Texture,
+    /// What shades where the texture lowers the transmission (a [`Material::Pbr`]).
+    pub opaque: Material,
+}
+
+impl TransmissionTexture {
+    /// The red channel at `uv`, clamped to [0, 1].
+    #[inline]
+    pub fn red(&self, uv: TexCoords) -> f32 {
+        self.texture.eval(uv).x.clamp(0.0, 1.0)
+    }
 }
 
 impl Material {
@@ -143,21 +171,28 @@ impl Material {
         }
     }
 
-    /// The material a hit shades as: for a [`Material::Transmissive`] its glass if `u()` (uniform
-    /// in [0, 1)) is below its weight, else its base; every other material is itself and draws
-    /// no `u`.
+    /// The material a hit at texture coordinates `uv` shades as: for a
+    /// [`Material::Transmissive`] of weight w its base if `u()` (uniform in [0, 1)) is at least
+    /// w, else its glass, or with a [`TransmissionTexture`] of red r at `uv` its glass if `u()` is
+    /// below w·r and the texture's opaque material otherwise. So the glass is picked with
+    /// probability w·r, the weight at that point, from one number. Every other material is
+    /// itself and draws no `u`.
     #[inline(always)]
-    pub fn component(&self, u: impl FnOnce() -> f32) -> &Self {
+    pub fn component(&self, uv: impl Into<TexCoords>, u: impl FnOnce() -> f32) -> &Self {
         match self {
             Self::Transmissive {
                 weight,
                 glass,
                 base,
+                texture,
             } => {
-                if u() < *weight {
-                    glass
-                } else {
-                    base
+                let u = u();
+                if u >= *weight {
+                    return base;
+                }
+                match texture {
+                    Some(t) if u >= *weight * t.red(uv.into()) => &t.opaque,
+                    _ => glass,
                 }
             }
             _ => self,
@@ -243,8 +278,17 @@ impl Material {
                     || alpha.is_some()
                     || layer_maps.is_some()
             }
-            Self::Transmissive { glass, base, .. } => {
-                glass.reads_tex_coords() || base.reads_tex_coords()
+            Self::Transmissive {
+                glass,
+                base,
+                texture,
+                ..
+            } => {
+                glass.reads_tex_coords()
+                    || base.reads_tex_coords()
+                    || texture
+                        .as_ref()
+                        .is_some_and(|t| t.texture.reads_uv() || t.opaque.reads_tex_coords())
             }
         }
     }
@@ -401,7 +445,7 @@ impl Material {
         uv: Vec2,
         sampler: &mut impl Sampler,
     ) -> Option<Scatter> {
-        self.component(|| sampler.next_1d())
+        self.component(uv, || sampler.next_1d())
             .bsdf_at(d, n, uv)
             .sample(sampler)
     }
@@ -598,6 +642,58 @@ mod tests {
             two_sided: true,
         };
         assert_eq!(two.emitted(Vec3::Y, Vec3::Y, Vec2::ZERO), Vec3::splat(2.0));
+    }
+
+    #[test]
+    fn a_textured_mix_picks_its_glass_with_the_weight_times_the_red_texel_at_the_point() {
+        // Weight 0.6; red 0.25 on the checker's odd cells (uv (0, 0)), 1 on its even ones.
+        // Over u stratified in [0, 1), the glass must come up 0.6 · red of the time, the
+        // texture's opaque material 0.6 · (1 − red), the base 0.4, at each point.
+        let pbr = |metallic| Material::Pbr {
+            base_color: Texture::Constant(Vec3::splat(0.5)),
+            metallic,
+            roughness: 0.5,
+            metallic_roughness: None,
+            emissive: Texture::Constant(Vec3::ZERO),
+            emissive_strength: 1.0,
+            normal_map: None,
+            alpha: None,
+            layers: Layers::NONE,
+            layer_maps: None,
+        };
+        let mix = Material::Transmissive {
+            weight: 0.6,
+            glass: Box::new(Material::glass(1.5)),
+            base: Box::new(pbr(0.5)),
+            texture: Some(Box::new(TransmissionTexture {
+                texture: Texture::Checker {
+                    scale: 10.0,
+                    even: Box::new(Texture::Constant(Vec3::new(1.0, 0.0, 0.0))),
+                    odd: Box::new(Texture::Constant(Vec3::new(0.25, 0.0, 0.0))),
+                },
+                opaque: pbr(0.0),
+            })),
+        };
+        assert!(mix.reads_tex_coords());
+        let n = 10_000;
+        for (uv, red) in [(Vec2::ZERO, 0.25), (Vec2::new(0.15, 0.05), 1.0)] {
+            let mut counts = [0usize; 3];
+            for k in 0..n {
+                let u = (k as f32 + 0.5) / n as f32;
+                let picked = mix.component(uv, || u);
+                let slot = match picked {
+                    Material::Dielectric { .. } => 0,
+                    Material::Pbr { metallic, .. } if *metallic == 0.0 => 1,
+                    _ => 2,
+                };
+                counts[slot] += 1;
+            }
+            let expected = [0.6 * red, 0.6 * (1.0 - red), 0.4];
+            for (count, share) in counts.iter().zip(expected) {
+                let got = *count as f64 / n as f64;
+                assert!((got - share).abs() < 2e-4, "{uv}: {counts:?}, {expected:?}");
+            }
+        }
     }
 
     /// Every material kind with `texture` in each of its colour slots.

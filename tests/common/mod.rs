@@ -8,6 +8,7 @@ pub mod chi2;
 pub mod furnace;
 pub mod gltf_doc;
 pub mod sheen_brdf;
+pub mod two_texel;
 pub mod watch_diff;
 
 use std::path::{Path, PathBuf};

@@ -60,8 +60,15 @@ pub fn may_be_specular(m: &Material) -> bool {
             metallic_roughness,
             ..
         } => metallic_roughness.is_some() || Pbr::new(Vec3::ZERO, *metallic, *roughness).is_delta(),
-        Material::Transmissive { glass, base, .. } => {
-            may_be_specular(glass) || may_be_specular(base)
+        Material::Transmissive {
+            glass,
+            base,
+            texture,
+            ..
+        } => {
+            may_be_specular(glass)
+                || may_be_specular(base)
+                || texture.as_ref().is_some_and(|t| may_be_specular(&t.opaque))
         }
         Material::Diffuse { .. } | Material::Light { .. } => false,
     }

@@ -9,7 +9,8 @@
 //! (see [`super::integrator`]). Both sides decide by the same tests, so their sum converges to
 //! what `Mis` converges to, with the caustics sampled from the light, where they are easy.
 //! At a mix (`Material::Transmissive`) both sides pick the component with the same
-//! probabilities and test the one picked, so they split the same path space.
+//! probabilities at the hit point (its transmission texture read there) and test the one
+//! picked, so they split the same path space.
 //!
 //! A light path starts at a light aimed at the specular surfaces ([`emit`]), follows the
 //! specular vertices by their BSDF sampling (the (n1/n2)² compression of radiance at
@@ -158,7 +159,7 @@ fn light_path<L: Layout>(
         let material = view
             .materials
             .get(*view.owner_material.get(s.owner as usize)? as usize)?
-            .component(|| sampler.next_1d());
+            .component(s.tex_coords(), || sampler.next_1d());
         let bsdf = material.bsdf(ray.direction, s.n, s.ns, s.tex_coords(), || {
             view.geometry.uv_tangent(&hit).map(|t| (t.tangent, t.sign))
         });

@@ -231,8 +231,9 @@ pub struct GltfMaterial {
     pub double_sided: bool,
     /// `KHR_materials_transmission`'s factor (0 without the extension).
     pub transmission: f32,
-    /// Whether the transmission factor is multiplied by a texture.
-    pub transmission_texture: bool,
+    /// `KHR_materials_transmission`'s `transmissionTexture` (linear): its red channel scales
+    /// the transmission factor.
+    pub transmission_texture: Option<GltfTexture>,
     /// Index of refraction (`KHR_materials_ior`; 1.5 without it).
     pub ior: f32,
     /// `KHR_materials_volume`'s thickness factor (0 without it: a thin-walled surface).

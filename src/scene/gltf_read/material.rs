@@ -150,9 +150,10 @@ pub(super) fn read_material(
         alpha_mode,
         double_sided: m.double_sided(),
         transmission,
-        transmission_texture: m
-            .transmission()
-            .is_some_and(|t| t.transmission_texture().is_some()),
+        transmission_texture: textured(
+            "extensions.KHR_materials_transmission.transmissionTexture",
+            m.transmission().and_then(|t| t.transmission_texture()),
+        )?,
         ior,
         thickness,
         attenuation_color: Vec3::from(attenuation_color),

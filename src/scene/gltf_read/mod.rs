@@ -16,7 +16,8 @@
 //! accessors without a buffer view (zeros), TRS and matrix node transforms,
 //! `EXT_mesh_gpu_instancing` (`instancing.rs`), the metallic–roughness material with its
 //! textures and their `KHR_texture_transform` (`texture_transform.rs`),
-//! `KHR_materials_emissive_strength`, `KHR_materials_transmission`, `KHR_materials_ior`,
+//! `KHR_materials_emissive_strength`, `KHR_materials_transmission` (its texture too),
+//! `KHR_materials_ior`,
 //! `KHR_materials_specular`, `KHR_materials_sheen` and `KHR_materials_clearcoat` with their
 //! textures (`layers.rs`; the coat's normal texture is named in a warning),
 //! `KHR_mesh_quantization`, the nodes' cameras and `KHR_lights_punctual` lights (`lights.rs`;

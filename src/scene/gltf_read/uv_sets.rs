@@ -23,6 +23,7 @@ impl GltfMaterial {
                 self.normal_texture.as_ref().map(|(t, _)| t),
             ),
             ("emissiveTexture", self.emissive_texture.as_ref()),
+            ("transmissionTexture", self.transmission_texture.as_ref()),
         ]
         .into_iter()
         .chain(self.layer_textures.slots())

@@ -13,9 +13,17 @@
 //! own part of the specular reflection, in proportion. So a material whose w is strictly
 //! between 0 and 1 is the mix; w = 1 is glass alone, w = 0 the opaque material alone.
 //!
+//! A `transmissionTexture` (its red channel r, linear, read through its own `texCoord` and
+//! `KHR_texture_transform`) makes t vary over the surface: w(x) = t·r(x)·(1 − m). The
+//! material is then the mix wherever w > 0, even at w = 1, and the glass's share is lowered
+//! point by point ([`crate::shading::material::TransmissionTexture`]): where r < 1 the share it
+//! takes from the glass goes to the metallic–roughness material of metalness 0 (the spec's
+//! dielectric), so the metal's share m and the base stay as without the texture, exactly.
+//!
 //! How this differs from the extensions:
-//! - transmission, thickness and metallic–roughness textures are not read by the glass nor by
-//!   the weight (the factors are; the mix's base still reads its metallic–roughness texture);
+//! - the weight's metalness m is the `metallicFactor`: the metallic–roughness texture scales
+//!   the metalness of the opaque parts where they shade, not the glass's share; thickness and
+//!   metallic–roughness textures are not read by the glass;
 //! - the base colour does not tint the transmitted light (the volume's attenuation does);
 //! - the glass part reflects with the exact Fresnel of its ior, the base's specular lobe with
 //!   Schlick's, so the mix's reflection is the spec's only up to that difference;
@@ -33,8 +41,9 @@ use crate::shading::material::{Material, absorption_coefficient};
 pub(super) enum Transmission {
     /// Opaque: the metallic–roughness material alone (no transmission).
     Opaque,
-    /// Partly transmissive: glass with probability `weight` (strictly between 0 and 1), else
-    /// the metallic–roughness material with metalness `base_metallic`.
+    /// Partly transmissive: glass with probability `weight` (strictly between 0 and 1; up to 1
+    /// with a transmission texture, which then lowers it point by point), else the
+    /// metallic–roughness material with metalness `base_metallic`.
     Mix {
         /// The glass component's probability, transmission × (1 − metallic).
         weight: f32,
@@ -55,14 +64,19 @@ pub(super) fn transmission(m: &GltfMaterial) -> Transmission {
     if weight <= 0.0 {
         return Transmission::Opaque;
     }
-    let mixed = weight < 1.0;
+    // A texture may lower the transmission anywhere: the mix, even at weight 1.
+    let mixed = weight < 1.0 || m.transmission_texture.is_some();
     let (glass, notes) = glass(m, mixed);
     if mixed {
         return Transmission::Mix {
             weight,
             glass,
-            // m ≤ 1 − w, as w = t·(1 − m) ≤ 1 − m: at most 1.
-            base_metallic: (m.metallic / (1.0 - weight)).min(1.0),
+            // m ≤ 1 − w, as w = t·(1 − m) ≤ 1 − m: at most 1. w = 1 only where m = 0.
+            base_metallic: if weight < 1.0 {
+                (m.metallic / (1.0 - weight)).min(1.0)
+            } else {
+                0.0
+            },
             notes,
         };
     }
@@ -73,17 +87,17 @@ pub(super) fn transmission(m: &GltfMaterial) -> Transmission {
 /// the transmitted part of a mix, whose opaque part shows the rest).
 fn glass(m: &GltfMaterial, mixed: bool) -> (Box<Material>, Vec<String>) {
     let mut notes = Vec::new();
-    if m.transmission_texture {
-        notes.push(format!(
-            "transmissionTexture is ignored: the transmission is {} everywhere",
-            m.transmission
-        ));
-    }
     if m.metallic_roughness_texture.is_some() {
+        let share = if m.transmission_texture.is_some() {
+            "transmissionTexture's red × "
+        } else {
+            ""
+        };
         notes.push(if mixed {
             format!(
                 "metallicRoughnessTexture does not reach the transmitted part: it has \
-                 roughness {} and a share of transmission {} × (1 − metallic {}) everywhere",
+                 roughness {} and a share of {share}transmission {} × (1 − metallic {}) \
+                 everywhere",
                 m.roughness, m.transmission, m.metallic
             )
         } else {

@@ -24,7 +24,7 @@ use crate::scene::gltf_read::{
 };
 use crate::shading::layers::Layers;
 use crate::shading::maps::{AlphaMask, NormalMap};
-use crate::shading::material::Material;
+use crate::shading::material::{Material, TransmissionTexture};
 use crate::shading::texture::{Filter, ImageTexture, Sampling, Texture, UvMap, Wrap};
 
 /// The name a placement's `materials` uses for primitives without a material.
@@ -384,13 +384,32 @@ impl Expander<'_> {
             layers: m.layers,
             layer_maps,
         };
-        Ok(match mix {
-            None => base,
-            Some((weight, glass)) => Material::Transmissive {
-                weight,
-                glass,
-                base: Box::new(base),
-            },
+        let Some((weight, glass)) = mix else {
+            return Ok(base);
+        };
+        let texture = match &m.transmission_texture {
+            Some(t) => {
+                // Where the texture lowers the transmission, the spec's dielectric shades:
+                // the base without metal (`TransmissionTexture`).
+                let mut opaque = base.clone();
+                if let Material::Pbr { metallic, .. } = &mut opaque {
+                    *metallic = 0.0;
+                }
+                let (img, sampling) = self
+                    .gltf_image(asset, path, t, Encoding::Linear)
+                    .map_err(|e| format!("{what}: transmissionTexture: {e}"))?;
+                Some(Box::new(TransmissionTexture {
+                    texture: mapped(Texture::Image(img, sampling), uv_map(m, t)),
+                    opaque,
+                }))
+            }
+            None => None,
+        };
+        Ok(Material::Transmissive {
+            weight,
+            glass,
+            base: Box::new(base),
+            texture,
         })
     }
 
