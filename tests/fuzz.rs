@@ -12,6 +12,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use common::png_chunks::png_header;
 use common::temp_dir;
 use rondo::scene::assets::AssetCache;
 use rondo::scene::check::check_scene;
@@ -363,37 +364,6 @@ fn scene_with(texture: &str, mesh: &str) -> String {
     format!(
         "Scene(\n    camera: Camera(position: (0, 0, -5), look_at: (0, 0, 0)),\n    materials: {{ \"m\": Diffuse(albedo: {material}) }},\n    entities: [\n        Entity(material: \"m\", shape: {entity}),\n    ],\n)"
     )
-}
-
-/// A PNG of `width × height` with a valid signature and header chunk, then `rest`.
-fn png_header(width: u32, height: u32, rest: &[u8]) -> Vec<u8> {
-    let mut ihdr = b"IHDR".to_vec();
-    ihdr.extend(width.to_be_bytes());
-    ihdr.extend(height.to_be_bytes());
-    ihdr.extend([8, 2, 0, 0, 0]); // 8-bit RGB, no interlace
-    let crc = crc32(&ihdr);
-    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
-    png.extend(13u32.to_be_bytes());
-    png.extend(&ihdr);
-    png.extend(crc.to_be_bytes());
-    png.extend(rest);
-    png
-}
-
-/// CRC-32 as PNG chunks use it (ISO 3309, reflected polynomial 0xEDB88320).
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in bytes {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 == 1 {
-                (crc >> 1) ^ 0xedb8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    !crc
 }
 
 /// Loads `scene` (written as `dir/scene.ron`) and returns its error text, or `None` if it loaded.

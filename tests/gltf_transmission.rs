@@ -10,6 +10,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::gltf_doc::{Bin, doc};
+use common::png_chunks::png_header;
 use common::two_texel::{fresnel_ior, half_residual, png, quad_file, render_quad_with};
 use common::{point_camera, render, temp_dir, with, write_scene};
 use glam::Vec3;
@@ -588,14 +589,7 @@ fn a_broken_or_oversized_transmission_texture_is_an_error_naming_its_image() {
     // Not a PNG at all, and a PNG header announcing 10⁵ × 10⁵ pixels with no data: errors
     // that name the material and the image, never a panic, never an allocation for the size.
     let dir = temp_dir("gltf-transmission-texture-broken");
-    let mut huge = b"\x89PNG\r\n\x1a\n".to_vec();
-    let mut ihdr = b"IHDR".to_vec();
-    ihdr.extend(100_000u32.to_be_bytes());
-    ihdr.extend(100_000u32.to_be_bytes());
-    ihdr.extend([8, 2, 0, 0, 0]);
-    huge.extend(13u32.to_be_bytes());
-    huge.extend(&ihdr);
-    huge.extend(crc32(&ihdr).to_be_bytes());
+    let huge = png_header(100_000, 100_000, &[]);
     let material = textured_material(0.5, 0.0, serde_json::json!({"index": 0}));
     let file = quad_file(material, &TEXTURED);
     std::fs::write(dir.join("q.gltf"), file.to_string()).expect("write");
@@ -620,22 +614,6 @@ fn a_broken_or_oversized_transmission_texture_is_an_error_naming_its_image() {
             "{error}"
         );
     }
-}
-
-/// CRC-32 as PNG chunks use it (ISO 3309, reflected polynomial 0xEDB88320).
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in bytes {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 == 1 {
-                (crc >> 1) ^ 0xedb8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    !crc
 }
 
 #[test]

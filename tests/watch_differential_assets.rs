@@ -13,6 +13,7 @@ mod common;
 
 use std::path::Path;
 
+use common::png_chunks::crc32;
 use common::watch_diff::{Save, Watcher, fresh, set_mtime, stamp};
 
 /// Quads per side of the mesh: 2 × 224² = 100,352 triangles.
@@ -66,18 +67,6 @@ fn mesh_obj(spike: bool) -> Vec<u8> {
         }
     }
     obj.into_bytes()
-}
-
-/// CRC-32 (ISO-HDLC), as PNG chunks carry it.
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in bytes {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = (crc >> 1) ^ (0xedb8_8320 & (crc & 1).wrapping_neg());
-        }
-    }
-    !crc
 }
 
 /// A PNG of 8-bit RGB `rows` (each `3 × width` bytes) with its image data stored, not

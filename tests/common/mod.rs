@@ -7,6 +7,7 @@
 pub mod chi2;
 pub mod furnace;
 pub mod gltf_doc;
+pub mod png_chunks;
 pub mod sheen_brdf;
 pub mod two_texel;
 pub mod watch_diff;
