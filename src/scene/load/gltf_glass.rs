@@ -28,8 +28,11 @@
 //! - the glass part reflects with the exact Fresnel of its ior, the base's specular lobe with
 //!   Schlick's, so the mix's reflection is the spec's only up to that difference;
 //! - every glass surface is a volume boundary: a thin-walled material (`thicknessFactor` 0, the
-//!   volume extension's default) refracts as solid glass and absorbs nothing; with a thickness
-//!   above 0 the attenuation applies inside the closed mesh, whatever the thickness's value.
+//!   volume extension's default) refracts as solid glass and absorbs nothing, with a warning:
+//!   through a single open surface (a pane of one quad) the light is bent and passes on
+//!   1/ior² of the radiance behind it, where the spec's thin wall lets it through unbent;
+//!   with a thickness above 0 the attenuation applies inside the closed mesh, whatever the
+//!   thickness's value.
 
 use glam::Vec3;
 
@@ -126,13 +129,16 @@ fn glass(m: &GltfMaterial, mixed: bool) -> (Box<Material>, Vec<String>) {
     let absorption = if m.thickness > 0.0 {
         absorption_coefficient(m.attenuation_color, m.attenuation_distance)
     } else {
-        if absorbs {
-            notes.push(
-                "KHR_materials_volume with thicknessFactor 0 is thin-walled: no absorption \
-                 (rondo renders it as solid glass)"
-                    .into(),
-            );
-        }
+        // The spec's thin wall lets light through unbent and undimmed by the crossing; rondo's
+        // glass is a volume boundary, so an open surface (a pane of one quad) bends the light
+        // into a medium it never leaves and passes on only 1/ior² of the radiance behind it.
+        notes.push(format!(
+            "thin-walled glass (KHR_materials_volume's thicknessFactor is 0 or absent) renders \
+             as solid glass{}: through a single open surface the light is bent and dimmed to \
+             1/ior² = {:.2} of the spec's; model panes as closed solids with a thickness",
+            if absorbs { " and absorbs nothing" } else { "" },
+            1.0 / (m.ior * m.ior)
+        ));
         Vec3::ZERO
     };
     let glass = Material::Dielectric {
