@@ -16,7 +16,6 @@ use common::furnace::{furnace_pixels, write_white_map};
 use common::temp_dir;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
-use rondo::shading::layers::Layers;
 use rondo::shading::material::Material;
 use rondo::shading::texture::Texture;
 
@@ -24,21 +23,6 @@ fn glossy(f0: Vec3, roughness: f32) -> Material {
     Material::Glossy {
         albedo: Texture::Constant(f0),
         roughness,
-    }
-}
-
-fn pbr(base: Vec3, metallic: f32, roughness: f32) -> Material {
-    Material::Pbr {
-        base_color: Texture::Constant(base),
-        metallic,
-        roughness,
-        metallic_roughness: None,
-        emissive: Texture::Constant(Vec3::ZERO),
-        emissive_strength: 1.0,
-        normal_map: None,
-        alpha: None,
-        layers: Layers::NONE,
-        layer_maps: None,
     }
 }
 
@@ -119,9 +103,9 @@ fn pairs() -> Vec<(f64, f64)> {
 fn white_lobes_reflect_everything_at_every_angle_and_roughness() {
     let lobes: [Lobe; 4] = [
         ("Glossy", |r| glossy(Vec3::ONE, r)),
-        ("Pbr metallic 1", |r| pbr(Vec3::ONE, 1.0, r)),
-        ("Pbr metallic 0", |r| pbr(Vec3::ONE, 0.0, r)),
-        ("Pbr metallic 0.5", |r| pbr(Vec3::ONE, 0.5, r)),
+        ("Pbr metallic 1", |r| Material::pbr(Vec3::ONE, 1.0, r)),
+        ("Pbr metallic 0", |r| Material::pbr(Vec3::ONE, 0.0, r)),
+        ("Pbr metallic 0.5", |r| Material::pbr(Vec3::ONE, 0.5, r)),
     ];
     let mut failures = Vec::new();
     for (name, make) in lobes {
@@ -173,7 +157,7 @@ fn a_coloured_pbr_reflects_at_most_what_white_does() {
         (88.0, 1.0),
     ] {
         for metallic in [0.0f32, 0.5, 1.0] {
-            let m = pbr(Vec3::splat(0.5), metallic, r as f32);
+            let m = Material::pbr(Vec3::splat(0.5), metallic, r as f32);
             let a = albedo(&m, f64::to_radians(deg), r, 160);
             assert!(a < 1.0 && a > 0.0, "{metallic} {deg}° {r}: {a}");
         }
@@ -186,14 +170,22 @@ fn sampled_directions_of_the_compensated_lobes_follow_the_density() {
     for (what, m, theta) in [
         ("Glossy", glossy(Vec3::new(0.9, 0.5, 0.2), 1.0), 1.3),
         ("Glossy", glossy(Vec3::ONE, 0.6), 0.4),
-        ("Pbr metal", pbr(Vec3::new(0.9, 0.6, 0.3), 1.0, 0.8), 1.2),
-        ("Pbr dielectric", pbr(Vec3::ONE, 0.0, 0.7), 1.3),
+        (
+            "Pbr metal",
+            Material::pbr(Vec3::new(0.9, 0.6, 0.3), 1.0, 0.8),
+            1.2,
+        ),
+        ("Pbr dielectric", Material::pbr(Vec3::ONE, 0.0, 0.7), 1.3),
         (
             "Pbr dielectric, narrow",
-            pbr(Vec3::ONE, 0.0, 0.3),
+            Material::pbr(Vec3::ONE, 0.0, 0.3),
             80f32.to_radians(),
         ),
-        ("Pbr mix", pbr(Vec3::new(0.3, 0.8, 0.5), 0.5, 0.6), 0.5),
+        (
+            "Pbr mix",
+            Material::pbr(Vec3::new(0.3, 0.8, 0.5), 0.5, 0.6),
+            0.5,
+        ),
     ] {
         let d = Vec3::new(f32::sin(theta), 0.0, -f32::cos(theta));
         let (chi2, limit) = chi_square_of_directions(&m, d, 300_000, 11);

@@ -420,12 +420,7 @@ fn the_methods_agree_inside_a_closed_box_partly_of_tinted_glass() {
             .any(|m| matches!(m, Material::Transmissive { .. })),
         "the box is a mix"
     );
-    let mut estimates = Vec::new();
-    for method in [Method::Naive, Method::Nee, Method::Mis] {
-        let r = render(&scene, with(method, 256), None);
-        let (mean, se) = common::point_estimate(&r);
-        estimates.push((method, mean, se));
-    }
+    let estimates = common::point_estimates_by_method(&scene, 256);
     assert!(estimates[2].1 > 0.005, "{estimates:?}");
     common::assert_methods_agree("inside a partly glass box", &estimates);
 }

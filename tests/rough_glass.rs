@@ -554,12 +554,7 @@ fn every_method_sees_the_same_light_inside_rough_tinted_glass() {
             point_camera("(0, 1, -5)", "(0.3, 0, 0)", "(0, 1, 0)"),
         ),
     );
-    let mut estimates = Vec::new();
-    for method in [Method::Naive, Method::Nee, Method::Mis] {
-        let r = render(&scene, with(method, 256), None);
-        let (mean, se) = common::point_estimate(&r);
-        estimates.push((method, mean, se));
-    }
+    let estimates = common::point_estimates_by_method(&scene, 256);
     // Light does arrive through the glass (rough: next-event estimation applies at it too).
     assert!(estimates[2].1 > 0.005, "{estimates:?}");
     common::assert_methods_agree("inside tinted glass", &estimates);

@@ -160,6 +160,23 @@ impl Material {
         }
     }
 
+    /// A metallic–roughness material of constant `base_color`, `metallic` and `roughness`,
+    /// without textures, emission, normal map, alpha or layers.
+    pub const fn pbr(base_color: Vec3, metallic: f32, roughness: f32) -> Self {
+        Self::Pbr {
+            base_color: Texture::Constant(base_color),
+            metallic,
+            roughness,
+            metallic_roughness: None,
+            emissive: Texture::Constant(Vec3::ZERO),
+            emissive_strength: 1.0,
+            normal_map: None,
+            alpha: None,
+            layers: Layers::NONE,
+            layer_maps: None,
+        }
+    }
+
     /// The absorption coefficient inside the material if it bounds a volume a path can enter
     /// by refraction (glass; zero for clear glass); `None` for a surface that does not.
     #[inline]
@@ -649,18 +666,7 @@ mod tests {
         // Weight 0.6; red 0.25 on the checker's odd cells (uv (0, 0)), 1 on its even ones.
         // Over u stratified in [0, 1), the glass must come up 0.6 · red of the time, the
         // texture's opaque material 0.6 · (1 − red), the base 0.4, at each point.
-        let pbr = |metallic| Material::Pbr {
-            base_color: Texture::Constant(Vec3::splat(0.5)),
-            metallic,
-            roughness: 0.5,
-            metallic_roughness: None,
-            emissive: Texture::Constant(Vec3::ZERO),
-            emissive_strength: 1.0,
-            normal_map: None,
-            alpha: None,
-            layers: Layers::NONE,
-            layer_maps: None,
-        };
+        let pbr = |metallic| Material::pbr(Vec3::splat(0.5), metallic, 0.5);
         let mix = Material::Transmissive {
             weight: 0.6,
             glass: Box::new(Material::glass(1.5)),

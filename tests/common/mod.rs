@@ -257,6 +257,22 @@ pub fn within(mean: f64, se: f64, expected: f64, k: f64) -> bool {
     (mean - expected).abs() <= k * se + 1e-6 * expected.abs()
 }
 
+/// The [`point_estimate`] of the scene at `path` under `naive`, `nee` and `mis`, `spp` samples
+/// each, in that order, for [`assert_methods_agree`].
+pub fn point_estimates_by_method(
+    path: &Path,
+    spp: u32,
+) -> Vec<(rondo::scene::format::Method, f64, f64)> {
+    use rondo::scene::format::Method;
+    [Method::Naive, Method::Nee, Method::Mis]
+        .into_iter()
+        .map(|method| {
+            let (mean, se) = point_estimate(&render(path, with(method, spp), None));
+            (method, mean, se)
+        })
+        .collect()
+}
+
 /// The three methods' estimates agree pairwise within 3.5 combined standard errors.
 pub fn assert_methods_agree(what: &str, estimates: &[(rondo::scene::format::Method, f64, f64)]) {
     for a in estimates {

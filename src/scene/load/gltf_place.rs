@@ -22,7 +22,6 @@ use crate::scene::format::EntityDesc;
 use crate::scene::gltf_read::{
     AlphaMode, GltfImage, GltfMaterial, GltfTexture, MAX_UV_SETS, Wrap as GltfWrap,
 };
-use crate::shading::layers::Layers;
 use crate::shading::maps::{AlphaMask, NormalMap};
 use crate::shading::material::{Material, TransmissionTexture};
 use crate::shading::texture::{Filter, ImageTexture, Sampling, Texture, UvMap, Wrap};
@@ -272,18 +271,7 @@ impl Expander<'_> {
         label: &str,
     ) -> Result<Material, String> {
         let Some(m) = m else {
-            return Ok(Material::Pbr {
-                base_color: Texture::Constant(Vec3::ONE),
-                metallic: 1.0,
-                roughness: 1.0,
-                metallic_roughness: None,
-                emissive: Texture::Constant(Vec3::ZERO),
-                emissive_strength: 1.0,
-                normal_map: None,
-                alpha: None,
-                layers: Layers::NONE,
-                layer_maps: None,
-            });
+            return Ok(Material::pbr(Vec3::ONE, 1.0, 1.0));
         };
         let what = format!("material \"{label}\"");
         let factor = Vec3::from_slice(&m.base_color_factor[..3]);
