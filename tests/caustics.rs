@@ -170,30 +170,34 @@ fn the_caustic_scene_converges_to_what_the_plain_path_tracer_finds() {
             let o = overrides(Method::Naive, 1024, seed, size);
             region_mean(&scene, o, rows.clone(), cols.clone())
         });
-        let light = over_seeds(8, |seed| {
-            let o = overrides(Method::Caustics, 64, seed, size);
-            region_mean(&scene, o, rows.clone(), cols.clone())
-        });
-        let se = (truth.1 * truth.1 + light.1 * light.1).sqrt();
-        assert!(
-            (truth.0 - light.0).abs() <= 4.0 * se,
-            "{what}: naive {} ± {}, caustics {} ± {}",
-            truth.0,
-            truth.1,
-            light.0,
-            light.1
-        );
-        eprintln!("{what}: naive {truth:?}, caustics {light:?}");
+        for method in [Method::Caustics, Method::Photons] {
+            let light = over_seeds(8, |seed| {
+                let o = overrides(method, 64, seed, size);
+                region_mean(&scene, o, rows.clone(), cols.clone())
+            });
+            let se = (truth.1 * truth.1 + light.1 * light.1).sqrt();
+            assert!(
+                (truth.0 - light.0).abs() <= 4.0 * se,
+                "{what}: naive {} ± {}, {method} {} ± {}",
+                truth.0,
+                truth.1,
+                light.0,
+                light.1
+            );
+            eprintln!("{what}: naive {truth:?}, {method} {light:?}");
+        }
     }
 }
 
 #[test]
 fn light_traced_images_are_the_same_on_any_thread_count() {
     let scene = scenes_dir().join("caustic.ron");
-    let o = overrides(Method::Caustics, 4, 7, (40, 30));
-    let one = render(&scene, o, Some(1));
-    let two = render(&scene, o, Some(2));
-    assert_eq!(one.film().sum, two.film().sum);
+    for method in [Method::Caustics, Method::Photons] {
+        let o = overrides(method, 4, 7, (40, 30));
+        let one = render(&scene, o, Some(1));
+        let two = render(&scene, o, Some(2));
+        assert_eq!(one.film().sum, two.film().sum, "{method}");
+    }
 }
 
 fn rondo(args: &[&str]) {
@@ -210,12 +214,23 @@ fn rondo(args: &[&str]) {
 
 #[test]
 fn split_and_merged_light_tracing_is_bit_exact_and_partials_name_the_method() {
+    split_and_merged_is_bit_exact("caustics");
+}
+
+#[test]
+fn split_and_merged_photons_are_bit_exact_and_partials_name_the_method() {
+    // Each sample gathers its own photons with its own radius: a partial of samples 2..6
+    // holds what the whole range's samples 2..6 hold.
+    split_and_merged_is_bit_exact("photons");
+}
+
+fn split_and_merged_is_bit_exact(method: &str) {
     let dir = temp_dir("caustics-split");
     let scene = scenes_dir().join("caustic.ron");
     let s = |p: &Path| p.to_str().expect("utf-8 path").to_string();
     let scene = s(&scene);
     let common = [
-        "--method", "caustics", "--width", "40", "--height", "30", "--seed", "3",
+        "--method", method, "--width", "40", "--height", "30", "--seed", "3",
     ];
     let whole = dir.path().join("whole.exr");
     let (a, b) = (dir.path().join("a.exr"), dir.path().join("b.exr"));
@@ -234,7 +249,7 @@ fn split_and_merged_light_tracing_is_bit_exact_and_partials_name_the_method() {
     let (w, m) = (exr_channels(&whole), exr_channels(&merged));
     assert!(!w.is_empty());
     assert_eq!(w, m, "split and merged differ from the whole range");
-    // A partial of `mis` does not merge with one of `caustics`.
+    // A partial of `mis` does not merge with one of this method.
     let other = dir.path().join("other.exr");
     let mut v = vec!["render", scene.as_str(), "--method", "mis"];
     v.extend(&common[2..]);

@@ -499,6 +499,7 @@ fn non_finite_samples_are_counted_and_dropped() {
                 roulette: true,
                 sampler: rondo::shading::sampler::SamplerKind::default(),
                 masked: false,
+                photons: None,
             };
             let mut film = Film::new(16, 16);
             let spp = 4u32;
@@ -570,6 +571,7 @@ fn a_glass_ball_in_a_white_furnace_is_exactly_white_sample_by_sample() {
         roulette: true,
         sampler: rondo::shading::sampler::SamplerKind::Independent,
         masked: false,
+        photons: None,
     };
     let (size, spp) = (64u32, 64u32);
     let (mut escaped, mut deep) = (0u64, 0u64);

@@ -21,6 +21,7 @@ fn colour(method: Method, sampler: SamplerKind) -> RGBColor {
         Method::Nee => RGBColor(31, 119, 180),
         Method::Mis => RGBColor(44, 160, 44),
         Method::Caustics => RGBColor(148, 103, 189),
+        Method::Photons => RGBColor(255, 127, 14),
     };
     let pale = |c: u8| ((u16::from(c) + 2 * 255) / 3) as u8;
     match sampler {

@@ -33,7 +33,7 @@ pub struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = thread_count())]
     pub threads: Option<usize>,
-    /// Light-transport method: naive, nee, mis or caustics (overrides the scene; the default is caustics).
+    /// Light-transport method: naive, nee, mis, caustics or photons (overrides the scene; the default is caustics).
     #[arg(long)]
     pub method: Option<Method>,
     /// Sample generator: independent or sobol (overrides the scene).

@@ -75,9 +75,13 @@ pub enum BenchCommand {
         /// Samples per pixel of the sweep, comma-separated.
         #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32,64", value_parser = at_most_u32(MAX_SPP))]
         spp_list: Vec<u32>,
-        /// Methods compared, comma-separated (`caustics` renders as `mis` where the scene has
+        /// Methods compared, comma-separated (`caustics` and `photons` render as `mis` where the scene has
         /// no perfect mirror or smooth glass).
-        #[arg(long, value_delimiter = ',', default_value = "naive,nee,mis,caustics")]
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "naive,nee,mis,caustics,photons"
+        )]
         methods: Vec<Method>,
         /// Samplers compared with every method, comma-separated.
         #[arg(long, value_delimiter = ',', default_value = "sobol")]

@@ -228,10 +228,13 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     let mut medium = Medium::CLEAR;
     // Under `Method::Caustics`, light tracing (the `caustics` module) owns the paths camera →
     // D → S… → light, D the camera's first hit continued by its non-delta part and each S a
-    // perfect specular vertex ([`is_chain_vertex`]): the number of S after such a D so far,
-    // `None` once the path is not one of them. Its emission from a finite emitter or a distant
-    // light is then not counted here.
+    // perfect specular vertex ([`is_chain_vertex`]); under `Method::Photons` with the sample's
+    // photons, the photons also own camera → S… → D → S… → light, D the first vertex that is
+    // not an S: the number of S after such a D so far, `None` once the path is not one of
+    // them. Its emission from a finite emitter or a distant light is then not counted here.
     let mut caustic: Option<u32> = None;
+    // Whether every vertex so far was an S: the camera sees this hit through mirrors and glass.
+    let mut through_chain = true;
     for depth in 0..view.max_depth {
         stats.rays += 1;
         let start = ray.origin;
@@ -308,6 +311,17 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         if depth + 1 == view.max_depth || !bsdf.scatters() {
             break;
         }
+        // Photons arriving at D after S… (`Method::Photons`), for paths that reach a light
+        // with the camera's rays left: at most `max_depth − depth − 2` S.
+        let gathered = match view.photons {
+            Some(map) if through_chain && depth > 0 && !specular => {
+                let max_chain = view.max_depth.saturating_sub(depth + 2);
+                radiance += throughput * map.gather(&s, &bsdf, max_chain);
+                true
+            }
+            _ => false,
+        };
+        through_chain &= specular;
         // Only a vertex the path continues from needs the hit point's error bound.
         let err = point_error(view.geometry, &hit, s.p);
         let dimension = 1 + depth * BOUNCE_DIMENSIONS;
@@ -328,7 +342,8 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         let Some(scatter) = bsdf.sample(sampler) else {
             break;
         };
-        if depth == 0 && view.method == Method::Caustics && !view.masked && !specular {
+        let light_traced_d = depth == 0 && view.method.traces_light() && !view.masked;
+        if (light_traced_d || gathered) && !specular {
             caustic = scatter.pdf.map(|_| 0);
         }
         previous = scatter.pdf.map(|pdf| (s.p, pdf));
@@ -514,7 +529,11 @@ fn direct_light<L: Layout, W: Lanes>(
     if occluded {
         return Vec3::ZERO;
     }
-    let weight = if matches!(view.method, Method::Mis | Method::Caustics) && !delta {
+    let weight = if matches!(
+        view.method,
+        Method::Mis | Method::Caustics | Method::Photons
+    ) && !delta
+    {
         power_heuristic(pdf_light, pdf_bsdf)
     } else {
         1.0

@@ -20,6 +20,7 @@ use crate::lights::LightSet;
 use crate::shading::material::Material;
 use crate::shading::sampler::SamplerKind;
 use camera::Camera;
+use caustics::photons::PhotonMap;
 
 pub use integrator::{point_error, spawn, trace_path};
 pub use pass::{render_pass, render_preview};
@@ -39,16 +40,26 @@ pub enum Method {
     /// glass → light left to light tracing ([`caustics`]): light paths from the emitters and
     /// distant lights, aimed at the specular surfaces, connected to the camera and splatted.
     Caustics,
+    /// `Caustics`, with the caustics the camera sees through perfect mirrors and glass
+    /// (camera → S… → D → S… → light) gathered from the light paths' photons at D instead
+    /// ([`caustics::photons`]): consistent, biased by each sample's gather radius.
+    Photons,
 }
 
 impl Method {
     /// The method whose estimate a light-tracing-free pass (the preview) uses: `Mis` for
-    /// `Caustics`, whose path tracer alone misses the caustic paths, itself otherwise.
+    /// `Caustics` and `Photons`, whose path tracer alone misses the caustic paths, itself
+    /// otherwise.
     pub fn path_traced(self) -> Self {
         match self {
-            Self::Caustics => Self::Mis,
+            Self::Caustics | Self::Photons => Self::Mis,
             m => m,
         }
+    }
+
+    /// Whether light paths are traced: `Caustics` and `Photons`.
+    pub fn traces_light(self) -> bool {
+        matches!(self, Self::Caustics | Self::Photons)
     }
 }
 
@@ -83,6 +94,9 @@ pub struct SceneView<'a, L: Layout = DefaultLayout> {
     /// Whether some material has an alpha mask ([`has_masks`] of `materials`): only then are
     /// hits tested for presence, so that scenes without masks pay nothing for them.
     pub masked: bool,
+    /// Under `Method::Photons`, the photons of the sample being traced; without them the
+    /// method traces as `Caustics`.
+    pub photons: Option<&'a PhotonMap>,
 }
 
 impl<L: Layout> SceneView<'_, L> {

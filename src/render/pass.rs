@@ -3,13 +3,14 @@
 
 use std::marker::PhantomData;
 use std::ops::Range;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use rayon::prelude::*;
 
 use super::camera::Camera;
+use super::caustics::LightTracing;
 use super::integrator::trace_path_with;
-use super::{Cancelled, LENS_DIMENSION, SceneView, TraceStats};
+use super::{Cancelled, LENS_DIMENSION, Method, SceneView, TraceStats};
 use crate::cpu::{Isa, Kernel, Lanes, Sse};
 use crate::film::{Film, FilmBand, FixedPoint, Pixel};
 use crate::geometry::layout::Layout;
@@ -27,7 +28,8 @@ const BAND_ROWS: usize = 4;
 /// pixel, sample index) and is added to its pixel's sum in sample order, so the film is
 /// bit-identical whatever the thread count and however the samples are split into passes.
 /// Under `Method::Caustics` the light paths of the same sample indices are then traced and
-/// splatted ([`super::caustics::splat_pass`]), as exactly.
+/// splatted ([`LightTracing`]), as exactly; under `Method::Photons` a sample at a time, each
+/// sample's light paths first, leaving the photons its camera paths gather.
 /// `progress(rows)` is called as bands finish. If `cancel` becomes true, remaining bands are
 /// skipped and `Err(Cancelled)` is returned.
 pub fn render_pass<L: Layout>(
@@ -50,6 +52,57 @@ pub fn render_pass<L: Layout>(
 }
 
 fn render_pass_with<L: Layout, S: PixelSampler>(
+    view: &SceneView<L>,
+    film: &mut Film,
+    seed: u64,
+    samples: Range<u32>,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<TraceStats, Cancelled> {
+    let mut stats = TraceStats::default();
+    let light = LightTracing::new(view, (film.width, film.height), seed, &mut stats);
+    match &light {
+        Some(light) if view.method == Method::Photons => {
+            // A sample at a time: its light paths leave the photons its camera paths gather.
+            // Progress is each band's rows over the samples, summed exactly.
+            let count = u64::from(samples.end.saturating_sub(samples.start)).max(1);
+            let rows_done = AtomicU64::new(0);
+            let share = |rows: u64| {
+                let before = rows_done.fetch_add(rows, Ordering::Relaxed);
+                progress((before + rows) / count - before / count);
+            };
+            for sample in samples.clone() {
+                let one = sample..sample + 1;
+                let (traced, photons) =
+                    light.trace(view, film, (seed, one.clone()), true, cancel)?;
+                let map = light.photon_map(photons, sample);
+                let view = SceneView {
+                    photons: Some(&map),
+                    ..*view
+                };
+                stats =
+                    stats + traced + camera_pass::<L, S>(&view, film, seed, one, cancel, &share)?;
+            }
+        }
+        _ => {
+            stats =
+                stats + camera_pass::<L, S>(view, film, seed, samples.clone(), cancel, progress)?;
+            if let Some(light) = &light {
+                let (traced, _) =
+                    light.trace(view, film, (seed, samples.clone()), false, cancel)?;
+                stats = stats + traced;
+            }
+        }
+    }
+    film.samples = samples.end;
+    if let Some(slot) = LayoutKind::ALL.iter().position(|&k| k == L::KIND) {
+        stats.layout_passes[slot] += 1;
+    }
+    Ok(stats)
+}
+
+/// The camera paths of samples `samples` of every pixel, added to `film` in parallel bands.
+fn camera_pass<L: Layout, S: PixelSampler>(
     view: &SceneView<L>,
     film: &mut Film,
     seed: u64,
@@ -86,12 +139,6 @@ fn render_pass_with<L: Layout, S: PixelSampler>(
         .reduce(TraceStats::default, |a, b| a + b);
     if cancel.load(Ordering::Relaxed) {
         return Err(Cancelled);
-    }
-    let stats = stats + super::caustics::splat_pass(view, film, seed, samples.clone(), cancel)?;
-    film.samples = samples.end;
-    let mut stats = stats;
-    if let Some(slot) = LayoutKind::ALL.iter().position(|&k| k == L::KIND) {
-        stats.layout_passes[slot] += 1;
     }
     Ok(stats)
 }

@@ -47,6 +47,7 @@ pub fn method(m: format::Method) -> Method {
         format::Method::Nee => Method::Nee,
         format::Method::Mis => Method::Mis,
         format::Method::Caustics => Method::Caustics,
+        format::Method::Photons => Method::Photons,
     }
 }
 
@@ -71,6 +72,7 @@ pub fn scene_view<'a, L: Layout>(
         roulette,
         sampler: s.sampler,
         masked: has_masks(&materials.materials),
+        photons: None,
     }
 }
 

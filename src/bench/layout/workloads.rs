@@ -173,6 +173,7 @@ impl RenderBench {
             roulette: true,
             sampler: SamplerKind::default(),
             masked: has_masks(&self.materials),
+            photons: None,
         };
         let mut film = Film::new(self.size, self.size);
         let cancel = AtomicBool::new(false);

@@ -58,6 +58,11 @@ pub(super) fn light_paths<L: Layout>(
     paths_for_share(share, pixels)
 }
 
+/// The most light paths per sample an image of `size` traces: [`MAX_PATHS_PER_PIXEL`].
+pub(super) fn most_paths(size: (u32, u32)) -> u64 {
+    paths_for_share(1.0, u64::from(size.0) * u64::from(size.1))
+}
+
 /// Light paths per sample over `pixels` for a caustic share `share` of the image's light.
 pub(super) fn paths_for_share(share: f64, pixels: u64) -> u64 {
     let per_pixel = (MAX_PATHS_PER_PIXEL * (share / FULL_SHARE).sqrt())
@@ -82,7 +87,7 @@ fn caustic_share<L: Layout>(
         .map(|k| {
             let mut stats = TraceStats::default();
             let mut rng = Rng::for_sample(seed, k, 0);
-            let splat = light_path(view, sources, size, &mut rng, &mut stats)
+            let splat = light_path(view, sources, size, &mut rng, &mut stats, None)
                 .map_or(0.0, |(_, l)| f64::from(luminance(l)));
             let mut rng = Rng::for_sample(seed, k, 1);
             let u = rng.next_2d();

@@ -214,6 +214,11 @@ impl Sources {
         self.targets.len()
     }
 
+    /// Summed `r²` of the targets' bounding spheres.
+    pub fn target_area(&self) -> f32 {
+        self.targets.area()
+    }
+
     /// A light path's first ray, from the sampler's next numbers; `None` where the light sends
     /// nothing that way. The target aimed at is chosen by `r²`; the density of what was sampled
     /// sums over every target the first ray (its line, from a distant light) meets, found by

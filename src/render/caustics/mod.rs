@@ -36,6 +36,7 @@
 
 mod budget;
 pub mod emit;
+pub mod photons;
 pub mod targets;
 
 use std::ops::Range;
@@ -57,92 +58,153 @@ use crate::shading::material::Material;
 use crate::shading::rng::Rng;
 use crate::shading::sampler::Sampler;
 use emit::Sources;
+use photons::{Photon, PhotonMap};
 
 /// Mixed into the seed of light paths, so their streams are not those of the pixels' samples.
 const LIGHT_SEED: u64 = 0x6c69_6768_7420_7061;
 
-/// Light paths traced per work item.
+/// Most light paths traced per work item.
 const CHUNK: u64 = 1024;
+
+/// Fewest work items per sample: a pass of one sample (`Method::Photons`) still shares its
+/// light paths among the threads.
+const MIN_CHUNKS: u64 = 32;
 
 /// Work items whose splats are held at once before they are added to the film: bounds the
 /// memory of a pass to `BATCH · CHUNK` splats, whatever the image size.
 const BATCH: u64 = 64;
 
-/// Traces the light paths of samples `samples` and adds their splats to `film` (see the
-/// module's notes); nothing unless the view's method is `Caustics`, the scene has no alpha
-/// masks, and it has a finite surface that may be perfect specular and a light.
-pub fn splat_pass<L: Layout>(
-    view: &SceneView<L>,
-    film: &mut Film,
-    seed: u64,
-    samples: Range<u32>,
-    cancel: &AtomicBool,
-) -> Result<TraceStats, Cancelled> {
-    let mut stats = TraceStats::default();
-    if view.method != Method::Caustics || view.masked {
-        return Ok(stats);
-    }
-    let sources = Sources::new(
-        view.geometry,
-        view.materials,
-        view.owner_material,
-        view.lights,
-    );
-    if sources.is_empty() {
-        return Ok(stats);
-    }
-    let size = (film.width, film.height);
-    let paths = budget::light_paths(view, &sources, size, seed, &mut stats);
-    let scale = 1.0 / paths as f32;
-    let fixed = film.fixed();
-    let chunks = paths.div_ceil(CHUNK);
-    let seed = seed ^ LIGHT_SEED;
-    // Work items are (sample, chunk) pairs, so that the samples of a pass share the threads
-    // even when one sample's light paths fit in a chunk.
-    let first = u64::from(samples.start);
-    let items = u64::from(samples.end.saturating_sub(samples.start)) * chunks;
-    for batch in (0..items).step_by(BATCH as usize) {
-        if cancel.load(Ordering::Relaxed) {
-            return Err(Cancelled);
+/// One work item's light paths: their splats (pixel index, value before the `1 / N` weight),
+/// the photons they left and their counters.
+type Traced = (Vec<(usize, Vec3)>, Vec<Photon>, TraceStats);
+
+/// The light paths of a render under `Caustics` or `Photons`: where they start and how many
+/// each sample traces (the pilot's count, [`budget`]).
+pub struct LightTracing {
+    sources: Sources,
+    paths: u64,
+}
+
+impl LightTracing {
+    /// The light paths of renders of `view` at `size` and `seed` (the pilot's work added to
+    /// `stats`); `None` (nothing to trace) unless the view's method is `Caustics` or
+    /// `Photons`, the scene has no alpha masks, and it has a finite surface that may be
+    /// perfect specular and a light.
+    pub fn new<L: Layout>(
+        view: &SceneView<L>,
+        size: (u32, u32),
+        seed: u64,
+        stats: &mut TraceStats,
+    ) -> Option<Self> {
+        if !matches!(view.method, Method::Caustics | Method::Photons) || view.masked {
+            return None;
         }
-        let done: Vec<(Vec<(usize, Vec3)>, TraceStats)> = (batch..(batch + BATCH).min(items))
-            .into_par_iter()
-            .map(|item| {
-                let (sample, chunk) = (first + item / chunks, item % chunks);
-                let mut stats = TraceStats::default();
-                let mut splats = Vec::new();
-                for k in chunk * CHUNK..((chunk + 1) * CHUNK).min(paths) {
-                    let mut rng = Rng::for_sample(seed, k, sample);
-                    if let Some(splat) = light_path(view, &sources, size, &mut rng, &mut stats) {
-                        splats.push(splat);
+        let sources = Sources::new(
+            view.geometry,
+            view.materials,
+            view.owner_material,
+            view.lights,
+        );
+        if sources.is_empty() {
+            return None;
+        }
+        // The pilot measures the share of the caustics light tracing connects to the camera,
+        // not of those the photons bring: `Photons` traces the most paths.
+        let paths = if view.method == Method::Photons {
+            budget::most_paths(size)
+        } else {
+            budget::light_paths(view, &sources, size, seed, stats)
+        };
+        Some(Self { sources, paths })
+    }
+
+    /// Light paths per sample.
+    pub fn paths(&self) -> u64 {
+        self.paths
+    }
+
+    /// Traces the light paths of samples `samples` and adds their splats to `film` (see the
+    /// module's notes); with `keep_photons`, also the photons they leave ([`photons`]), in
+    /// the order of their paths.
+    pub fn trace<L: Layout>(
+        &self,
+        view: &SceneView<L>,
+        film: &mut Film,
+        (seed, samples): (u64, Range<u32>),
+        keep_photons: bool,
+        cancel: &AtomicBool,
+    ) -> Result<(TraceStats, Vec<Photon>), Cancelled> {
+        let mut stats = TraceStats::default();
+        let mut kept = Vec::new();
+        let size = (film.width, film.height);
+        let scale = 1.0 / self.paths as f32;
+        let fixed = film.fixed();
+        // Paths per work item: the items of a sample hold them in order whatever their size,
+        // so neither the splats' sums nor the photons' order depend on it.
+        let chunk = self.paths.div_ceil(MIN_CHUNKS).clamp(1, CHUNK);
+        let chunks = self.paths.div_ceil(chunk);
+        let seed = seed ^ LIGHT_SEED;
+        // Work items are (sample, chunk) pairs, so that the samples of a pass share the
+        // threads even when one sample's light paths fit in a chunk.
+        let first = u64::from(samples.start);
+        let items = u64::from(samples.end.saturating_sub(samples.start)) * chunks;
+        for batch in (0..items).step_by(BATCH as usize) {
+            if cancel.load(Ordering::Relaxed) {
+                return Err(Cancelled);
+            }
+            let done: Vec<Traced> = (batch..(batch + BATCH).min(items))
+                .into_par_iter()
+                .map(|item| {
+                    let (sample, part) = (first + item / chunks, item % chunks);
+                    let mut stats = TraceStats::default();
+                    let mut splats = Vec::new();
+                    let mut photons = Vec::new();
+                    let mut keep = keep_photons.then_some(&mut photons);
+                    for k in part * chunk..((part + 1) * chunk).min(self.paths) {
+                        let mut rng = Rng::for_sample(seed, k, sample);
+                        let left = keep.as_deref_mut();
+                        let splat =
+                            light_path(view, &self.sources, size, &mut rng, &mut stats, left);
+                        splats.extend(splat);
                     }
-                }
-                (splats, stats)
-            })
-            .collect();
-        for (splats, s) in done {
-            stats = stats + s;
-            for (pixel, l) in splats {
-                let l = l * scale;
-                if !l.is_finite() {
-                    stats.nonfinite += 1;
-                } else if film.sum[pixel].add(l, fixed) {
-                    stats.clamped += 1;
+                    (splats, photons, stats)
+                })
+                .collect();
+            for (splats, photons, s) in done {
+                stats = stats + s;
+                kept.extend(photons);
+                for (pixel, l) in splats {
+                    let l = l * scale;
+                    if !l.is_finite() {
+                        stats.nonfinite += 1;
+                    } else if film.sum[pixel].add(l, fixed) {
+                        stats.clamped += 1;
+                    }
                 }
             }
         }
+        Ok((stats, kept))
     }
-    Ok(stats)
+
+    /// The photon map of sample `sample` from the photons its light paths left.
+    pub fn photon_map(&self, photons: Vec<Photon>, sample: u32) -> PhotonMap {
+        let first = photons::first_radius(self.sources.target_area(), self.paths);
+        PhotonMap::new(photons, self.paths, photons::radius(first, sample))
+    }
 }
 
 /// One light path: its splat (pixel index, value before the `1 / N` weight), if
-/// it reaches a non-specular vertex the camera sees after at least one specular one.
+/// it reaches a non-specular vertex the camera sees after at least one specular one; with
+/// `photons`, the photons it leaves on the way: wherever it arrives after a specular vertex
+/// at a surface that may shade as a non-specular one there (not a chain vertex, or a mix,
+/// whose pick is the gather's to make).
 fn light_path<L: Layout>(
     view: &SceneView<L>,
     sources: &Sources,
     size: (u32, u32),
     sampler: &mut Rng,
     stats: &mut TraceStats,
+    mut photons: Option<&mut Vec<Photon>>,
 ) -> Option<(usize, Vec3)> {
     let emitted = sources.emit(view.geometry, view.materials, view.lights, sampler)?;
     let (mut ray, mut beta) = (emitted.ray, emitted.beta);
@@ -156,14 +218,26 @@ fn light_path<L: Layout>(
             beta *= medium.transmittance((s.p - ray.origin).length());
         }
         // A mix's component, picked as the path tracer picks it (see `trace_path`).
-        let material = view
+        let whole = view
             .materials
-            .get(*view.owner_material.get(s.owner as usize)? as usize)?
-            .component(s.tex_coords(), || sampler.next_1d());
+            .get(*view.owner_material.get(s.owner as usize)? as usize)?;
+        let material = whole.component(s.tex_coords(), || sampler.next_1d());
         let bsdf = material.bsdf(ray.direction, s.n, s.ns, s.tex_coords(), || {
             view.geometry.uv_tangent(&hit).map(|t| (t.tangent, t.sign))
         });
-        if !is_chain_vertex(&bsdf, hit.kind) {
+        let chain = is_chain_vertex(&bsdf, hit.kind);
+        let leaves_photon = specular > 0 && (whole.is_mix() || !chain);
+        if let Some(kept) = photons.as_deref_mut().filter(|_| leaves_photon) {
+            kept.push(Photon {
+                p: s.p,
+                n: s.n,
+                direction: ray.direction,
+                beta,
+                owner: s.owner,
+                chain: specular,
+            });
+        }
+        if !chain {
             if specular == 0 {
                 return None;
             }
