@@ -75,3 +75,37 @@ fn a_caustic_seen_in_a_mirror_has_the_closed_form_radiance() {
     eprintln!("caustics: {traced} ± {traced_se}");
     assert!(traced_se > 5.0 * se, "caustics: {traced} ± {traced_se}");
 }
+
+#[test]
+fn live_passes_gather_the_photons_a_batch_render_gathers() {
+    // Watch's passes (a preview, then 1, 2, 4, 8, 16 and 20 samples in total) rebuild each
+    // sample's photons from the scene and the seed: the image is the batch render's, bit for
+    // bit, across the groups of 16 samples a pass traces at once.
+    let scene = common::scenes_dir().join("caustic.ron");
+    let o = Overrides {
+        method: Some(Method::Photons),
+        width: Some(40),
+        height: Some(30),
+        spp: Some(20),
+        seed: Some(3),
+        ..Overrides::default()
+    };
+    let batch = render(&scene, o, Some(2));
+    let mut live =
+        rondo::Renderer::new(Some(1), rondo::PassPlan::Progressive { first: 1 }).expect("pool");
+    live.set_overrides(o);
+    live.load(&scene).expect("loads");
+    live.render_to_completion();
+    assert_eq!(live.film().samples, 20);
+    assert_eq!(live.film().sum, batch.film().sum);
+    // Gathering changed the image: it is not the one `caustics` renders.
+    let caustics = render(
+        &scene,
+        Overrides {
+            method: Some(Method::Caustics),
+            ..o
+        },
+        Some(2),
+    );
+    assert!(caustics.film().sum != batch.film().sum);
+}

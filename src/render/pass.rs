@@ -9,6 +9,7 @@ use rayon::prelude::*;
 
 use super::camera::Camera;
 use super::caustics::LightTracing;
+use super::caustics::photons::PhotonMap;
 use super::integrator::trace_path_with;
 use super::{Cancelled, LENS_DIMENSION, Method, SceneView, TraceStats};
 use crate::cpu::{Isa, Kernel, Lanes, Sse};
@@ -28,8 +29,8 @@ const BAND_ROWS: usize = 4;
 /// pixel, sample index) and is added to its pixel's sum in sample order, so the film is
 /// bit-identical whatever the thread count and however the samples are split into passes.
 /// Under `Method::Caustics` the light paths of the same sample indices are then traced and
-/// splatted ([`LightTracing`]), as exactly; under `Method::Photons` a sample at a time, each
-/// sample's light paths first, leaving the photons its camera paths gather.
+/// splatted ([`LightTracing`]), as exactly; under `Method::Photons` in groups of samples, each
+/// group's light paths first, leaving the photons its camera paths gather (a map per sample).
 /// `progress(rows)` is called as bands finish. If `cancel` becomes true, remaining bands are
 /// skipped and `Err(Cancelled)` is returned.
 pub fn render_pass<L: Layout>(
@@ -63,30 +64,39 @@ fn render_pass_with<L: Layout, S: PixelSampler>(
     let light = LightTracing::new(view, (film.width, film.height), seed, &mut stats);
     match &light {
         Some(light) if view.method == Method::Photons => {
-            // A sample at a time: its light paths leave the photons its camera paths gather.
-            // Progress is each band's rows over the samples, summed exactly.
-            let count = u64::from(samples.end.saturating_sub(samples.start)).max(1);
+            // Samples in groups: their light paths leave the photons their camera paths
+            // gather, a map per sample. Progress is each band's rows over the groups, summed
+            // exactly.
+            let group = light.samples_per_group();
+            let groups = u64::from(samples.end.saturating_sub(samples.start))
+                .div_ceil(u64::from(group))
+                .max(1);
             let rows_done = AtomicU64::new(0);
             let share = |rows: u64| {
                 let before = rows_done.fetch_add(rows, Ordering::Relaxed);
-                progress((before + rows) / count - before / count);
+                progress((before + rows) / groups - before / groups);
             };
-            for sample in samples.clone() {
-                let one = sample..sample + 1;
+            for start in samples.clone().step_by(group as usize) {
+                let part = start..(start + group).min(samples.end);
                 let (traced, photons) =
-                    light.trace(view, film, (seed, one.clone()), true, cancel)?;
-                let map = light.photon_map(photons, sample);
-                let view = SceneView {
-                    photons: Some(&map),
-                    ..*view
-                };
-                stats =
-                    stats + traced + camera_pass::<L, S>(&view, film, seed, one, cancel, &share)?;
+                    light.trace(view, film, (seed, part.clone()), true, cancel)?;
+                let maps: Vec<PhotonMap> = part
+                    .clone()
+                    .into_par_iter()
+                    .zip(photons)
+                    .map(|(sample, photons)| light.photon_map(photons, sample))
+                    .collect();
+                let gather = Some(Gather {
+                    first: start,
+                    maps: &maps,
+                });
+                let camera = camera_pass::<L, S>(view, gather, film, seed, part, cancel, &share)?;
+                stats = stats + traced + camera;
             }
         }
         _ => {
-            stats =
-                stats + camera_pass::<L, S>(view, film, seed, samples.clone(), cancel, progress)?;
+            let all = samples.clone();
+            stats = stats + camera_pass::<L, S>(view, None, film, seed, all, cancel, progress)?;
             if let Some(light) = &light {
                 let (traced, _) =
                     light.trace(view, film, (seed, samples.clone()), false, cancel)?;
@@ -101,9 +111,18 @@ fn render_pass_with<L: Layout, S: PixelSampler>(
     Ok(stats)
 }
 
-/// The camera paths of samples `samples` of every pixel, added to `film` in parallel bands.
+/// The photon maps of samples `first..`, one per sample, for `Method::Photons`.
+#[derive(Clone, Copy)]
+struct Gather<'a> {
+    first: u32,
+    maps: &'a [PhotonMap],
+}
+
+/// The camera paths of samples `samples` of every pixel, added to `film` in parallel bands;
+/// with `gather`, each sample gathers from its photon map.
 fn camera_pass<L: Layout, S: PixelSampler>(
     view: &SceneView<L>,
+    gather: Option<Gather>,
     film: &mut Film,
     seed: u64,
     samples: Range<u32>,
@@ -125,6 +144,7 @@ fn camera_pass<L: Layout, S: PixelSampler>(
             let rows = (pixels.sum.len() / width as usize) as u64;
             let stats = isa.run(Band::<L, S> {
                 view,
+                gather,
                 pixels,
                 first,
                 size: (width, height),
@@ -169,6 +189,7 @@ fn camera_ray(
 /// their sums: the work of a pass that [`Isa::run`] compiles once per instruction set.
 struct Band<'a, L: Layout, S> {
     view: &'a SceneView<'a, L>,
+    gather: Option<Gather<'a>>,
     pixels: FilmBand<'a>,
     first: usize,
     size: (u32, u32),
@@ -196,8 +217,20 @@ impl<L: Layout, S: PixelSampler> Kernel for Band<'_, L, S> {
             for sample in self.samples.clone() {
                 let mut sampler = pixel.start_sample(sample);
                 let ray = camera_ray(self.view.camera, x, y, self.size, &mut sampler);
+                let gathering;
+                let view = match self.gather {
+                    Some(g) => {
+                        let map = g.maps.get(sample.wrapping_sub(g.first) as usize);
+                        gathering = SceneView {
+                            photons: map,
+                            ..*self.view
+                        };
+                        &gathering
+                    }
+                    None => self.view,
+                };
                 let (l, features) =
-                    trace_path_with(lanes, self.view, ray, &mut sampler, &mut stats, collect);
+                    trace_path_with(lanes, view, ray, &mut sampler, &mut stats, collect);
                 match self.pixels.add(offset, l, &features, self.fixed) {
                     None => stats.nonfinite += 1,
                     Some(clamped) => stats.clamped += u64::from(clamped),

@@ -29,7 +29,12 @@
 //! specular surface, so their caustics are light that `Mis` lacks (the one place where
 //! `Caustics` does not converge to `Mis`'s image, but to the physically right one).
 //!
-//! Not light-traced (left to the path tracer): D seen through a mirror or glass, D deeper than
+//! Under `Method::Photons` the same light paths also leave photons where they arrive after a
+//! specular vertex, and the camera gathers them where it sees D through mirrors and glass
+//! ([`photons`]); under `Caustics` those paths are left to the path tracer.
+//!
+//! Not light-traced (left to the path tracer): D seen through a mirror or glass (but see
+//! `Photons` above), D deeper than
 //! the camera's first hit, glossy (not perfect) specular chains, emitting or mirror planes, the
 //! constant background, scenes with alpha masks (there `Caustics` is `Mis`), and light leaving
 //! an emitter inside tinted glass is not attenuated before its first hit.
@@ -69,6 +74,14 @@ const CHUNK: u64 = 1024;
 /// Fewest work items per sample: a pass of one sample (`Method::Photons`) still shares its
 /// light paths among the threads.
 const MIN_CHUNKS: u64 = 32;
+
+/// Most bytes of photons a `Photons` pass holds at once (see
+/// [`LightTracing::samples_per_group`]).
+const PHOTON_MEMORY: u64 = 64 << 20;
+
+/// Most samples whose photon maps a `Photons` pass holds at once: few enough barriers between
+/// light and camera paths to keep both threads busy.
+const PHOTON_GROUP: u64 = 16;
 
 /// Work items whose splats are held at once before they are added to the film: bounds the
 /// memory of a pass to `BATCH · CHUNK` splats, whatever the image size.
@@ -123,9 +136,19 @@ impl LightTracing {
         self.paths
     }
 
+    /// Samples whose photon maps a `Photons` pass holds at once: as many as fit in
+    /// [`PHOTON_MEMORY`] at the most photons their paths can leave (one each), at most
+    /// [`PHOTON_GROUP`], at least one.
+    pub fn samples_per_group(&self) -> u32 {
+        let per_sample = self
+            .paths
+            .saturating_mul(std::mem::size_of::<Photon>() as u64);
+        (PHOTON_MEMORY / per_sample.max(1)).clamp(1, PHOTON_GROUP) as u32
+    }
+
     /// Traces the light paths of samples `samples` and adds their splats to `film` (see the
-    /// module's notes); with `keep_photons`, also the photons they leave ([`photons`]), in
-    /// the order of their paths.
+    /// module's notes); with `keep_photons`, also the photons they leave ([`photons`]): one
+    /// list per sample, in the order of their paths.
     pub fn trace<L: Layout>(
         &self,
         view: &SceneView<L>,
@@ -133,9 +156,12 @@ impl LightTracing {
         (seed, samples): (u64, Range<u32>),
         keep_photons: bool,
         cancel: &AtomicBool,
-    ) -> Result<(TraceStats, Vec<Photon>), Cancelled> {
+    ) -> Result<(TraceStats, Vec<Vec<Photon>>), Cancelled> {
         let mut stats = TraceStats::default();
-        let mut kept = Vec::new();
+        let count = samples.end.saturating_sub(samples.start) as usize;
+        let mut kept: Vec<Vec<Photon>> = (0..if keep_photons { count } else { 0 })
+            .map(|_| Vec::new())
+            .collect();
         let size = (film.width, film.height);
         let scale = 1.0 / self.paths as f32;
         let fixed = film.fixed();
@@ -170,9 +196,11 @@ impl LightTracing {
                     (splats, photons, stats)
                 })
                 .collect();
-            for (splats, photons, s) in done {
+            for (item, (splats, photons, s)) in (batch..).zip(done) {
                 stats = stats + s;
-                kept.extend(photons);
+                if let Some(list) = kept.get_mut((item / chunks) as usize) {
+                    list.extend(photons);
+                }
                 for (pixel, l) in splats {
                     let l = l * scale;
                     if !l.is_finite() {
