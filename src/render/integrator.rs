@@ -314,7 +314,7 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         // Photons arriving at D after S… (`Method::Photons`), for paths that reach a light
         // with the camera's rays left: at most `max_depth − depth − 2` S.
         let gathered = match view.photons {
-            Some(map) if through_chain && depth > 0 && !specular => {
+            Some(map) if depth > 0 && !specular && (through_chain || bsdf.is_lambertian()) => {
                 let max_chain = view.max_depth.saturating_sub(depth + 2);
                 radiance += throughput * map.gather(&s, &bsdf, max_chain);
                 true

@@ -209,6 +209,13 @@ impl<'a> Bsdf<'a> {
         self.lobe.is_specular()
     }
 
+    /// Whether the lobe is Lambertian (a `Diffuse` material): where a photon map's density
+    /// estimate is smooth whatever the directions.
+    #[inline]
+    pub fn is_lambertian(&self) -> bool {
+        matches!(self.lobe, Lobe::Diffuse(_))
+    }
+
     /// The normal the lobe shades with: the interpolated vertex normal of a smooth mesh
     /// (perturbed by a normal map), except for glass, whose refraction must follow the true
     /// surface to stay watertight.
