@@ -229,9 +229,10 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     // Under `Method::Caustics`, light tracing (the `caustics` module) owns the paths camera →
     // D → S… → light, D the camera's first hit continued by its non-delta part and each S a
     // perfect specular vertex ([`is_chain_vertex`]); under `Method::Photons` with the sample's
-    // photons, the photons also own camera → S… → D → S… → light, D the first vertex that is
-    // not an S: the number of S after such a D so far, `None` once the path is not one of
-    // them. Its emission from a finite emitter or a distant light is then not counted here.
+    // photons, the photons also own camera → … → D → S… → light, D a later vertex that is not
+    // an S and either the first one (seen through S… only) or Lambertian: the number of S
+    // after such a D so far, `None` once the path is not one of them. Its emission from a
+    // finite emitter or a distant light is then not counted here.
     let mut caustic: Option<u32> = None;
     // Whether every vertex so far was an S: the camera sees this hit through mirrors and glass.
     let mut through_chain = true;
@@ -311,8 +312,9 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         if depth + 1 == view.max_depth || !bsdf.scatters() {
             break;
         }
-        // Photons arriving at D after S… (`Method::Photons`), for paths that reach a light
-        // with the camera's rays left: at most `max_depth − depth − 2` S.
+        // Photons arriving at D after S… (`Method::Photons`), past the camera's first hit (light
+        // tracing's), where the camera sees D through S… only or D is Lambertian; for paths
+        // that reach a light with the camera's rays left: at most `max_depth − depth − 2` S.
         let gathered = match view.photons {
             Some(map) if depth > 0 && !specular && (through_chain || bsdf.is_lambertian()) => {
                 let max_chain = view.max_depth.saturating_sub(depth + 2);

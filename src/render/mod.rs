@@ -41,8 +41,9 @@ pub enum Method {
     /// distant lights, aimed at the specular surfaces, connected to the camera and splatted.
     Caustics,
     /// `Caustics`, with the caustics the camera sees through perfect mirrors and glass
-    /// (camera → S… → D → S… → light) gathered from the light paths' photons at D instead
-    /// ([`caustics::photons`]): consistent, biased by each sample's gather radius.
+    /// (camera → S… → D → S… → light) or after a Lambertian bounce gathered from the light
+    /// paths' photons at D instead ([`caustics::photons`]): consistent, biased by each
+    /// sample's gather radius.
     Photons,
 }
 

@@ -4,11 +4,14 @@
 //! caustic seen in a mirror or through a glass ball (camera → S… → D → S… → light) is left to
 //! the path tracer, which finds it only when a BSDF-sampled ray from D happens to reach the
 //! light through the specular surfaces: the rare, bright samples that stay in sunlit images as
-//! fireflies. Here the light paths of each sample also leave a photon where they arrive after
-//! at least one specular vertex, and the camera path gathers them at its first non-specular
-//! vertex D reached through specular vertices only: Σ f(ωo, ωi) Φ / (π r²) over the photons
-//! within `r` of D on the same surface (Jensen 1996), the path tracer dropping the same paths
-//! beyond D (see [`super::super::integrator`]).
+//! fireflies. The same holds for a caustic lighting what the camera sees after a diffuse
+//! bounce (camera → D → D′ → S… → light). Here the light paths of each sample also leave a
+//! photon where they arrive after at least one specular vertex, and the camera path gathers
+//! them at its first non-specular vertex D reached through specular vertices only, and at
+//! every later Lambertian vertex (where the density estimate is smooth; a glossy lobe would
+//! turn single photons into speckles): Σ f(ωo, ωi) Φ / (π r²) over the photons within `r` of
+//! the vertex on the same surface (Jensen 1996), the path tracer dropping the same paths
+//! beyond it (see [`super::super::integrator`]). The camera's first hit is light tracing's.
 //!
 //! Each sample index has its own photons (the light paths of that sample) and its own radius,
 //! `r_s = r_1 (s + 1)^((α − 1)/2)` with α = 2/3 (Knaus and Zwicker 2011, probabilistic

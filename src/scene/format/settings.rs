@@ -43,7 +43,8 @@ pub enum Method {
     #[serde(alias = "caustics")]
     Caustics,
     /// `Caustics`, with the caustics seen in mirrors and through glass (camera → mirror or
-    /// glass → diffuse → mirror or glass → light) gathered from photons the light paths leave:
+    /// glass → diffuse → mirror or glass → light) and those seen after a diffuse bounce
+    /// gathered from photons the light paths leave:
     /// consistent (it converges to what `Caustics` does), biased at a finite sample count by a
     /// gather radius that shrinks with every sample.
     #[serde(alias = "photons")]
