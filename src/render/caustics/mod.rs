@@ -92,7 +92,7 @@ const BATCH: u64 = 64;
 type Traced = (Vec<(usize, Vec3)>, Vec<Photon>, TraceStats);
 
 /// The light paths of a render under `Caustics` or `Photons`: where they start and how many
-/// each sample traces (the pilot's count, [`budget`]).
+/// each sample traces (the pilot's count, the `budget` module).
 pub struct LightTracing {
     sources: Sources,
     paths: u64,

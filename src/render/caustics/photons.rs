@@ -123,7 +123,7 @@ impl PhotonMap {
     }
 
     /// Radiance towards the ray `bsdf` was built for, from the photons within the radius of
-    /// `s.p` on the same surface (same owner, geometric normals within [`SAME_SURFACE_COS`])
+    /// `s.p` on the same surface (same owner, geometric normals within `SAME_SURFACE_COS`)
     /// that passed at most `max_chain` specular vertices: Σ β f / (N π r²), with f the BSDF's
     /// non-delta part ([`Bsdf::eval`]'s value over the photon's geometric cosine, as light
     /// tracing connects).
