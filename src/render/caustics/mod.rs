@@ -137,8 +137,8 @@ impl LightTracing {
     }
 
     /// Samples whose photon maps a `Photons` pass holds at once: as many as fit in
-    /// [`PHOTON_MEMORY`] at the most photons their paths can leave (one each), at most
-    /// [`PHOTON_GROUP`], at least one.
+    /// `PHOTON_MEMORY` (64 MiB) at the most photons their paths can leave (one each), at most
+    /// `PHOTON_GROUP` (16), at least one.
     pub fn samples_per_group(&self) -> u32 {
         let per_sample = self
             .paths
