@@ -15,28 +15,42 @@ use rondo::scene::format::Method;
 /// over x from −4 to 0 with radiance ρ/π · E cos 45°.
 /// The camera, at (−2, 1, 0) looking straight down, sees that underside only in a small
 /// second mirror at y = 0.3: every pixel is camera → mirror → ceiling → mirror → sun, a caustic
-/// seen in a mirror. The small mirror's shadow and its own reflection of the sun fall on the
-/// ceiling at least a metre to the side of the part seen; nothing else lights it (black sky,
-/// paths of at most 4 rays, and the sun on the ceiling's upper side only).
-const SCENE: &str = r#"Scene(
-    camera: Camera(position: (-2, 1, 0), look_at: (-2, 0.3, 0), up: (0, 0, 1), fov: 20),
-    settings: Settings(width: 128, height: 128, spp: 128, max_depth: 4, background: (0, 0, 0),
+/// seen in a mirror. The small mirror's shadow in the beam falls on the ceiling a metre to the
+/// side of the part seen (the ceiling shades the small mirror from the sun); nothing else
+/// lights it (black sky, paths of at most 4 rays, and the sun on the ceiling's upper side only).
+fn mirrored_caustic() -> String {
+    scene(
+        "Camera(position: (-2, 1, 0), look_at: (-2, 0.3, 0), up: (0, 0, 1), fov: 20)",
+        "spp: 128, max_depth: 4",
+        "Entity(name: \"small mirror\", material: \"mirror\", shape: Quad(a: (-2.25, 0.3, -0.25), b: (-1.75, 0.3, -0.25), c: (-1.75, 0.3, 0.25), d: (-2.25, 0.3, 0.25))),",
+    )
+}
+
+/// The sunlit mirror and the ceiling of these tests (see [`mirrored_caustic`]), seen by
+/// `camera`, with `settings` and `more` entities.
+fn scene(camera: &str, settings: &str, more: &str) -> String {
+    format!(
+        r#"Scene(
+    camera: {camera},
+    settings: Settings(width: 128, height: 128, {settings}, background: (0, 0, 0),
         sun: Sun(direction: (1, 1, 0), angular_diameter: 0.53, irradiance: 3.0, colour: (1, 1, 1))),
-    materials: {
+    materials: {{
         "ceiling": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
         "mirror": Metal(albedo: Constant((1, 1, 1)), roughness: 0),
-    },
+    }},
     entities: [
         Entity(name: "ceiling", material: "ceiling", shape: Quad(a: (-8, 2, -4), b: (0, 2, -4), c: (0, 2, 4), d: (-8, 2, 4))),
         Entity(name: "mirror", material: "mirror", shape: Quad(a: (-6, 0, -4), b: (2, 0, -4), c: (2, 0, 4), d: (-6, 0, 4))),
-        Entity(name: "small mirror", material: "mirror", shape: Quad(a: (-2.25, 0.3, -0.25), b: (-1.75, 0.3, -0.25), c: (-1.75, 0.3, 0.25), d: (-2.25, 0.3, 0.25))),
+        {more}
     ],
-)"#;
+)"#
+    )
+}
 
-/// Mean red value of the image for each of `seeds`.
-fn image_means(method: Method, seeds: std::ops::Range<u64>) -> Vec<f64> {
-    let dir = temp_dir("photons-mirrored-caustic");
-    let scene = write_scene(dir.path(), "mirrors.ron", SCENE);
+/// Mean red value of the image of the scene `text` for each of `seeds`.
+fn image_means(text: &str, method: Method, seeds: std::ops::Range<u64>) -> Vec<f64> {
+    let dir = temp_dir("photons-closed-form");
+    let scene = write_scene(dir.path(), "scene.ron", text);
     seeds
         .map(|seed| {
             let o = Overrides {
@@ -64,7 +78,7 @@ fn mean_and_error(values: &[f64]) -> (f64, f64) {
 fn a_caustic_seen_in_a_mirror_has_the_closed_form_radiance() {
     let expected = 0.5 / PI * 3.0 * std::f64::consts::FRAC_1_SQRT_2;
     // Each render's photons are shared by all its pixels: the error is taken over seeds.
-    let (mean, se) = mean_and_error(&image_means(Method::Photons, 1..7));
+    let (mean, se) = mean_and_error(&image_means(&mirrored_caustic(), Method::Photons, 1..7));
     eprintln!("photons: {mean} ± {se}, expected {expected}");
     assert!(
         (mean - expected).abs() <= 4.0 * se && se < 0.01 * expected,
@@ -72,7 +86,8 @@ fn a_caustic_seen_in_a_mirror_has_the_closed_form_radiance() {
     );
     // Without the photons, only the path tracer's rays from the ceiling that happen to hit
     // the 0.53° sun in the big mirror find this light: the same mean, far noisier.
-    let (traced, traced_se) = mean_and_error(&image_means(Method::Caustics, 1..7));
+    let (traced, traced_se) =
+        mean_and_error(&image_means(&mirrored_caustic(), Method::Caustics, 1..7));
     eprintln!("caustics: {traced} ± {traced_se}");
     assert!(traced_se > 5.0 * se, "caustics: {traced} ± {traced_se}");
 }
@@ -112,26 +127,20 @@ fn live_passes_gather_the_photons_a_batch_render_gathers() {
 }
 
 /// The big mirror's beam lights the ceiling's underside with L₁ = ρ/π · E cos 45°, evenly over
-/// x from −4 to 0 (see [`SCENE`]). Seen from the ceiling, the mirror shows the ceiling again (its image 4 below
+/// x from −4 to 0 (see [`mirrored_caustic`]). Seen from the ceiling, the mirror shows the ceiling again (its image 4 below
 /// it, where the reflection point falls on the mirror): a second, indirect caustic
 /// (ceiling → mirror → ceiling → mirror → sun), which `photons` gathers at the second ceiling
 /// vertex. The camera looks straight up at the ceiling from just above the mirror (a 90° view
 /// of the square |x + 2|, |z| ≤ 1.7, evenly); with paths of at most 5 rays its radiance is
 /// L₁ (light-traced) + ρ/π · E₂, E₂ the irradiance from the lit ceiling's image, integrated
 /// here on grids.
-const INDIRECT: &str = r#"Scene(
-    camera: Camera(position: (-2, 0.3, 0), look_at: (-2, 2, 0), up: (0, 0, 1), fov: 90),
-    settings: Settings(width: 128, height: 128, spp: 64, max_depth: 5, background: (0, 0, 0),
-        sun: Sun(direction: (1, 1, 0), angular_diameter: 0.53, irradiance: 3.0, colour: (1, 1, 1))),
-    materials: {
-        "ceiling": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
-        "mirror": Metal(albedo: Constant((1, 1, 1)), roughness: 0),
-    },
-    entities: [
-        Entity(name: "ceiling", material: "ceiling", shape: Quad(a: (-8, 2, -4), b: (0, 2, -4), c: (0, 2, 4), d: (-8, 2, 4))),
-        Entity(name: "mirror", material: "mirror", shape: Quad(a: (-6, 0, -4), b: (2, 0, -4), c: (2, 0, 4), d: (-6, 0, 4))),
-    ],
-)"#;
+fn indirect_caustic() -> String {
+    scene(
+        "Camera(position: (-2, 0.3, 0), look_at: (-2, 2, 0), up: (0, 0, 1), fov: 90)",
+        "spp: 64, max_depth: 5",
+        "",
+    )
+}
 
 /// Midpoints of `n` equal steps over `range`.
 fn midpoints(range: std::ops::Range<f64>, n: usize) -> impl Iterator<Item = f64> + Clone {
@@ -168,20 +177,7 @@ fn a_caustic_lighting_the_ceiling_again_through_the_mirror_is_gathered_after_the
         .sum::<f64>()
         / (view * view) as f64;
     let expected = l1 + rho / PI * mean_e2;
-    let dir = temp_dir("photons-indirect-caustic");
-    let scene = write_scene(dir.path(), "indirect.ron", INDIRECT);
-    let means: Vec<f64> = (1..7)
-        .map(|seed| {
-            let o = Overrides {
-                method: Some(Method::Photons),
-                seed: Some(seed),
-                ..Overrides::default()
-            };
-            let r = render(&scene, o, None);
-            let px = r.film().mean();
-            px.iter().map(|p| f64::from(p.x)).sum::<f64>() / px.len() as f64
-        })
-        .collect();
+    let means = image_means(&indirect_caustic(), Method::Photons, 1..7);
     let (mean, se) = mean_and_error(&means);
     eprintln!("indirect: {mean} ± {se}, expected {expected} (direct part {l1})");
     // Gathers near the lit ceiling's edges lose part of their kernel: allowed 1 % of the whole.
