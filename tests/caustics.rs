@@ -45,10 +45,7 @@ fn region_mean(
 /// Mean and standard error of `f(seed)` over `seeds`.
 fn over_seeds(seeds: u64, f: impl Fn(u64) -> f64) -> (f64, f64) {
     let v: Vec<f64> = (0..seeds).map(|s| f(100 + s)).collect();
-    let n = v.len() as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
+    common::mean_se(&v)
 }
 
 #[test]

@@ -359,10 +359,7 @@ fn over_seeds(scene: &Path, method: Method, spp: u32) -> (f64, f64) {
             px.iter().map(|p| f64::from(p.x)).sum::<f64>() / px.len() as f64
         })
         .collect();
-    let n = v.len() as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
+    common::mean_se(&v)
 }
 
 #[test]

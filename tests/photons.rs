@@ -5,7 +5,7 @@ mod common;
 
 use std::f64::consts::PI;
 
-use common::{render, temp_dir, write_scene};
+use common::{mean_se, render, temp_dir, write_scene};
 use rondo::Overrides;
 use rondo::scene::format::Method;
 
@@ -66,19 +66,11 @@ fn image_means(text: &str, method: Method, seeds: std::ops::Range<u64>) -> Vec<f
         .collect()
 }
 
-/// Mean and standard error of `values`.
-fn mean_and_error(values: &[f64]) -> (f64, f64) {
-    let n = values.len() as f64;
-    let mean = values.iter().sum::<f64>() / n;
-    let var = values.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
-}
-
 #[test]
 fn a_caustic_seen_in_a_mirror_has_the_closed_form_radiance() {
     let expected = 0.5 / PI * 3.0 * std::f64::consts::FRAC_1_SQRT_2;
     // Each render's photons are shared by all its pixels: the error is taken over seeds.
-    let (mean, se) = mean_and_error(&image_means(&mirrored_caustic(), Method::Photons, 1..7));
+    let (mean, se) = mean_se(&image_means(&mirrored_caustic(), Method::Photons, 1..7));
     eprintln!("photons: {mean} ± {se}, expected {expected}");
     assert!(
         (mean - expected).abs() <= 4.0 * se && se < 0.01 * expected,
@@ -86,8 +78,7 @@ fn a_caustic_seen_in_a_mirror_has_the_closed_form_radiance() {
     );
     // Without the photons, only the path tracer's rays from the ceiling that happen to hit
     // the 0.53° sun in the big mirror find this light: the same mean, far noisier.
-    let (traced, traced_se) =
-        mean_and_error(&image_means(&mirrored_caustic(), Method::Caustics, 1..7));
+    let (traced, traced_se) = mean_se(&image_means(&mirrored_caustic(), Method::Caustics, 1..7));
     eprintln!("caustics: {traced} ± {traced_se}");
     assert!(traced_se > 5.0 * se, "caustics: {traced} ± {traced_se}");
 }
@@ -178,7 +169,7 @@ fn a_caustic_lighting_the_ceiling_again_through_the_mirror_is_gathered_after_the
         / (view * view) as f64;
     let expected = l1 + rho / PI * mean_e2;
     let means = image_means(&indirect_caustic(), Method::Photons, 1..7);
-    let (mean, se) = mean_and_error(&means);
+    let (mean, se) = mean_se(&means);
     eprintln!("indirect: {mean} ± {se}, expected {expected} (direct part {l1})");
     // Gathers near the lit ceiling's edges lose part of their kernel: allowed 1 % of the whole.
     assert!(

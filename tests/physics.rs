@@ -8,7 +8,7 @@ use std::f64::consts::PI;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
-use common::{point_estimate, render, scenes_dir, temp_dir, write_scene};
+use common::{mean_se, point_estimate, render, scenes_dir, temp_dir, write_scene};
 use glam::{Affine3A, Mat3, Quat, Vec2, Vec3};
 use rondo::geometry::instance::MeshBlas;
 use rondo::geometry::packed::{Geometry, HitKind, Primitive};
@@ -37,14 +37,6 @@ fn lamp(intensity: f32) -> Material {
         intensity,
         two_sided: true,
     }
-}
-
-/// Mean and standard error of a sample.
-fn mean_se(xs: &[f64]) -> (f64, f64) {
-    let n = xs.len() as f64;
-    let mean = xs.iter().sum::<f64>() / n;
-    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
 }
 
 #[test]

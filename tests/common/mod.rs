@@ -252,6 +252,14 @@ pub fn point_camera(position: &str, at: &str, up: &str) -> String {
     format!("Camera(position: {position}, look_at: {at}, up: {up}, fov: 0.001)")
 }
 
+/// Mean and standard error of the mean of `xs` (at least two values).
+pub fn mean_se(xs: &[f64]) -> (f64, f64) {
+    let n = xs.len() as f64;
+    let mean = xs.iter().sum::<f64>() / n;
+    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
 /// Whether `mean ± se` is within `k` standard errors of `expected`.
 pub fn within(mean: f64, se: f64, expected: f64, k: f64) -> bool {
     (mean - expected).abs() <= k * se + 1e-6 * expected.abs()
