@@ -86,13 +86,16 @@ pub fn first_radius(area: f32, paths: u64) -> f32 {
 
 impl PhotonMap {
     /// The map of `photons` left by `paths` light paths, gathered within `radius`; photons at
-    /// non-finite points are dropped. `O(n log n)`, the order of equal keys kept, so the map
-    /// is the same for the same photons in the same order.
+    /// non-finite points are dropped, and so are all of them if the radius is not a positive
+    /// finite number (a degenerate scene's). `O(n log n)`, the order of equal keys kept, so
+    /// the map is the same for the same photons in the same order.
     pub fn new(photons: Vec<Photon>, paths: u64, radius: f32) -> Self {
+        let usable = radius > 0.0 && radius.is_finite();
+        let radius = if usable { radius } else { 1.0 };
         let inv_cell = 0.5 / radius;
         let mut keyed: Vec<(u64, Photon)> = photons
             .into_iter()
-            .filter(|ph| ph.p.is_finite())
+            .filter(|ph| usable && ph.p.is_finite())
             .map(|ph| (key(cell(ph.p, inv_cell)), ph))
             .collect();
         keyed.sort_by_key(|&(k, _)| k);
@@ -275,6 +278,20 @@ mod tests {
         // Seen from below, the floor's upper side's photons do not shine through it.
         let under = floor.bsdf(-down, s.n, s.ns, Vec2::ZERO, || None);
         assert_eq!(map.gather(&s, &under, 1), Vec3::ZERO);
+    }
+
+    #[test]
+    fn a_degenerate_radius_gathers_nothing_and_no_nan() {
+        let floor = Material::Diffuse {
+            albedo: Texture::Constant(Vec3::splat(ALBEDO)),
+        };
+        let s = floor_point(0.0, 0.0, 0);
+        let bsdf = floor.bsdf(-Vec3::Y, s.n, s.ns, Vec2::ZERO, || None);
+        for radius in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            let map = PhotonMap::new(uniform_photons(100, 1.0), 10, radius);
+            assert!(map.is_empty());
+            assert_eq!(map.gather(&s, &bsdf, 8), Vec3::ZERO, "radius {radius}");
+        }
     }
 
     #[test]
