@@ -329,7 +329,7 @@ fn settings_values_are_named() {
         ),
         (
             "method: Fast",
-            "settings: unknown method \"Fast\" (expected Naive, Nee, Mis or Caustics)",
+            "settings: unknown method \"Fast\" (expected Naive, Nee, Mis, Caustics or Photons)",
         ),
     ];
     for (setting, expected) in cases {
