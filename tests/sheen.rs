@@ -21,21 +21,13 @@ use rondo::scene::load::load_scene;
 use rondo::shading::layers::Layers;
 use rondo::shading::material::Material;
 use rondo::shading::sheen::Sheen;
-use rondo::shading::texture::Texture;
 
 fn pbr(base: Vec3, metallic: f32, roughness: f32, layers: Layers) -> Material {
-    Material::Pbr {
-        base_color: Texture::Constant(base),
-        metallic,
-        roughness,
-        metallic_roughness: None,
-        emissive: Texture::Constant(Vec3::ZERO),
-        emissive_strength: 1.0,
-        normal_map: None,
-        alpha: None,
-        layers,
-        layer_maps: None,
+    let mut m = Material::pbr(base, metallic, roughness);
+    if let Material::Pbr { layers: l, .. } = &mut m {
+        *l = layers;
     }
+    m
 }
 
 fn sheen(color: Vec3, roughness: f32) -> Layers {

@@ -131,11 +131,6 @@ impl LightTracing {
         Some(Self { sources, paths })
     }
 
-    /// Light paths per sample.
-    pub fn paths(&self) -> u64 {
-        self.paths
-    }
-
     /// Samples whose photon maps a `Photons` pass holds at once: as many as fit in
     /// `PHOTON_MEMORY` (64 MiB) at the most photons their paths can leave (one each), at most
     /// `PHOTON_GROUP` (16), at least one.
@@ -159,9 +154,7 @@ impl LightTracing {
     ) -> Result<(TraceStats, Vec<Vec<Photon>>), Cancelled> {
         let mut stats = TraceStats::default();
         let count = samples.end.saturating_sub(samples.start) as usize;
-        let mut kept: Vec<Vec<Photon>> = (0..if keep_photons { count } else { 0 })
-            .map(|_| Vec::new())
-            .collect();
+        let mut kept: Vec<Vec<Photon>> = vec![Vec::new(); if keep_photons { count } else { 0 }];
         let size = (film.width, film.height);
         let scale = 1.0 / self.paths as f32;
         let fixed = film.fixed();

@@ -110,19 +110,9 @@ impl PhotonMap {
         }
     }
 
-    /// Number of photons held.
-    pub fn len(&self) -> usize {
-        self.photons.len()
-    }
-
     /// Whether the map holds no photon.
     pub fn is_empty(&self) -> bool {
         self.photons.is_empty()
-    }
-
-    /// The gather radius.
-    pub fn radius(&self) -> f32 {
-        self.radius
     }
 
     /// Radiance towards the ray `bsdf` was built for, from the photons within the radius of
