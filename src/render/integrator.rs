@@ -236,6 +236,8 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     let mut caustic: Option<u32> = None;
     // Whether every vertex so far was an S: the camera sees this hit through mirrors and glass.
     let mut through_chain = true;
+    // Whether light tracing owns the paths through the camera's first hit (see `caustic`).
+    let light_traces_first_hit = view.method.traces_light() && !view.masked;
     for depth in 0..view.max_depth {
         stats.rays += 1;
         let start = ray.origin;
@@ -344,8 +346,7 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         let Some(scatter) = bsdf.sample(sampler) else {
             break;
         };
-        let light_traced_d = depth == 0 && view.method.traces_light() && !view.masked;
-        if (light_traced_d || gathered) && !specular {
+        if ((depth == 0 && light_traces_first_hit) || gathered) && !specular {
             caustic = scatter.pdf.map(|_| 0);
         }
         previous = scatter.pdf.map(|pdf| (s.p, pdf));
