@@ -61,12 +61,14 @@ fn emission_weight(
     }
 }
 
-/// Whether a vertex with `bsdf` on a primitive of `kind` is a perfect specular vertex of a
-/// light-traced path: a perfect mirror or smooth glass, not on an infinite plane (which no
+/// Whether a vertex with `bsdf` on a primitive of `kind` is a chain vertex of a light-traced
+/// path under `method`: a perfect mirror or smooth glass, or under `Method::Photons` also a
+/// narrow glossy conductor ([`Method::chains_glossy`]); never on an infinite plane (which no
 /// light path can be aimed at).
 #[inline(always)]
-pub(super) fn is_chain_vertex(bsdf: &Bsdf, kind: HitKind) -> bool {
-    bsdf.is_specular() && kind != HitKind::Plane
+pub(super) fn is_chain_vertex(bsdf: &Bsdf, kind: HitKind, method: Method) -> bool {
+    (bsdf.is_specular() || (method.chains_glossy() && bsdf.is_narrow_glossy()))
+        && kind != HitKind::Plane
 }
 
 /// Absolute error bound of the hit point `s.p` of `hit`, per component (pbrt-v4, Section 6.8.5):
@@ -226,13 +228,14 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     let mut features = (!collect).then(FeatureSample::default);
     // The medium the current ray travels through.
     let mut medium = Medium::CLEAR;
-    // Under `Method::Caustics`, light tracing (the `caustics` module) owns the paths camera →
-    // D → S… → light, D the camera's first hit continued by its non-delta part and each S a
-    // perfect specular vertex ([`is_chain_vertex`]); under `Method::Photons` with the sample's
-    // photons, the photons also own camera → … → D → S… → light, D a later vertex that is not
-    // an S and either the first one (seen through S… only) or Lambertian: the number of S
-    // after such a D so far, `None` once the path is not one of them. Its emission from a
-    // finite emitter or a distant light is then not counted here.
+    // Under `Method::Caustics` and `Method::Photons`, light tracing (the `caustics` module) owns
+    // the paths camera → D → S… → light, D the camera's first hit continued by its non-delta
+    // part and each S a chain vertex ([`is_chain_vertex`]: a perfect mirror or glass, under
+    // `Photons` also a narrow glossy conductor, whose light samples are then not taken); under
+    // `Photons` with the sample's photons, the photons also own camera → … → D → S… → light, D
+    // a later vertex that is not an S and either the first one (seen through S… only) or
+    // Lambertian: the number of S after such a D so far, `None` once the path is not one of
+    // them. Its emission from a finite emitter or a distant light is then not counted here.
     let mut caustic: Option<u32> = None;
     // Whether every vertex so far was an S: the camera sees this hit through mirrors and glass.
     let mut through_chain = true;
@@ -300,7 +303,7 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
                 normal: if ray.direction.dot(n) < 0.0 { n } else { -n },
             });
         }
-        let specular = is_chain_vertex(&bsdf, hit.kind);
+        let specular = is_chain_vertex(&bsdf, hit.kind, view.method);
         let light_traced = caustic.is_some_and(|k| k > 0) && hit.kind != HitKind::Plane;
         caustic = caustic.filter(|_| specular).map(|k| k + 1);
         if let Some(emitted) = bsdf.emitted().filter(|_| !light_traced) {
@@ -330,7 +333,9 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
         let err = point_error(view.geometry, &hit, s.p);
         let dimension = 1 + depth * BOUNCE_DIMENSIONS;
         let beyond = medium.beyond(material, ray.direction, s.n);
-        if sample_lights && bsdf.samples_lights() {
+        // A narrow glossy vertex of a chain the photons own: its light samples are theirs too.
+        let owned = caustic.is_some_and(|k| k > 0);
+        if sample_lights && bsdf.samples_lights() && !owned {
             sampler.seek(dimension + LIGHT_CHOICE_DIMENSION);
             let vertex = Vertex {
                 surface: &s,

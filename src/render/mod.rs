@@ -62,6 +62,12 @@ impl Method {
     pub fn traces_light(self) -> bool {
         matches!(self, Self::Caustics | Self::Photons)
     }
+
+    /// Whether the chains its light paths follow hold narrow glossy conductors besides perfect
+    /// mirrors and glass ([`crate::shading::bsdf::Bsdf::is_narrow_glossy`]): `Photons`.
+    pub fn chains_glossy(self) -> bool {
+        self == Self::Photons
+    }
 }
 
 /// Most rays a path may have, camera ray included: the sampler's dimensions are laid out for

@@ -24,6 +24,7 @@ use super::dielectric::Dielectric;
 use super::diffuse::Diffuse;
 use super::emission::Emission;
 use super::fuzzed::Fuzzed;
+use super::microfacet::is_narrow_alpha;
 use super::pbr::Pbr;
 use super::rough_dielectric::RoughDielectric;
 use super::sampler::Sampler;
@@ -207,6 +208,14 @@ impl<'a> Bsdf<'a> {
     #[inline]
     pub fn is_specular(&self) -> bool {
         self.lobe.is_specular()
+    }
+
+    /// Whether the lobe is a narrow GGX conductor that is not a perfect mirror
+    /// ([`super::microfacet::is_narrow_alpha`]): a glossy vertex `Method::Photons` follows along
+    /// its light paths like a mirror.
+    #[inline]
+    pub fn is_narrow_glossy(&self) -> bool {
+        matches!(self.lobe, Lobe::Conductor(l) if is_narrow_alpha(l.alpha))
     }
 
     /// Whether the lobe is Lambertian (a `Diffuse` material): where a photon map's density

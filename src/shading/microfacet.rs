@@ -36,6 +36,19 @@ pub fn is_specular_alpha(alpha: f32) -> bool {
     alpha < SPECULAR_ALPHA
 }
 
+/// The α below which a GGX conductor (a `Glossy` material, roughness under about 0.32) joins the
+/// chains of mirrors and glass that `Method::Photons` leaves to its light paths: its highlight
+/// is narrow enough that the light it focuses onto a diffuse surface is a caustic, which light
+/// paths find and camera paths find only by chance. Measured on `sunlit.ron`'s gold ball
+/// (roughness 0.3, α = 0.09): BENCHMARKS.md, "Glossy caustics by photons".
+pub const NARROW_ALPHA: f32 = 0.1;
+
+/// Whether a lobe of GGX `alpha` is narrow but not a perfect mirror ([`NARROW_ALPHA`]).
+#[inline]
+pub fn is_narrow_alpha(alpha: f32) -> bool {
+    !is_specular_alpha(alpha) && alpha < NARROW_ALPHA
+}
+
 /// The GGX α of a user-facing roughness in [0, 1] (α = roughness², the "perceptual" mapping of
 /// Burley 2012 and glTF), clamped to [`MIN_ROUGHNESS`]² … 1.
 #[inline]

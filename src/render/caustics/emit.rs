@@ -1,7 +1,8 @@
 //! Where light paths start: a light chosen by its power towards the perfect specular surfaces,
 //! and a ray from it aimed at them. No ECS here.
 //!
-//! The surfaces that may be perfect mirrors or glass ([`may_be_specular`]) are bounded each by
+//! The surfaces that may be perfect mirrors or glass (under `Method::Photons` also narrow
+//! glossy conductors: [`may_be_chain`]) are bounded each by
 //! a sphere (the targets, [`super::targets`]): an entity that is one sphere is its own, any
 //! other the sphere around its box. Every ray that meets such a surface first passes through
 //! its target, so aiming only at targets loses no path light tracing owns. A target is chosen
@@ -39,18 +40,24 @@ use crate::geometry::triangle::{sample_triangle_area, triangle_point_error};
 use crate::lights::LightSet;
 use crate::lights::area::{Emitter, radiance_scale};
 use crate::shading::material::Material;
-use crate::shading::microfacet::{alpha_from_roughness, is_specular_alpha};
+use crate::shading::microfacet::{alpha_from_roughness, is_narrow_alpha, is_specular_alpha};
 use crate::shading::pbr::Pbr;
 use crate::shading::sampler::Sampler;
 use crate::shading::sampling::{Frame, concentric_disk};
 use crate::shading::texture::TexCoords;
 
-/// Whether a surface of material `m` may be a perfect mirror or smooth glass somewhere
-/// ([`crate::shading::bsdf::Bsdf::is_specular`] at some point): conservative, a textured
-/// metallic–roughness material counts.
-pub fn may_be_specular(m: &Material) -> bool {
+/// Whether a surface of material `m` may be a chain vertex somewhere (the integrator's
+/// `is_chain_vertex`): a perfect mirror or smooth glass
+/// ([`crate::shading::bsdf::Bsdf::is_specular`] at some point), with `glossy` also a narrow
+/// glossy conductor ([`crate::shading::bsdf::Bsdf::is_narrow_glossy`]). Conservative: a
+/// textured metallic–roughness material counts.
+pub fn may_be_chain(m: &Material, glossy: bool) -> bool {
     match m {
-        Material::Dielectric { roughness, .. } | Material::Glossy { roughness, .. } => {
+        Material::Glossy { roughness, .. } => {
+            let alpha = alpha_from_roughness(*roughness);
+            is_specular_alpha(alpha) || (glossy && is_narrow_alpha(alpha))
+        }
+        Material::Dielectric { roughness, .. } => {
             is_specular_alpha(alpha_from_roughness(*roughness))
         }
         Material::Metal { roughness, .. } => *roughness == 0.0,
@@ -66,9 +73,11 @@ pub fn may_be_specular(m: &Material) -> bool {
             texture,
             ..
         } => {
-            may_be_specular(glass)
-                || may_be_specular(base)
-                || texture.as_ref().is_some_and(|t| may_be_specular(&t.opaque))
+            may_be_chain(glass, glossy)
+                || may_be_chain(base, glossy)
+                || texture
+                    .as_ref()
+                    .is_some_and(|t| may_be_chain(&t.opaque, glossy))
         }
         Material::Diffuse { .. } | Material::Light { .. } => false,
     }
@@ -106,13 +115,14 @@ pub struct Emitted {
 }
 
 impl Sources {
-    /// The targets and sources of a scene; empty (nothing to trace) without a finite surface
-    /// that may be perfect specular or without a light. Cost `O(n log n)` in the primitives.
+    /// The targets and sources of a scene, its materials and each owner's material given; empty
+    /// (nothing to trace) without a finite surface that may be a chain vertex ([`may_be_chain`],
+    /// with `glossy`) or without a light. Cost `O(n log n)` in the primitives.
     pub fn new<L: Layout>(
         geometry: &Geometry<L>,
-        materials: &[Material],
-        owner_material: &[u32],
+        (materials, owner_material): (&[Material], &[u32]),
         lights: &LightSet,
+        glossy: bool,
     ) -> Self {
         let material = |owner: u32| {
             owner_material
@@ -120,7 +130,7 @@ impl Sources {
                 .and_then(|&m| materials.get(m as usize))
         };
         let targets = Targets::new(targets(geometry, &|owner| {
-            material(owner).is_some_and(may_be_specular)
+            material(owner).is_some_and(|m| may_be_chain(m, glossy))
         }));
         let Some((lo, hi)) = geometry.finite_bounds().filter(|_| !targets.is_empty()) else {
             return Self::default();
@@ -567,6 +577,28 @@ mod tests {
     }
 
     #[test]
+    fn a_glossy_material_is_a_target_where_its_bsdf_is_a_chain_vertex() {
+        // Targets must cover every surface the light paths follow (see the module's notes):
+        // a `Glossy` material may be a chain vertex exactly where its BSDF is a perfect
+        // mirror or, with glossy chains, a narrow glossy conductor; sunlit.ron's gold ball
+        // (roughness 0.3) is one only with them, envmap.ron's ball (0.4) never.
+        let glossy = |roughness: f32| Material::Glossy {
+            albedo: Texture::Constant(Vec3::ONE),
+            roughness,
+        };
+        for step in 0..=100 {
+            let m = glossy(step as f32 / 100.0);
+            let bsdf = m.bsdf_at(-Vec3::Z, Vec3::Z, Vec2::ZERO);
+            assert_eq!(may_be_chain(&m, false), bsdf.is_specular(), "{step}");
+            let chain = bsdf.is_specular() || bsdf.is_narrow_glossy();
+            assert_eq!(may_be_chain(&m, true), chain, "{step}");
+        }
+        assert!(!may_be_chain(&glossy(0.3), false) && may_be_chain(&glossy(0.3), true));
+        assert!(!may_be_chain(&glossy(0.4), true));
+        assert!(may_be_chain(&mirror(), false));
+    }
+
+    #[test]
     fn light_paths_carry_the_flux_each_light_sends_into_each_ball() {
         // The flux into a ball, independent of how light paths are aimed: from a point light
         // of intensity I, I Ω; from a small spherical lamp of radiance L and radius ρ (an
@@ -619,7 +651,7 @@ mod tests {
             },
         ];
         for (what, (g, set, want)) in ["lamp", "point", "sun"].iter().zip(&cases) {
-            let sources = Sources::new(g, &materials, &owners, set);
+            let sources = Sources::new(g, (&materials, &owners), set, false);
             let got = flux_into_balls(&sources, g, &materials, set, 200_000);
             for b in 0..2 {
                 let (mean, se) = got[b];
@@ -652,7 +684,7 @@ mod tests {
             (1, sphere(Vec3::Y * 10.0, 0.5)),
         ]);
         let set = LightSet::build(&g, &materials, &[0, 1]);
-        let sources = Sources::new(&g, &materials, &[0, 1], &set);
+        let sources = Sources::new(&g, (&materials, &[0, 1]), &set, false);
         let n = 4000;
         let met = (0..n)
             .filter(|&k| {

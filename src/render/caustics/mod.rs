@@ -114,9 +114,9 @@ impl LightTracing {
         }
         let sources = Sources::new(
             view.geometry,
-            view.materials,
-            view.owner_material,
+            (view.materials, view.owner_material),
             view.lights,
+            view.method.chains_glossy(),
         );
         if sources.is_empty() {
             return None;
@@ -246,7 +246,7 @@ fn light_path<L: Layout>(
         let bsdf = material.bsdf(ray.direction, s.n, s.ns, s.tex_coords(), || {
             view.geometry.uv_tangent(&hit).map(|t| (t.tangent, t.sign))
         });
-        let chain = is_chain_vertex(&bsdf, hit.kind);
+        let chain = is_chain_vertex(&bsdf, hit.kind, view.method);
         let leaves_photon = specular > 0 && (whole.is_mix() || !chain);
         if let Some(kept) = photons.as_deref_mut().filter(|_| leaves_photon) {
             kept.push(Photon {
