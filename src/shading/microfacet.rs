@@ -36,12 +36,13 @@ pub fn is_specular_alpha(alpha: f32) -> bool {
     alpha < SPECULAR_ALPHA
 }
 
-/// The α below which a GGX conductor (a `Glossy` material, roughness under about 0.32) joins the
-/// chains of mirrors and glass that `Method::Photons` leaves to its light paths: its highlight
-/// is narrow enough that the light it focuses onto a diffuse surface is a caustic, which light
-/// paths find and camera paths find only by chance. Measured on `sunlit.ron`'s gold ball
-/// (roughness 0.3, α = 0.09): BENCHMARKS.md, "Glossy caustics by photons".
-pub const NARROW_ALPHA: f32 = 0.1;
+/// The α below which a GGX conductor (a `Glossy` material of roughness under about 0.55) joins
+/// the chains of mirrors and glass that `Method::Photons` leaves to its light paths: its
+/// highlight is narrow enough that the light it reflects onto a diffuse surface is a caustic,
+/// which light paths find at once and camera paths only by chance. Measured on `sunlit.ron`
+/// with its gold ball at roughness 0.3 to 0.54, and on `envmap.ron` (0.4): BENCHMARKS.md,
+/// "Glossy caustics by photons".
+pub const NARROW_ALPHA: f32 = 0.3;
 
 /// Whether a lobe of GGX `alpha` is narrow but not a perfect mirror ([`NARROW_ALPHA`]).
 #[inline]

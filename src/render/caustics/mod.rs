@@ -31,11 +31,15 @@
 //!
 //! Under `Method::Photons` the same light paths also leave photons where they arrive after a
 //! specular vertex, and the camera gathers them where it sees D through mirrors and glass
-//! ([`photons`]); under `Caustics` those paths are left to the path tracer.
+//! ([`photons`]); under `Caustics` those paths are left to the path tracer. Under `Photons` the
+//! chains also hold narrow glossy conductors (`Bsdf::is_narrow_glossy`), followed by sampling
+//! their lobe from the light's side (the GGX conductor's value is symmetric in its two
+//! directions), and the path tracer takes no light sample at such a vertex of a chain it
+//! leaves to light tracing or the photons.
 //!
 //! Not light-traced (left to the path tracer): D seen through a mirror or glass (but see
 //! `Photons` above), D deeper than
-//! the camera's first hit, glossy (not perfect) specular chains, emitting or mirror planes, the
+//! the camera's first hit, glossy chains (but see `Photons`), emitting or mirror planes, the
 //! constant background, scenes with alpha masks (there `Caustics` is `Mis`), and light leaving
 //! an emitter inside tinted glass is not attenuated before its first hit.
 
