@@ -4,7 +4,7 @@ A bench, never run by the tests.
 
     benches/photons.py [--rondo target/release/rondo] [--out bench/photons]
                        [--scenes sun_caustics,envmap] [--width 240] [--spp 64] [--seeds 16]
-                       [--reference-spp 16384]
+                       [--reference-spp 16384] [--box X0,Y0,X1,Y1]
 
 Needs numpy and the OpenEXR module (`pip install numpy OpenEXR`) in the Python running it.
 
@@ -14,6 +14,9 @@ Needs numpy and the OpenEXR module (`pip install numpy OpenEXR`) in the Python r
   over the whole image, and over the pixels seen through mirrors and glass: those where a
   `photons` and a `caustics` render of the same seed differ (seeds 1-4), the only pixels
   whose camera paths gather.
+- `--box`: also the err over that box of pixels (at `--width`; X1, Y1 excluded), e.g. a
+  glossy caustic on `sunlit.ron`: `--scenes sunlit --box 90,100,185,150`, the ground around
+  and in front of the gold ball.
 - Fireflies: pixels whose luminance is above 4x the reference's and above it by 0.1, mean
   per image; "sky seen through glass" are those also in a `mis` render of the same seed with
   every non-specular material black: light seen only through mirrors and glass (camera ->
@@ -76,12 +79,15 @@ def main():
     p.add_argument("--spp", type=int, default=64)
     p.add_argument("--seeds", type=int, default=16)
     p.add_argument("--reference-spp", type=int, default=16384)
+    p.add_argument("--box", default=None, help="X0,Y0,X1,Y1: also the err over these pixels")
     args = p.parse_args()
+    box = [int(v) for v in args.box.split(",")] if args.box else None
     os.makedirs(args.out, exist_ok=True)
     seeds = range(1, args.seeds + 1)
     print("| scene | method | s (median) | err | err seen through specular | fireflies "
-          "| of which sky seen through glass | image mean / reference's |")
-    print("|---|---|---|---|---|---|---|---|")
+          "| of which sky seen through glass | image mean / reference's |"
+          + (" err in the box |" if box else ""))
+    print("|---|---|---|---|---|---|---|---|" + ("---|" if box else ""))
     for name in args.scenes.split(","):
         scene = os.path.join(ROOT, "scenes", name + ".ron")
         text = open(scene).read()
@@ -109,15 +115,20 @@ def main():
         seen = np.zeros(valid.shape, bool)
         for k in range(min(4, len(images["photons"]))):
             seen |= (images["photons"][k] != images["caustics"][k]).any(-1)
+        inside = np.zeros(valid.shape, bool)
+        if box:
+            inside[box[1]:box[3], box[0]:box[2]] = True
         for m in METHODS:
             sq = np.array([(np.clip(a, 0, 1) - np.clip(ref, 0, 1)) ** 2 for a in images[m]])
+            extra = " %.5f (%d px) |" % (np.sqrt(sq[:, inside & valid].mean()),
+                                         (inside & valid).sum()) if box else ""
             flies = [fireflies(a, ref) for a in images[m]]
-            print("| %s | %s | %.2f | %.5f | %.5f (%d px) | %.2f | %.2f | %.4f |" % (
+            print("| %s | %s | %.2f | %.5f | %.5f (%d px) | %.2f | %.2f | %.4f |%s" % (
                 name, m, np.median(times[m]), np.sqrt(sq[:, valid].mean()),
                 np.sqrt(sq[:, seen & valid].mean()), (seen & valid).sum(),
                 np.mean([f.sum() for f in flies]),
                 np.mean([(f & b).sum() for f, b in zip(flies, sky)]),
-                np.mean([a.mean() for a in images[m]]) / ref.mean()), flush=True)
+                np.mean([a.mean() for a in images[m]]) / ref.mean(), extra), flush=True)
 
 
 if __name__ == "__main__":
