@@ -36,7 +36,11 @@ BEST = {name: "multijitter" for name in ALL}
 # `principled` (Disney/Burley diffuse base, each its own specular); rondo's `Glossy` (and rough
 # glass) put back the light single-scattering GGX loses, as Cycles' multiscatter GGX does and
 # Mitsuba's GGX does not (up to 3 % brighter at the roughness 0.25-0.4 of these scenes).
-OWN_REFERENCE = {"gltf", "veach_mis", "envmap", "dof", "bigmesh"}
+# `sunlit` (not one of the suite's own, for issue 36): its gold ball is a `Glossy`, and its
+# infinite ground plane meets the sky at a horizon the peers' large ground quad does not draw
+# the same (0.0084 between rondo's and Mitsuba's 16,384-spp images, 99 % of it in 1,000 pixels
+# along the horizon's row).
+OWN_REFERENCE = {"gltf", "veach_mis", "envmap", "dof", "bigmesh", "sunlit"}
 
 
 def scene_path(name, out):

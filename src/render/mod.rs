@@ -42,8 +42,9 @@ pub enum Method {
     Caustics,
     /// `Caustics`, with the caustics the camera sees through perfect mirrors and glass
     /// (camera → S… → D → S… → light) or after a Lambertian bounce gathered from the light
-    /// paths' photons at D instead ([`caustics::photons`]): consistent, biased by each
-    /// sample's gather radius.
+    /// paths' photons at D instead ([`caustics::photons`]), its chains S… holding narrow
+    /// glossy conductors too ([`Method::chains_glossy`]): consistent, biased by each sample's
+    /// gather radius.
     Photons,
 }
 

@@ -219,10 +219,11 @@ impl LightTracing {
 }
 
 /// One light path: its splat (pixel index, value before the `1 / N` weight), if
-/// it reaches a non-specular vertex the camera sees after at least one specular one; with
-/// `photons`, the photons it leaves on the way: wherever it arrives after a specular vertex
-/// at a surface that may shade as a non-specular one there (not a chain vertex, or a mix,
-/// whose pick is the gather's to make).
+/// it reaches a vertex the camera sees that is not a chain vertex (`is_chain_vertex`: a
+/// perfect mirror or glass, under `Photons` also a narrow glossy conductor) after at least one
+/// chain vertex; with `photons`, the photons it leaves on the way: wherever it arrives after a
+/// chain vertex at a surface that may shade as another kind there (not a chain vertex, or a
+/// mix, whose pick is the gather's to make).
 fn light_path<L: Layout>(
     view: &SceneView<L>,
     sources: &Sources,
@@ -234,6 +235,7 @@ fn light_path<L: Layout>(
     let emitted = sources.emit(view.geometry, view.materials, view.lights, sampler)?;
     let (mut ray, mut beta) = (emitted.ray, emitted.beta);
     let mut medium = Medium::CLEAR;
+    // Chain vertices so far.
     let mut specular = 0u32;
     loop {
         stats.rays += 1;

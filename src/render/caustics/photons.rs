@@ -12,6 +12,8 @@
 //! turn single photons into speckles): Σ f(ωo, ωi) Φ / (π r²) over the photons within `r` of
 //! the vertex on the same surface (Jensen 1996), the path tracer dropping the same paths
 //! beyond it (see [`super::super::integrator`]). The camera's first hit is light tracing's.
+//! Here S is any chain vertex of the light paths: a perfect mirror or glass, or a narrow glossy
+//! conductor (the sun's highlight on a gold ball, reflected onto the ground, is a caustic too).
 //!
 //! Each sample index has its own photons (the light paths of that sample) and its own radius,
 //! `r_s = r_1 (s + 1)^((α − 1)/2)` with α = 2/3 (Knaus and Zwicker 2011, probabilistic
@@ -22,8 +24,9 @@
 //! sample aimed at specular targets of summed `r²` `A`: about `K` photons per gather where the
 //! flux through the targets spreads evenly over their cross-sections.
 //!
-//! Memory: one sample's photons at a time, at most one per light path (64 bytes each: one per
-//! 8 pixels or fewer, 8 bytes per pixel at most).
+//! Memory: the photons of the samples a pass traces together (at most 16 or 64 MiB:
+//! `LightTracing::samples_per_group`), at most one per light path (56 bytes each, one light
+//! path per 8 pixels or fewer: 7 bytes per pixel per sample held at most).
 
 use glam::Vec3;
 

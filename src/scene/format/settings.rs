@@ -44,7 +44,8 @@ pub enum Method {
     Caustics,
     /// `Caustics`, with the caustics seen in mirrors and through glass (camera → mirror or
     /// glass → diffuse → mirror or glass → light) and those seen after a diffuse bounce
-    /// gathered from photons the light paths leave:
+    /// gathered from photons the light paths leave, which also follow narrow glossy
+    /// reflections (a `Glossy` of roughness below about 0.55):
     /// consistent (it converges to what `Caustics` does), biased at a finite sample count by a
     /// gather radius that shrinks with every sample.
     #[serde(alias = "photons")]
