@@ -8,7 +8,7 @@ use std::f64::consts::PI;
 use std::path::Path;
 use std::process::Command;
 
-use common::{exr_channels, render, scenes_dir, temp_dir, write_scene};
+use common::{exr_channels, region_mean, render, scenes_dir, temp_dir, write_scene};
 use rondo::Overrides;
 use rondo::scene::format::Method;
 
@@ -21,25 +21,6 @@ fn overrides(method: Method, spp: u32, seed: u64, size: (u32, u32)) -> Overrides
         height: Some(size.1),
         ..Overrides::default()
     }
-}
-
-/// The mean red value of the pixels in rows `rows` and columns `cols` of a render.
-fn region_mean(
-    path: &Path,
-    o: Overrides,
-    rows: std::ops::Range<usize>,
-    cols: std::ops::Range<usize>,
-) -> f64 {
-    let r = render(path, o, None);
-    assert_eq!(r.stats().nonfinite, 0);
-    let film = r.film();
-    let px = film.mean();
-    let w = film.width as usize;
-    let n = (rows.len() * cols.len()) as f64;
-    rows.flat_map(|y| cols.clone().map(move |x| (y, x)))
-        .map(|(y, x)| f64::from(px[y * w + x].x))
-        .sum::<f64>()
-        / n
 }
 
 /// Mean and standard error of `f(seed)` over `seeds`.

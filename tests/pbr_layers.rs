@@ -16,7 +16,7 @@ use std::path::Path;
 use common::chi2::chi_square_of_directions;
 use common::furnace::{furnace_pixels, write_white_map};
 use common::gltf_doc::{Bin, doc};
-use common::{temp_dir, write_scene};
+use common::{layered_pbr, temp_dir, write_scene};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use rondo::scene::assets::AssetCache;
@@ -25,14 +25,6 @@ use rondo::shading::layers::Layers;
 use rondo::shading::material::Material;
 use rondo::shading::rng::Rng;
 use serde_json::{Value, json};
-
-fn pbr(base: Vec3, metallic: f32, roughness: f32, layers: Layers) -> Material {
-    let mut m = Material::pbr(base, metallic, roughness);
-    if let Material::Pbr { layers: l, .. } = &mut m {
-        *l = layers;
-    }
-    m
-}
 
 fn specular(weight: f32, color: Vec3) -> Layers {
     Layers {
@@ -190,7 +182,7 @@ fn the_specular_lobe_reflects_its_strength_and_colour_over_a_black_base() {
         .par_iter()
         .filter_map(|&(deg, r)| {
             let layers = specular(weight as f32, Vec3::from(color.map(|c| c as f32)));
-            let m = pbr(Vec3::ZERO, 0.0, r as f32, layers);
+            let m = layered_pbr(Vec3::ZERO, 0.0, r as f32, layers);
             let got = albedo(&m, deg.to_radians(), &[alpha(r)]);
             let expected = integrate(deg.to_radians(), &[alpha(r)], 160, |wo, wi| {
                 color.map(|c| ggx_cos(wo, wi, alpha(r), weight * (0.04 * c).min(1.0), weight))
@@ -221,7 +213,7 @@ fn a_white_base_under_a_tinted_or_weakened_specular_lobe_reflects_everything() {
     let results: Vec<(String, [f64; 3])> = cases
         .par_iter()
         .map(|&(l, deg, r)| {
-            let m = pbr(Vec3::ONE, 0.0, r as f32, l);
+            let m = layered_pbr(Vec3::ONE, 0.0, r as f32, l);
             let a = albedo(&m, deg.to_radians(), &[alpha(r)]);
             (
                 format!(
@@ -263,7 +255,7 @@ fn a_rough_coat_over_a_base_that_reflects_nothing_is_the_coat_lobe() {
                 specular: 0.0,
                 ..coat(weight as f32, r as f32)
             };
-            let m = pbr(Vec3::ZERO, 0.0, 0.5, layers);
+            let m = layered_pbr(Vec3::ZERO, 0.0, 0.5, layers);
             let got = albedo(&m, deg.to_radians(), &[alpha(r), alpha(0.5)])[0];
             let expected = integrate(deg.to_radians(), &[alpha(r)], 160, |wo, wi| {
                 [weight * ggx_cos(wo, wi, alpha(r), 0.04, 1.0); 3]
@@ -292,8 +284,8 @@ fn a_clear_coat_over_a_white_base_loses_and_adds_nothing() {
         .par_iter()
         .map(|&(metallic, deg, r)| {
             let alphas = [alpha(r), alpha(0.5)];
-            let white = pbr(Vec3::ONE, metallic, 0.5, coat(1.0, r as f32));
-            let grey = pbr(Vec3::splat(0.5), metallic, 0.5, coat(1.0, r as f32));
+            let white = layered_pbr(Vec3::ONE, metallic, 0.5, coat(1.0, r as f32));
+            let grey = layered_pbr(Vec3::splat(0.5), metallic, 0.5, coat(1.0, r as f32));
             (
                 format!("metallic {metallic} {deg}° coat roughness {r}"),
                 albedo(&white, deg.to_radians(), &alphas)[0],
@@ -323,8 +315,8 @@ fn a_smooth_coat_reflects_the_exact_fresnel_and_passes_the_rest_to_the_base() {
             ..coat(0.8, 0.0)
         };
         for (m, expected) in [
-            (pbr(Vec3::ZERO, 0.0, 0.5, dark), 0.8 * fresnel),
-            (pbr(Vec3::ONE, 0.0, 0.5, coat(0.8, 0.0)), 1.0),
+            (layered_pbr(Vec3::ZERO, 0.0, 0.5, dark), 0.8 * fresnel),
+            (layered_pbr(Vec3::ONE, 0.0, 0.5, coat(0.8, 0.0)), 1.0),
         ] {
             let count = 200_000;
             let mut sum = 0.0f64;
@@ -347,22 +339,22 @@ fn sampled_directions_of_the_layers_follow_the_density() {
     for (what, m, deg) in [
         (
             "coat 0.3 over dielectric 0.6",
-            pbr(Vec3::new(0.8, 0.5, 0.2), 0.0, 0.6, coat(1.0, 0.3)),
+            layered_pbr(Vec3::new(0.8, 0.5, 0.2), 0.0, 0.6, coat(1.0, 0.3)),
             40.0f32,
         ),
         (
             "coat 0.6 over metal 0.2",
-            pbr(Vec3::new(0.9, 0.6, 0.3), 1.0, 0.2, coat(0.5, 0.6)),
+            layered_pbr(Vec3::new(0.9, 0.6, 0.3), 1.0, 0.2, coat(0.5, 0.6)),
             70.0,
         ),
         (
             "coat 0.2 over mix 1",
-            pbr(Vec3::new(0.3, 0.8, 0.5), 0.5, 1.0, coat(0.8, 0.2)),
+            layered_pbr(Vec3::new(0.3, 0.8, 0.5), 0.5, 1.0, coat(0.8, 0.2)),
             80.0,
         ),
         (
             "tinted specular 0.4",
-            pbr(
+            layered_pbr(
                 Vec3::new(0.2, 0.3, 0.9),
                 0.0,
                 0.4,

@@ -5,7 +5,7 @@ mod common;
 
 use std::f64::consts::PI;
 
-use common::{mean_se, render, temp_dir, write_scene};
+use common::{mean_se, region_mean, render, temp_dir, write_scene};
 use rondo::Overrides;
 use rondo::scene::format::Method;
 
@@ -178,8 +178,7 @@ fn a_caustic_lighting_the_ceiling_again_through_the_mirror_is_gathered_after_the
     );
 }
 
-/// Mean red value of the pixels in rows `rows` and columns `cols` of each seed's render of
-/// `scene` under `method` at `spp` and 96×64.
+/// [`region_mean`] of each seed's render of `scene` under `method` at `spp` and 96×64.
 fn region_means(
     scene: &std::path::Path,
     (method, spp): (Method, u32),
@@ -196,18 +195,7 @@ fn region_means(
                 height: Some(64),
                 ..Overrides::default()
             };
-            let r = render(scene, o, None);
-            assert_eq!(r.stats().nonfinite, 0);
-            let px = r.film().mean();
-            let n = (rows.len() * cols.len()) as f64;
-            let mut sum = 0.0;
-            for y in rows.clone() {
-                sum += cols
-                    .clone()
-                    .map(|x| f64::from(px[y * 96 + x].x))
-                    .sum::<f64>();
-            }
-            sum / n
+            region_mean(scene, o, rows.clone(), cols.clone())
         })
         .collect()
 }

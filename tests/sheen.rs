@@ -13,7 +13,7 @@ mod common;
 use common::chi2::chi_square_of_directions;
 use common::furnace::{furnace_pixels, write_white_map};
 use common::sheen_brdf::{hemisphere, sheen_cos};
-use common::{temp_dir, write_scene};
+use common::{layered_pbr, temp_dir, write_scene};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use rondo::scene::assets::AssetCache;
@@ -21,14 +21,6 @@ use rondo::scene::load::load_scene;
 use rondo::shading::layers::Layers;
 use rondo::shading::material::Material;
 use rondo::shading::sheen::Sheen;
-
-fn pbr(base: Vec3, metallic: f32, roughness: f32, layers: Layers) -> Material {
-    let mut m = Material::pbr(base, metallic, roughness);
-    if let Material::Pbr { layers: l, .. } = &mut m {
-        *l = layers;
-    }
-    m
-}
 
 fn sheen(color: Vec3, roughness: f32) -> Layers {
     Layers {
@@ -93,8 +85,11 @@ fn a_black_base_under_a_sheen_reflects_the_sheen_lobe_and_a_white_one_everything
                 specular: 0.0,
                 ..sheen(color, r as f32)
             };
-            let black = albedo(&pbr(Vec3::ZERO, 0.0, 0.5, dark), mu);
-            let white = albedo(&pbr(Vec3::ONE, 0.0, 0.5, sheen(Vec3::ONE, r as f32)), mu)[0];
+            let black = albedo(&layered_pbr(Vec3::ZERO, 0.0, 0.5, dark), mu);
+            let white = albedo(
+                &layered_pbr(Vec3::ONE, 0.0, 0.5, sheen(Vec3::ONE, r as f32)),
+                mu,
+            )[0];
             let lobe = hemisphere(mu, |wo, wi| [sheen_cos(wo, wi, r); 3])[0];
             (mu, r, black, white, lobe)
         })
@@ -124,12 +119,12 @@ fn sampled_directions_under_a_sheen_follow_the_density() {
     for (what, m, deg) in [
         (
             "sheen 0.3 over dielectric 0.6",
-            pbr(Vec3::new(0.2, 0.3, 0.8), 0.0, 0.6, sheen(Vec3::ONE, 0.3)),
+            layered_pbr(Vec3::new(0.2, 0.3, 0.8), 0.0, 0.6, sheen(Vec3::ONE, 0.3)),
             50.0f32,
         ),
         (
             "sheen 0.8 over metal 0.2",
-            pbr(
+            layered_pbr(
                 Vec3::new(0.9, 0.6, 0.3),
                 1.0,
                 0.2,
@@ -139,12 +134,12 @@ fn sampled_directions_under_a_sheen_follow_the_density() {
         ),
         (
             "sheen 0 (the lobe's narrowest) over dielectric 0.3",
-            pbr(Vec3::splat(0.5), 0.0, 0.3, sheen(Vec3::splat(0.7), 0.0)),
+            layered_pbr(Vec3::splat(0.5), 0.0, 0.3, sheen(Vec3::splat(0.7), 0.0)),
             82.0,
         ),
         (
             "sheen 0.4 under a coat 0.3",
-            pbr(
+            layered_pbr(
                 Vec3::new(0.3, 0.8, 0.5),
                 0.0,
                 0.7,

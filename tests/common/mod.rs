@@ -87,6 +87,39 @@ pub fn render(path: &Path, overrides: Overrides, threads: Option<usize>) -> Rend
     r
 }
 
+/// The mean red value of the pixels in rows `rows` and columns `cols` of a render.
+pub fn region_mean(
+    path: &Path,
+    o: Overrides,
+    rows: std::ops::Range<usize>,
+    cols: std::ops::Range<usize>,
+) -> f64 {
+    let r = render(path, o, None);
+    assert_eq!(r.stats().nonfinite, 0);
+    let film = r.film();
+    let px = film.mean();
+    let w = film.width as usize;
+    let n = (rows.len() * cols.len()) as f64;
+    rows.flat_map(|y| cols.clone().map(move |x| (y, x)))
+        .map(|(y, x)| f64::from(px[y * w + x].x))
+        .sum::<f64>()
+        / n
+}
+
+/// [`Material::pbr`] of constant `base`, `metallic` and `roughness`, with the layers `layers`.
+pub fn layered_pbr(
+    base: Vec3,
+    metallic: f32,
+    roughness: f32,
+    layers: rondo::shading::layers::Layers,
+) -> rondo::shading::material::Material {
+    let mut m = rondo::shading::material::Material::pbr(base, metallic, roughness);
+    if let rondo::shading::material::Material::Pbr { layers: l, .. } = &mut m {
+        *l = layers;
+    }
+    m
+}
+
 /// Mean radiance per pixel of a film.
 pub fn pixels(film: &Film) -> Vec<glam::Vec3> {
     film.mean()

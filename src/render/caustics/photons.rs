@@ -94,11 +94,15 @@ impl PhotonMap {
     /// the map is the same for the same photons in the same order.
     pub fn new(photons: Vec<Photon>, paths: u64, radius: f32) -> Self {
         let usable = radius > 0.0 && radius.is_finite();
-        let radius = if usable { radius } else { 1.0 };
+        let (photons, radius) = if usable {
+            (photons, radius)
+        } else {
+            (Vec::new(), 1.0)
+        };
         let inv_cell = 0.5 / radius;
         let mut keyed: Vec<(u64, Photon)> = photons
             .into_iter()
-            .filter(|ph| usable && ph.p.is_finite())
+            .filter(|ph| ph.p.is_finite())
             .map(|ph| (key(cell(ph.p, inv_cell)), ph))
             .collect();
         keyed.sort_by_key(|&(k, _)| k);
