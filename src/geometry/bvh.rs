@@ -55,18 +55,23 @@ const LARGE_BUILD_PARAMS: BvhBuildParams = BvhBuildParams {
 };
 
 /// A wide node: the boxes of up to eight children lane by lane (`[min_x, min_y, min_z, max_x,
-/// max_y, max_z]`, eight lanes each, a row per AVX register), and what each child is.
+/// max_y, max_z]`, eight lanes each, a row per AVX register), and what each child is. 256 bytes
+/// aligned to 64, so a visit reads four cache lines (a node of `u32` counts took 288 bytes: five
+/// lines for most visits, since the child mask after the counts is read at every one).
 #[derive(Clone, Copy, Debug)]
-#[repr(align(32))]
+#[repr(C, align(64))]
 struct WideNode {
     bounds: [[f32; WIDTH]; 6],
     /// Per child: a wide node index (`count == 0`) or the first slot of a leaf.
     child: [u32; WIDTH],
-    /// Per child: primitives in the leaf, 0 for an inner child.
-    count: [u32; WIDTH],
+    /// Per child: slots in the leaf, 0 for an inner child. A leaf holds at most 255 groups (as
+    /// obvhs's leaves do) of at most 255 slots ([`Bvh::build_groups`]), so at most 65,025.
+    count: [u16; WIDTH],
     /// Bit `k` set if child `k` exists.
-    valid: u32,
+    valid: u8,
 }
+
+const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
 
 /// A bounding volume hierarchy over primitives stored in BVH order.
 #[derive(Clone, Default)]
@@ -78,6 +83,13 @@ pub struct Bvh {
     wide: Vec<WideNode>,
     /// Nodes the clustering considered over all its rounds (see [`Bvh::build_work`]).
     work: u64,
+}
+
+/// The slot count of a leaf of `prim_count` slots in a wide node. At most 255 groups (the leaf
+/// collapse's bound) of at most 255 slots (`Bvh::build_groups`'s `u8`): at most 65,025.
+fn leaf_slots(prim_count: u32) -> u16 {
+    debug_assert!(prim_count <= 255 * 255, "a leaf of {prim_count} slots");
+    prim_count as u16
 }
 
 /// Binary nodes from which the collapse builds the subtrees under the wide root in parallel.
@@ -154,7 +166,7 @@ fn collapse(bvh: &Bvh2, n: usize, wide: &mut Vec<WideNode>, parallel: bool) -> (
         node.valid |= 1 << k;
         if nodes[c].is_leaf() {
             node.child[k] = nodes[c].first_index;
-            node.count[k] = nodes[c].prim_count;
+            node.count[k] = leaf_slots(nodes[c].prim_count);
         } else if let Some((sub, d)) = subtrees.next() {
             // The subtree's root is its node 0, and its inner children index its own vector.
             let base = wide.len() as u32;
@@ -235,8 +247,9 @@ impl Bvh {
     /// Builds a BVH over groups of primitives that a leaf never splits: group `g` has box
     /// `bounds[g]` and `size(g)` slots. Returns it with the group `order`: the BVH's slots hold
     /// the primitives of group `order[0]`, then those of `order[1]`, and so on, so a leaf's slot
-    /// range covers whole groups.
-    pub fn build_groups(bounds: &[Bounds], size: impl Fn(usize) -> u32) -> (Self, Vec<u32>) {
+    /// range covers whole groups. A group has at most 255 slots (`u8`), so a leaf of at most 255
+    /// groups counts its slots in a `u16`.
+    pub fn build_groups(bounds: &[Bounds], size: impl Fn(usize) -> u8) -> (Self, Vec<u32>) {
         if bounds.is_empty() {
             return (Self::default(), Vec::new());
         }
@@ -278,7 +291,7 @@ impl Bvh {
         let mut first_slot = Vec::with_capacity(order.len() + 1);
         first_slot.push(0u32);
         for &g in &order {
-            first_slot.push(first_slot[first_slot.len() - 1] + size(g as usize));
+            first_slot.push(first_slot[first_slot.len() - 1] + u32::from(size(g as usize)));
         }
         for node in bvh.nodes.iter_mut().filter(|n| n.is_leaf()) {
             let (first, end) = (
@@ -437,27 +450,30 @@ impl Bvh {
             return;
         }
         let entered = q.enter_boxes(lanes, &self.wide[0].bounds, *t_max);
-        if entered.0 & self.wide[0].valid == 0 {
+        if entered.0 & u32::from(self.wide[0].valid) == 0 {
             return;
         }
         // Each level pushes at most eight children after popping one. The stack is zeroed at
         // every query, so a shallow tree gets a short one.
         let needed = (WIDTH - 1) * self.depth + 1;
         if needed <= SHORT_STACK {
-            let mut stack = [0u32; SHORT_STACK];
+            let mut stack = [0u64; SHORT_STACK];
             self.traverse_wide::<NEAREST_FIRST, W>(lanes, entered, &mut stack, q, t_max, &mut leaf);
         } else if needed <= INLINE_STACK {
-            let mut stack = [0u32; INLINE_STACK];
+            let mut stack = [0u64; INLINE_STACK];
             self.traverse_wide::<NEAREST_FIRST, W>(lanes, entered, &mut stack, q, t_max, &mut leaf);
         } else {
-            let mut stack = vec![0u32; needed];
+            let mut stack = vec![0u64; needed];
             self.traverse_wide::<NEAREST_FIRST, W>(lanes, entered, &mut stack, q, t_max, &mut leaf);
         }
     }
 
-    /// Traversal of the wide tree from its root, whose children `root` tested. A node popped
-    /// from `stack` tests its children against the `t_max` of that moment, which culls what a
-    /// closer hit has put out of reach. A node's entered leaves are visited first, then its inner
+    /// Traversal of the wide tree from its root, whose children `root` tested. The stack holds
+    /// each pushed node's entry distance (its bits above its index); a node popped beyond the
+    /// `t_max` of that moment is dropped unread, and one within tests its children against that
+    /// `t_max`, which culls what a closer hit has put out of reach. Dropping it changes nothing
+    /// but the work: its children's boxes lie inside its own, so (the slab test being monotone in
+    /// the bounds) none of them could be entered before its own entry distance. A node's entered leaves are visited first, then its inner
     /// children still in reach are pushed; with `NEAREST_FIRST` both go nearest first (inner
     /// children pushed farthest deepest), without, in node order.
     #[inline(always)]
@@ -465,7 +481,7 @@ impl Bvh {
         &self,
         lanes: W,
         root: (u32, [f32; WIDTH]),
-        stack: &mut [u32],
+        stack: &mut [u64],
         q: &RayQuery,
         t_max: &mut f32,
         leaf: &mut impl Leaf,
@@ -474,7 +490,7 @@ impl Bvh {
         let mut node = &self.wide[0];
         let (mut mask, mut near) = root;
         loop {
-            let mut hits = mask & node.valid;
+            let mut hits = mask & u32::from(node.valid);
             // The entered children, nearest first (insertion sort of at most eight) or as they
             // come. A key is the entry distance's bits above the child's index: distances are
             // never negative (nor NaN), so keys order as (distance, index) do, and equal
@@ -515,15 +531,22 @@ impl Bvh {
             for &key in order[..n].iter().rev() {
                 let (k, t) = child(key);
                 if node.count[k] == 0 && t <= *t_max {
-                    stack[top] = node.child[k];
+                    stack[top] = (key >> 32) << 32 | u64::from(node.child[k]);
                     top += 1;
                 }
             }
-            if top == 0 {
-                return;
-            }
-            top -= 1;
-            node = &self.wide[stack[top] as usize];
+            // The nearest pushed node still in reach; the ones a closer hit put beyond it go.
+            let next = loop {
+                if top == 0 {
+                    return;
+                }
+                top -= 1;
+                let entry = stack[top];
+                if f32::from_bits((entry >> 32) as u32) <= *t_max {
+                    break entry as u32;
+                }
+            };
+            node = &self.wide[next as usize];
             (mask, near) = q.enter_boxes(lanes, &node.bounds, *t_max);
         }
     }

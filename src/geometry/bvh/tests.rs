@@ -21,7 +21,7 @@ fn every_primitive_lands_in_exactly_one_leaf() {
 #[test]
 fn a_group_is_never_split_between_leaves_and_every_slot_is_in_one() {
     // Groups of one to three slots, as for quads (two triangles) among single triangles.
-    let sizes: Vec<u32> = (0..500).map(|i| 1 + (i * 7 % 3)).collect();
+    let sizes: Vec<u8> = (0..500u32).map(|i| 1 + (i * 7 % 3) as u8).collect();
     let bounds: Vec<Bounds> = (0..sizes.len())
         .map(|i| {
             let c = Vec3::new((i % 8) as f32, (i / 8 % 8) as f32, (i / 64) as f32);

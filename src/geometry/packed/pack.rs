@@ -72,7 +72,7 @@ impl BvhPlan {
             i = end;
         }
         let (triangle_bvh, group_order) =
-            Bvh::build_groups(&bounds, |g| groups[g].end - groups[g].start);
+            Bvh::build_groups(&bounds, |g| (groups[g].end - groups[g].start) as u8); // 1 or 2
         let triangle_order = group_order
             .iter()
             .flat_map(|&g| groups[g as usize].clone())

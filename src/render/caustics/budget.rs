@@ -19,6 +19,7 @@ use rayon::prelude::*;
 
 use super::emit::Sources;
 use super::light_path;
+use crate::cpu::Sse;
 use crate::geometry::layout::Layout;
 use crate::render::integrator::trace_path;
 use crate::render::{SceneView, TraceStats};
@@ -87,7 +88,7 @@ fn caustic_share<L: Layout>(
         .map(|k| {
             let mut stats = TraceStats::default();
             let mut rng = Rng::for_sample(seed, k, 0);
-            let splat = light_path(view, sources, size, &mut rng, &mut stats, None)
+            let splat = light_path(Sse, (view, sources, size), &mut rng, &mut stats, None)
                 .map_or(0.0, |(_, l)| f64::from(luminance(l)));
             let mut rng = Rng::for_sample(seed, k, 1);
             let u = rng.next_2d();

@@ -57,7 +57,7 @@ use rayon::prelude::*;
 use super::integrator::{is_chain_vertex, point_error, spawn};
 use super::medium::Medium;
 use super::{Cancelled, Method, SceneView, TraceStats};
-use crate::cpu::Sse;
+use crate::cpu::{Isa, Kernel, Lanes};
 use crate::film::Film;
 use crate::geometry::layout::Layout;
 use crate::geometry::packed::Hit;
@@ -179,18 +179,15 @@ impl LightTracing {
                 .into_par_iter()
                 .map(|item| {
                     let (sample, part) = (first + item / chunks, item % chunks);
-                    let mut stats = TraceStats::default();
-                    let mut splats = Vec::new();
-                    let mut photons = Vec::new();
-                    let mut keep = keep_photons.then_some(&mut photons);
-                    for k in part * chunk..((part + 1) * chunk).min(self.paths) {
-                        let mut rng = Rng::for_sample(seed, k, sample);
-                        let left = keep.as_deref_mut();
-                        let splat =
-                            light_path(view, &self.sources, size, &mut rng, &mut stats, left);
-                        splats.extend(splat);
-                    }
-                    (splats, photons, stats)
+                    Isa::selected().run(Chunk {
+                        view,
+                        sources: &self.sources,
+                        size,
+                        seed,
+                        sample,
+                        paths: part * chunk..((part + 1) * chunk).min(self.paths),
+                        keep_photons,
+                    })
                 })
                 .collect();
             for (item, (splats, photons, s)) in (batch..).zip(done) {
@@ -218,16 +215,48 @@ impl LightTracing {
     }
 }
 
+/// The light paths `paths` of sample `sample`: the work of a [`LightTracing::trace`] item, which
+/// [`Isa::run`] compiles once per instruction set (as the camera's passes are), so the light
+/// paths' traversals use the widest lanes the CPU has.
+struct Chunk<'a, L: Layout> {
+    view: &'a SceneView<'a, L>,
+    sources: &'a Sources,
+    size: (u32, u32),
+    seed: u64,
+    sample: u64,
+    paths: Range<u64>,
+    keep_photons: bool,
+}
+
+impl<L: Layout> Kernel for Chunk<'_, L> {
+    type Output = Traced;
+
+    #[inline(always)]
+    fn run<W: Lanes>(self, lanes: W) -> Traced {
+        let mut stats = TraceStats::default();
+        let mut splats = Vec::new();
+        let mut photons = Vec::new();
+        let mut keep = self.keep_photons.then_some(&mut photons);
+        for k in self.paths {
+            let mut rng = Rng::for_sample(self.seed, k, self.sample);
+            let left = keep.as_deref_mut();
+            let at = (self.view, self.sources, self.size);
+            splats.extend(light_path(lanes, at, &mut rng, &mut stats, left));
+        }
+        (splats, photons, stats)
+    }
+}
+
 /// One light path: its splat (pixel index, value before the `1 / N` weight), if
 /// it reaches a vertex the camera sees that is not a chain vertex (`is_chain_vertex`: a
 /// perfect mirror or glass, under `Photons` also a narrow glossy conductor) after at least one
 /// chain vertex; with `photons`, the photons it leaves on the way: wherever it arrives after a
 /// chain vertex at a surface that may shade as another kind there (not a chain vertex, or a
 /// mix, whose pick is the gather's to make).
-fn light_path<L: Layout>(
-    view: &SceneView<L>,
-    sources: &Sources,
-    size: (u32, u32),
+#[inline(always)]
+fn light_path<L: Layout, W: Lanes>(
+    lanes: W,
+    (view, sources, size): (&SceneView<L>, &Sources, (u32, u32)),
     sampler: &mut Rng,
     stats: &mut TraceStats,
     mut photons: Option<&mut Vec<Photon>>,
@@ -239,7 +268,7 @@ fn light_path<L: Layout>(
     let mut specular = 0u32;
     loop {
         stats.rays += 1;
-        let hit = view.geometry.intersect_with(Sse, &ray, f32::INFINITY)?;
+        let hit = view.geometry.intersect_with(lanes, &ray, f32::INFINITY)?;
         let s = view.geometry.surface(&ray, &hit);
         if !medium.is_clear() {
             beta *= medium.transmittance((s.p - ray.origin).length());
@@ -274,7 +303,7 @@ fn light_path<L: Layout>(
                 material,
                 direction: ray.direction,
             };
-            return connect(view, at, beta, size, sampler, stats);
+            return connect(lanes, view, at, beta, size, sampler, stats);
         }
         // The path tracer reaches a light through at most `max_depth − 2` specular vertices.
         if specular + 2 >= view.max_depth {
@@ -307,7 +336,9 @@ struct Arrival<'a> {
 /// light's side, about the shading normal, folded as the path tracer folds it) is the one the
 /// path tracer samples, and the geometric cosines convert the light path's density at the
 /// point into the camera's.
-fn connect<L: Layout>(
+#[inline(always)]
+fn connect<L: Layout, W: Lanes>(
+    lanes: W,
     view: &SceneView<L>,
     at: Arrival,
     beta: Vec3,
@@ -345,7 +376,7 @@ fn connect<L: Layout>(
     stats.rays += 1;
     if view
         .geometry
-        .occluded_with(Sse, &Ray::new(from, span / length), length)
+        .occluded_with(lanes, &Ray::new(from, span / length), length)
     {
         return None;
     }
