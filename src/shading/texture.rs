@@ -257,13 +257,26 @@ fn srgb_table() -> Vec<f32> {
 /// (within an ulp of a cell's edge); NaN and infinite arguments (whose sine is NaN) give false.
 #[inline]
 fn sines_agree(a: f32, b: f32) -> bool {
-    // 0 or 1 for a finite x, NaN otherwise; exact for every finite quotient (for |x/π| ≥ 2²⁴
-    // the quotient is an even integer or `0.5 · h` is exact).
-    let parity = |x: f32| {
-        let h = (x * std::f32::consts::FRAC_1_PI).floor();
-        h - 2.0 * (0.5 * h).floor()
-    };
-    a != 0.0 && b != 0.0 && parity(a) == parity(b)
+    a != 0.0 && b != 0.0 && matches!((half_period_parity(a), half_period_parity(b)), (Some(p), Some(q)) if p == q)
+}
+
+/// The parity of `⌊x/π⌋` (`None` for a NaN or infinite `x`, whose sine is NaN), exact for every
+/// finite quotient, by integer arithmetic: no `floor`, which the baseline x86-64 copy of the
+/// render loop calls in the C library (SSE2 has no rounding instruction). From 2²⁴ up a
+/// quotient's ulp is at least 2, so it is an even integer; below, the truncation to an integer
+/// is exact and is moved down by one where it rounded a negative quotient up.
+#[inline]
+fn half_period_parity(x: f32) -> Option<u32> {
+    let q = x * std::f32::consts::FRAC_1_PI;
+    if !q.is_finite() {
+        return None;
+    }
+    if q.abs() >= (1u32 << 24) as f32 {
+        return Some(0);
+    }
+    let truncated = q as i32;
+    let floor = truncated - i32::from(q < truncated as f32);
+    Some((floor & 1) as u32)
 }
 
 /// A colour source.
@@ -540,6 +553,32 @@ mod tests {
         assert_eq!(t.eval(Vec2::new(0.5, 0.5)), Vec3::ONE);
         assert_eq!(t.eval(Vec2::new(1.5, 0.5)), Vec3::ZERO);
         assert_eq!(t.eval(Vec2::new(1.5, 1.5)), Vec3::ONE);
+    }
+
+    /// The integer parity equals `⌊x/π⌋ mod 2` computed in f64 from the same f32 quotient, at
+    /// every magnitude: around each power of two from 2⁻²⁰ to 2¹²⁷ (where the quotient stops
+    /// having a fractional part at 2²³ and an odd one at 2²⁴), both signs, an ulp either side.
+    #[test]
+    fn half_period_parity_is_the_floor_s_parity_at_every_magnitude() {
+        let mut checked = 0;
+        for e in -20..=127 {
+            let p = 2f32.powi(e);
+            for q in [p, p.next_up(), p.next_down(), 1.5 * p, 3.0 * p] {
+                for q in [q, -q] {
+                    let x = q * std::f32::consts::PI;
+                    let quotient = x * std::f32::consts::FRAC_1_PI;
+                    if !quotient.is_finite() || !x.is_finite() {
+                        continue;
+                    }
+                    let want = f64::from(quotient).floor().rem_euclid(2.0) as u32;
+                    assert_eq!(half_period_parity(x), Some(want), "{x}");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 1400, "{checked}");
+        assert_eq!(half_period_parity(f32::NAN), None);
+        assert_eq!(half_period_parity(f32::NEG_INFINITY), None);
     }
 
     /// The parity form agrees with the sign of the product of sines (computed in f64, the
