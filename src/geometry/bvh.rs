@@ -56,8 +56,8 @@ const LARGE_BUILD_PARAMS: BvhBuildParams = BvhBuildParams {
 
 /// A wide node: the boxes of up to eight children lane by lane (`[min_x, min_y, min_z, max_x,
 /// max_y, max_z]`, eight lanes each, a row per AVX register), and what each child is. 256 bytes
-/// aligned to 64, so a visit reads four cache lines (a node of `u32` counts took 288 bytes: five
-/// lines for most visits, since the child mask after the counts is read at every one).
+/// aligned to 64: a visit reads exactly four cache lines, the boxes in three and the rest (read at
+/// every visit for the mask) in the fourth.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 struct WideNode {
@@ -472,10 +472,11 @@ impl Bvh {
     /// each pushed node's entry distance (its bits above its index); a node popped beyond the
     /// `t_max` of that moment is dropped unread, and one within tests its children against that
     /// `t_max`, which culls what a closer hit has put out of reach. Dropping it changes nothing
-    /// but the work: its children's boxes lie inside its own, so (the slab test being monotone in
-    /// the bounds) none of them could be entered before its own entry distance. A node's entered leaves are visited first, then its inner
-    /// children still in reach are pushed; with `NEAREST_FIRST` both go nearest first (inner
-    /// children pushed farthest deepest), without, in node order.
+    /// but the work: its children's boxes lie inside its own, so (the slab test being monotone
+    /// in the bounds) none of them could be entered before its own entry distance. A node's
+    /// entered leaves are visited first, then its inner children still in reach are pushed; with
+    /// `NEAREST_FIRST` both go nearest first (inner children pushed farthest deepest), without,
+    /// in node order.
     #[inline(always)]
     fn traverse_wide<const NEAREST_FIRST: bool, W: Lanes>(
         &self,
