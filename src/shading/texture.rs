@@ -257,7 +257,9 @@ fn srgb_table() -> Vec<f32> {
 /// (within an ulp of a cell's edge); NaN and infinite arguments (whose sine is NaN) give false.
 #[inline]
 fn sines_agree(a: f32, b: f32) -> bool {
-    a != 0.0 && b != 0.0 && matches!((half_period_parity(a), half_period_parity(b)), (Some(p), Some(q)) if p == q)
+    a != 0.0
+        && b != 0.0
+        && matches!((half_period_parity(a), half_period_parity(b)), (Some(p), Some(q)) if p == q)
 }
 
 /// The parity of `⌊x/π⌋` (`None` for a NaN or infinite `x`, whose sine is NaN), exact for every

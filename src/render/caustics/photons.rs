@@ -63,6 +63,9 @@ pub struct Photon {
     pub chain: u32,
 }
 
+// The module's notes give a photon's memory as 56 bytes.
+const _: () = assert!(std::mem::size_of::<Photon>() == 56);
+
 /// One sample's photons, sorted into a grid of cells `2r` wide, and the gather's radius.
 #[derive(Clone, Debug)]
 pub struct PhotonMap {
