@@ -263,10 +263,10 @@ fn sines_agree(a: f32, b: f32) -> bool {
 }
 
 /// The parity of `⌊x/π⌋` (`None` for a NaN or infinite `x`, whose sine is NaN), exact for every
-/// finite quotient, by integer arithmetic: no `floor`, which the baseline x86-64 copy of the
-/// render loop calls in the C library (SSE2 has no rounding instruction). From 2²⁴ up a
-/// quotient's ulp is at least 2, so it is an even integer; below, the truncation to an integer
-/// is exact and is moved down by one where it rounded a negative quotient up.
+/// finite quotient, by integer arithmetic: no `floor`, which the out-of-line texture lookup,
+/// compiled for baseline x86-64 (SSE2 has no rounding instruction), calls in the C library.
+/// From 2²⁴ up a quotient's ulp is at least 2, so it is an even integer; below, the truncation
+/// to an integer is exact and is moved down by one where it rounded a negative quotient up.
 #[inline]
 fn half_period_parity(x: f32) -> Option<u32> {
     let q = x * std::f32::consts::FRAC_1_PI;

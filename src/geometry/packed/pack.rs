@@ -71,8 +71,9 @@ impl BvhPlan {
             bounds.push(b);
             i = end;
         }
+        // A group is one triangle or a quad's two.
         let (triangle_bvh, group_order) =
-            Bvh::build_groups(&bounds, |g| (groups[g].end - groups[g].start) as u8); // 1 or 2
+            Bvh::build_groups(&bounds, |g| (groups[g].end - groups[g].start) as u8);
         let triangle_order = group_order
             .iter()
             .flat_map(|&g| groups[g as usize].clone())
