@@ -750,7 +750,8 @@ fn previews_between_passes_leave_the_render_a_fresh_one() {
         if reply.status == 200 {
             answered += 1;
         } else {
-            // Over the connection limit (`503`) while earlier connections close: let them.
+            // Refused (seen: `503`, most likely connections over the limit while earlier ones
+            // close): wait a moment before the next.
             refused.insert(reply.status);
             std::thread::sleep(std::time::Duration::from_millis(5));
         }
