@@ -4,7 +4,7 @@
 #
 #   benches/suite/run.sh [--scenes cornell,envmap] [--quick] [--scale 0.5] [--spp-list 4,16,64]
 #                        [--reference-spp 1024] [--denoise-times 1,10] [--threads N] [--no-cycles]
-#                        [--out bench/suite]
+#                        [--repeat N] [--out bench/suite]
 #
 # Environment: MITSUBA_VENV, CYCLES_VENV, CYCLES_PYTHON, BPY_VERSION (see benches/mitsuba/venv.sh
 # and benches/cycles/venv.sh, which set up both environments), RONDO_OIDN_DIR (src/denoise/).

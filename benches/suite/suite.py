@@ -9,6 +9,12 @@ to [0, 1], pixels whose reference exceeds 1 left out. On a scene of OWN_REFERENC
 materials the renderers model differently, each renderer's err is taken against its own
 converged image (noise only, what E compares) and its mean against Mitsuba's (the bias the
 models' difference costs).
+
+With --repeat N the timed renders are timed N times in all: after the first round (which picks
+each peer's spp for equal time and gives every image), N - 1 more rounds time rondo, Mitsuba and
+Cycles again in turn at the same spp and seed (the same images), and each point's time is the
+median of its N. The rounds interleave the renderers, so a slow phase of a shared host reaches
+each of them rather than one; the denoised budgets are rendered once.
 """
 
 import argparse
@@ -16,6 +22,7 @@ import json
 import os
 import re
 import shlex
+import statistics
 import subprocess
 import sys
 import time
@@ -226,6 +233,42 @@ def cycles_curve(args, export, work, size, rondo_pts, budgets, own_ref, ref, mi,
     return pts, dpts, notes
 
 
+def cycles_retime(args, export, work, size, pts, guiding):
+    """Cycles' render times at the spp of `pts` again (fixed-spp renders, `--spp-list`), in
+    their order."""
+    cmd = [args.cycles_python, os.path.join(HERE, "cycles_render.py"), export,
+           os.path.join(work, "cycles_guiding" if guiding else "cycles"),
+           "--size", str(size[0]), str(size[1]),
+           "--spp-list", ",".join(str(p["spp"]) for p in pts)]
+    if args.threads:
+        cmd += ["--threads", str(args.threads)]
+    if guiding:
+        cmd += ["--guiding"]
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0:
+        sys.exit("cycles failed:\n%s" % p.stderr[-3000:])
+    times = [json.loads(line)["seconds"] for line in p.stdout.splitlines()
+             if line.startswith("{") and "notes" not in line]
+    if len(times) != len(pts):
+        sys.exit("cycles gave %d times for %d renders" % (len(times), len(pts)))
+    return times
+
+
+def settle_times(curves):
+    """Each repeated point's time becomes the median of its times; its rates follow."""
+    for key, pts in curves.items():
+        if key.endswith("notes"):
+            continue
+        for p in pts:
+            if len(p.get("times", [])) < 2:
+                continue
+            t = statistics.median(p["times"])
+            if "mrps" in p:
+                p["mrps"] *= p["t"] / t
+            p["msps"] *= p["t"] / t
+            p["t"] = t
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scenes", default=",".join(ALL),
@@ -255,8 +298,13 @@ def main():
                     "scene's own): the first is the curve the peers are matched to in time; "
                     "each other one (e.g. caustics) gets its own curve and the table's column "
                     "`E <method>` = t_first err_first^2 / (t err^2)")
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="time every raw render this many times, in rounds that interleave "
+                    "the renderers, and keep the median (the images are rendered once)")
     ap.add_argument("--out", default=os.path.join(ROOT, "bench", "suite"))
     args = ap.parse_args()
+    if args.repeat < 1:
+        sys.exit("--repeat takes 1 or more")
     if args.quick:
         args.spp_list, args.reference_spp, args.denoise_times = "2,8", 64, "0.2,1"
 
@@ -323,7 +371,7 @@ def main():
             r = rondo_render(args.rondo, scene, spp, size, 300 + k, out_img, args.threads,
                              method=methods[0])
             img = read_exr(mi, out_img)
-            rondo_pts.append({"spp": spp, "t": r["t"], "bvh": r["bvh"],
+            rondo_pts.append({"spp": spp, "t": r["t"], "times": [r["t"]], "bvh": r["bvh"],
                               "err": err(img, refs.get("rondo", ref)),
                               "msps": r["msps"], "mrps": r["mrps"], "mean": means(img, ref)})
             print("  rondo   %5d spp %8.3f s err %.4e  %.2f M samples/s %.2f M rays/s"
@@ -336,7 +384,8 @@ def main():
                 r = rondo_render(args.rondo, scene, spp, size, 300 + k, out_img, args.threads,
                                  method=method)
                 img = read_exr(mi, out_img)
-                pts.append({"spp": spp, "t": r["t"], "err": err(img, refs.get("rondo", ref)),
+                pts.append({"spp": spp, "t": r["t"], "times": [r["t"]],
+                            "err": err(img, refs.get("rondo", ref)),
                             "msps": r["msps"], "mrps": r["mrps"], "mean": means(img, ref)})
                 print("  rondo/%-9s %5d spp %8.3f s err %.4e" % (method, spp, r["t"],
                                                                  pts[-1]["err"]), flush=True)
@@ -347,10 +396,11 @@ def main():
                                                refs.get("rondo", ref), mi,
                                                os.path.join(work, "rondo_denoised.exr"))
 
+        mitsuba_timers = {}
         for sampler in dict.fromkeys(["independent", BEST.get(name, "multijitter")]):
             sc, notes = mitsuba_scene.load(mi, export, sampler, work, size)
 
-            def render(n, seed):
+            def render(n, seed, sc=sc):
                 t0 = time.perf_counter()
                 img = mi.render(sc, spp=n, seed=seed)
                 dr.eval(img)
@@ -370,13 +420,15 @@ def main():
                         break
                     n = max(1, round(n * rp["t"] / t))
                 pix = img.shape[0] * img.shape[1]
-                pts.append({"spp": n, "t": t, "err": err(img, refs.get("mitsuba", ref)),
+                pts.append({"spp": n, "t": t, "times": [t], "seed": 101 + k,
+                            "err": err(img, refs.get("mitsuba", ref)),
                             "msps": n * pix / t / 1e6, "mean": means(img, ref)})
                 print("  mitsuba/%-11s %5d spp %8.3f s err %.4e" % (sampler, n, t,
                                                                      pts[-1]["err"]),
                       flush=True)
             curves["mitsuba " + sampler] = pts
             curves["mitsuba " + sampler + " notes"] = notes
+            mitsuba_timers[sampler] = render
 
         if not args.no_cycles:
             pts, dpts, notes = cycles_curve(args, export, work, size, rondo_pts, budgets,
@@ -390,6 +442,28 @@ def main():
                                              refs.get("cycles", ref), ref, mi, guiding=True)
                 curves["cycles guiding"] = pts
                 curves["cycles guiding notes"] = notes
+
+        for round_ in range(1, args.repeat):
+            for key, method in [("rondo", methods[0])] + [("rondo " + m, m)
+                                                            for m in methods[1:]]:
+                for k, p in enumerate(curves[key]):
+                    p["times"].append(rondo_render(args.rondo, scene, p["spp"], size, 300 + k,
+                                                   out_img, args.threads, method=method)["t"])
+            for sampler, render in mitsuba_timers.items():
+                for p in curves["mitsuba " + sampler]:
+                    # Untimed first, as in the first round: after the other sampler's renders,
+                    # Dr.Jit compiles this one's kernels again.
+                    render(p["spp"], p["seed"] - 1)
+                    p["times"].append(render(p["spp"], p["seed"])[0])
+            for key, guiding in (("cycles", False), ("cycles guiding", True)):
+                if key in curves:
+                    for p, t in zip(curves[key], cycles_retime(args, export, work, size,
+                                                               curves[key], guiding)):
+                        p.setdefault("times", [p["t"]]).append(t)
+            print("  round %d of %d: %s" % (round_ + 1, args.repeat, "; ".join(
+                "%s %s s" % (key, "/".join("%.3f" % p["times"][-1] for p in pts))
+                for key, pts in curves.items() if not key.endswith("notes"))), flush=True)
+        settle_times(curves)
 
         row = summarise(name, size, args, curves, denoised)
         row["own_reference"] = name in OWN_REFERENCE
@@ -467,8 +541,11 @@ def table(rows, args):
              "is built at load), Cycles' own `render_time` (no scene synchronisation; see "
              "benches/suite/README.md). On %s each renderer's err is against its own converged "
              "image at the same spp (their materials differ; the mean column gives what that "
-             "costs against Mitsuba's)." % (args.reference_sampler, args.reference_spp,
-                                           ", ".join(sorted(OWN_REFERENCE))), "",
+             "costs against Mitsuba's).%s" % (args.reference_sampler, args.reference_spp,
+                                             ", ".join(sorted(OWN_REFERENCE)),
+                                             " Each time is the median of %d, timed in rounds "
+                                             "that interleave the renderers (--repeat)."
+                                             % args.repeat if args.repeat > 1 else ""), "",
              "| scene | size | rondo spp, s, err | rondo M samples/s, M rays/s | "
              + "".join("rondo %s spp, s, err | E %s | " % (m, m) for m in extra)
              + " | ".join("E vs %s" % p for p in peers) + " | "
