@@ -39,10 +39,12 @@ use super::store::{
 };
 use super::triangle::{TriangleHit, intersect_triangle};
 
-/// The layout `Geometry` uses when none is named, and `render` uses without `--layout`: the one
-/// that rendered fastest for each primitive kind in `rondo bench layout` (BENCHMARKS.md,
-/// "SoA vs AoS"). [`LayoutKind::default`] must name the same layout.
-pub type DefaultLayout = Hybrid;
+/// The layout `Geometry` uses when none is named, and `render` uses without `--layout`: no other
+/// renders faster in `rondo bench layout` (BENCHMARKS.md, "SoA against AoS on an Intel Xeon").
+/// Since the BVH's leaves hold about one primitive, the 4-lane sphere test of [`SoaSimd`] and
+/// [`Hybrid`] mostly runs one live lane and costs more than it saves. [`LayoutKind::default`]
+/// must name the same layout.
+pub type DefaultLayout = Aos;
 
 /// Primitives stored one array per field (structure of arrays), tested one at a time.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -58,10 +60,10 @@ pub struct Aos;
 pub struct SoaSimd;
 
 /// Spheres as in [`SoaSimd`] (field arrays, tested 4 at a time), triangles as in [`Aos`]
-/// (structs, tested one at a time): for each kind the layout that renders it fastest in
-/// `rondo bench layout`. A triangle is 9 floats, so its nine SoA arrays cost about nine cache
-/// lines per leaf visit where 36-byte structs cost about three; a sphere is 4 floats, and there
-/// the lanes win.
+/// (structs, tested one at a time). A triangle is 9 floats, so its nine SoA arrays cost about
+/// nine cache lines per leaf visit where 36-byte structs cost about three; a sphere is 4 floats,
+/// where the lanes won while leaves held several primitives (the default until leaves came to
+/// hold about one).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Hybrid;
 
@@ -70,12 +72,12 @@ pub struct Hybrid;
 pub enum LayoutKind {
     /// [`Soa`].
     Soa,
-    /// [`Aos`].
+    /// [`Aos`], the default.
+    #[default]
     Aos,
     /// [`SoaSimd`].
     SoaSimd,
-    /// [`Hybrid`], the default.
-    #[default]
+    /// [`Hybrid`].
     Hybrid,
 }
 
