@@ -194,15 +194,11 @@ def rondo_denoised(args, scene, size, budgets, raw, ref, own_ref, mi, out_img):
     return pts
 
 
-def cycles_curve(args, export, work, size, rondo_pts, budgets, own_ref, ref, mi, guiding):
-    """Cycles at equal time with rondo's raw renders (and at the denoised budgets): the raw
-    points, the denoised points and Cycles' notes. `guiding` turns on Cycles' path guiding
-    (Open PGL, surface guiding; it trains on its first samples)."""
+def run_cycles(args, export, work, size, guiding, extra):
+    """cycles_render.py on the export with `extra` arguments; its standard output."""
     cmd = [args.cycles_python, os.path.join(HERE, "cycles_render.py"), export,
            os.path.join(work, "cycles_guiding" if guiding else "cycles"),
-           "--size", str(size[0]), str(size[1]),
-           "--targets", ",".join("%.4f" % p["t"] for p in rondo_pts),
-           "--denoise-targets", ",".join("%g" % b for b in budgets)]
+           "--size", str(size[0]), str(size[1])] + extra
     if args.threads:
         cmd += ["--threads", str(args.threads)]
     if guiding:
@@ -210,8 +206,18 @@ def cycles_curve(args, export, work, size, rondo_pts, budgets, own_ref, ref, mi,
     p = subprocess.run(cmd, capture_output=True, text=True)
     if p.returncode != 0:
         sys.exit("cycles failed:\n%s" % p.stderr[-3000:])
+    return p.stdout
+
+
+def cycles_curve(args, export, work, size, rondo_pts, budgets, own_ref, ref, mi, guiding):
+    """Cycles at equal time with rondo's raw renders (and at the denoised budgets): the raw
+    points, the denoised points and Cycles' notes. `guiding` turns on Cycles' path guiding
+    (Open PGL, surface guiding; it trains on its first samples)."""
+    out = run_cycles(args, export, work, size, guiding,
+                     ["--targets", ",".join("%.4f" % p["t"] for p in rondo_pts),
+                      "--denoise-targets", ",".join("%g" % b for b in budgets)])
     pts, dpts, notes = [], [], []
-    for line in p.stdout.splitlines():
+    for line in out.splitlines():
         if not line.startswith("{"):
             continue
         d = json.loads(line)
@@ -236,18 +242,9 @@ def cycles_curve(args, export, work, size, rondo_pts, budgets, own_ref, ref, mi,
 def cycles_retime(args, export, work, size, pts, guiding):
     """Cycles' render times at the spp of `pts` again (fixed-spp renders, `--spp-list`), in
     their order."""
-    cmd = [args.cycles_python, os.path.join(HERE, "cycles_render.py"), export,
-           os.path.join(work, "cycles_guiding" if guiding else "cycles"),
-           "--size", str(size[0]), str(size[1]),
-           "--spp-list", ",".join(str(p["spp"]) for p in pts)]
-    if args.threads:
-        cmd += ["--threads", str(args.threads)]
-    if guiding:
-        cmd += ["--guiding"]
-    p = subprocess.run(cmd, capture_output=True, text=True)
-    if p.returncode != 0:
-        sys.exit("cycles failed:\n%s" % p.stderr[-3000:])
-    times = [json.loads(line)["seconds"] for line in p.stdout.splitlines()
+    out = run_cycles(args, export, work, size, guiding,
+                     ["--spp-list", ",".join(str(p["spp"]) for p in pts)])
+    times = [json.loads(line)["seconds"] for line in out.splitlines()
              if line.startswith("{") and "notes" not in line]
     if len(times) != len(pts):
         sys.exit("cycles gave %d times for %d renders" % (len(times), len(pts)))
