@@ -1,7 +1,7 @@
 //! Alpha masks (`Pbr(alpha_cutoff: …)`, glTF's `alphaMode: MASK`): the camera sees through a
 //! mask exactly where its alpha is below the cutoff, shadows pass through it in proportion to
-//! its open area, a mask absent everywhere changes no path, and a hostile stack of masked layers
-//! ends.
+//! its open area, light-traced caustics pass through it as the camera's paths do, a mask absent
+//! everywhere changes no path, and a hostile stack of masked layers ends.
 
 mod common;
 
@@ -130,6 +130,68 @@ fn a_mask_between_a_plane_and_the_sun_lets_through_its_open_fraction() {
                 "{diameter}° {method}: {mean} ± {se}, expected {expected}"
             );
         }
+    }
+}
+
+#[test]
+fn a_mirrored_sun_reaches_a_ceiling_through_masks_by_light_tracing() {
+    // The closed-form caustic of tests/caustics.rs: a sun of irradiance E = 3 from 45° falls on
+    // a perfect mirror at y = 0 and is reflected onto a diffuse ceiling (ρ = 0.5) at y = 2,
+    // seen from below, radiance ρ/π · E cos 45°. Only light tracing finds it (the path tracer's
+    // BSDF samples nearly never hit the 0.53° sun), so without light paths through masks the
+    // ceiling stays black. Two masked quads stand in the way:
+    // - `pane`, horizontal at y = 1.5, open everywhere: the reflected light and the camera's
+    //   view of the ceiling (the light paths' connections) both cross it, and it must change
+    //   nothing;
+    // - `grille`, vertical at x = −2 between the mirror and the part of the ceiling the camera
+    //   sees, a 256 × 256 checkerboard of open and opaque texels: it must let through half the
+    //   light, on average over the ceiling the camera sees (its shadow is the checkerboard,
+    //   projected along the light).
+    let dir = temp_dir("alpha-caustic");
+    write_rgba(&dir, "open.png", (2, 2), [0, 0, 0], |_, _| 0);
+    write_rgba(&dir, "checker.png", (256, 256), [0, 0, 0], |x, y| {
+        if (x + y) % 2 == 0 { 0 } else { 255 }
+    });
+    let expected = 0.5 / PI * 3.0 * std::f64::consts::FRAC_1_SQRT_2;
+    for (grille, open) in [(false, 1.0), (true, 0.5)] {
+        let grille = if grille {
+            "Entity(material: \"grille\", shape: Quad(a: (-2, 0, -1.5), b: (-2, 2, -1.5), c: (-2, 2, 1.5), d: (-2, 0, 1.5))),"
+        } else {
+            ""
+        };
+        let scene = write_scene(
+            &dir,
+            "caustic.ron",
+            &format!(
+                r#"Scene(
+    camera: Camera(position: (-3, 0.2, 0), look_at: (-3, 2, 0), up: (0, 0, 1), fov: 30),
+    settings: Settings(width: 24, height: 24, spp: 1024, max_depth: 3, background: (0, 0, 0),
+        sun: Sun(direction: (1, 1, 0), angular_diameter: 0.53, irradiance: 3.0, colour: (1, 1, 1))),
+    materials: {{
+        "ceiling": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
+        "mirror": Metal(albedo: Constant((1, 1, 1)), roughness: 0),
+        "pane": Pbr(base_color: Image(path: "open.png"), alpha_cutoff: 0.5),
+        "grille": Pbr(base_color: Image(path: "checker.png"), alpha_cutoff: 0.5),
+    }},
+    entities: [
+        Entity(material: "ceiling", shape: Quad(a: (-4, 2, -1), b: (-2, 2, -1), c: (-2, 2, 1), d: (-4, 2, 1))),
+        Entity(material: "mirror", shape: Quad(a: (-2, 0, -1.5), b: (0, 0, -1.5), c: (0, 0, 1.5), d: (-2, 0, 1.5))),
+        Entity(material: "pane", shape: Quad(a: (-4.5, 1.5, -1.5), b: (-1.5, 1.5, -1.5), c: (-1.5, 1.5, 1.5), d: (-4.5, 1.5, 1.5))),
+        {grille}
+    ],
+)"#
+            ),
+        );
+        let r = render(&scene, with(Method::Caustics, 1024), None);
+        let px: Vec<f64> = r.film().mean().iter().map(|p| f64::from(p.x)).collect();
+        let n = px.len() as f64;
+        let mean = px.iter().sum::<f64>() / n;
+        let se = (px.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+        let want = open * expected;
+        assert!(
+            (mean / want - 1.0).abs() < 0.05,
+            "open {open}: ceiling {mean} ± {se}, expected {want}"
+        );
     }
 }
 

@@ -1,6 +1,7 @@
 //! `Method::Caustics` (light tracing of camera → diffuse → perfect specular → light paths)
 //! against independent truth: a closed-form caustic, the plain path tracer that finds every
-//! path, determinism over threads and sample splits, and scenes it must leave alone.
+//! path, determinism over threads and sample splits (with and without alpha masks), and scenes
+//! it must leave alone. Caustics through alpha masks: tests/alpha_mask.rs.
 
 mod common;
 
@@ -169,12 +170,15 @@ fn the_caustic_scene_converges_to_what_the_plain_path_tracer_finds() {
 
 #[test]
 fn light_traced_images_are_the_same_on_any_thread_count() {
-    let scene = scenes_dir().join("caustic.ron");
-    for method in [Method::Caustics, Method::Photons] {
-        let o = overrides(method, 4, 7, (40, 30));
-        let one = render(&scene, o, Some(1));
-        let two = render(&scene, o, Some(2));
-        assert_eq!(one.film().sum, two.film().sum, "{method}");
+    // gltf.ron: light paths through alpha masks.
+    for name in ["caustic.ron", "gltf.ron"] {
+        let scene = scenes_dir().join(name);
+        for method in [Method::Caustics, Method::Photons] {
+            let o = overrides(method, 4, 7, (40, 30));
+            let one = render(&scene, o, Some(1));
+            let two = render(&scene, o, Some(2));
+            assert_eq!(one.film().sum, two.film().sum, "{name} {method}");
+        }
     }
 }
 
@@ -192,19 +196,21 @@ fn rondo(args: &[&str]) {
 
 #[test]
 fn split_and_merged_light_tracing_is_bit_exact_and_partials_name_the_method() {
-    split_and_merged_is_bit_exact("caustics");
+    split_and_merged_is_bit_exact("caustics", "caustic.ron");
+    // Light paths through alpha masks (the glTF model's fence) draw from their own numbers.
+    split_and_merged_is_bit_exact("caustics", "gltf.ron");
 }
 
 #[test]
 fn split_and_merged_photons_are_bit_exact_and_partials_name_the_method() {
     // Each sample gathers its own photons with its own radius: a partial of samples 7..20
     // holds what the whole range's samples 7..20 hold.
-    split_and_merged_is_bit_exact("photons");
+    split_and_merged_is_bit_exact("photons", "caustic.ron");
 }
 
-fn split_and_merged_is_bit_exact(method: &str) {
+fn split_and_merged_is_bit_exact(method: &str, scene: &str) {
     let dir = temp_dir("caustics-split");
-    let scene = scenes_dir().join("caustic.ron");
+    let scene = scenes_dir().join(scene);
     let s = |p: &Path| p.to_str().expect("utf-8 path").to_string();
     let scene = s(&scene);
     let common = [

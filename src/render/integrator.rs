@@ -117,7 +117,7 @@ pub fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
 /// [`Lanes::out_of_line`]: the masked scenes' loop stays out of the render loop, compiled for
 /// the same instructions.
 #[inline(always)]
-fn first_present<L: Layout, W: Lanes>(
+pub(super) fn first_present<L: Layout, W: Lanes>(
     lanes: W,
     view: &SceneView<L>,
     ray: &mut Ray,
@@ -240,7 +240,7 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     // Whether every vertex so far was an S: the camera sees this hit through mirrors and glass.
     let mut through_chain = true;
     // Whether light tracing owns the paths through the camera's first hit (see `caustic`).
-    let light_traces_first_hit = view.method.traces_light() && !view.masked;
+    let light_traces_first_hit = view.method.traces_light();
     for depth in 0..view.max_depth {
         stats.rays += 1;
         let start = ray.origin;

@@ -40,8 +40,14 @@
 //! Not light-traced (left to the path tracer): D seen through a mirror or glass (but see
 //! `Photons` above), D deeper than
 //! the camera's first hit, glossy chains (but see `Photons`), emitting or mirror planes, the
-//! constant background, scenes with alpha masks (there `Caustics` is `Mis`), and light leaving
-//! an emitter inside tinted glass is not attenuated before its first hit.
+//! constant background, and light leaving an emitter inside tinted glass is not attenuated
+//! before its first hit.
+//!
+//! Alpha masks: light paths and their connections to the camera pass through surfaces where
+//! the masks say they are absent, as the camera's paths do (`first_present`: cut-outs always,
+//! blended surfaces with probability 1 − coverage, drawn from the light path's own numbers), and
+//! a masked emitter sends light from its present points only. The camera's first hit D is then
+//! its first present surface on both sides.
 
 mod budget;
 pub mod emit;
@@ -54,7 +60,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::integrator::{is_chain_vertex, point_error, spawn};
+use super::integrator::{first_present, is_chain_vertex, point_error, spawn};
 use super::medium::Medium;
 use super::{Cancelled, Method, SceneView, TraceStats};
 use crate::cpu::{Isa, Kernel, Lanes};
@@ -105,15 +111,14 @@ pub struct LightTracing {
 impl LightTracing {
     /// The light paths of renders of `view` at `size` and `seed` (the pilot's work added to
     /// `stats`); `None` (nothing to trace) unless the view's method is `Caustics` or
-    /// `Photons`, the scene has no alpha masks, and it has a finite surface that may be
-    /// perfect specular and a light.
+    /// `Photons` and the scene has a finite surface that may be perfect specular and a light.
     pub fn new<L: Layout>(
         view: &SceneView<L>,
         size: (u32, u32),
         seed: u64,
         stats: &mut TraceStats,
     ) -> Option<Self> {
-        if !matches!(view.method, Method::Caustics | Method::Photons) || view.masked {
+        if !matches!(view.method, Method::Caustics | Method::Photons) {
             return None;
         }
         let sources = Sources::new(
@@ -268,10 +273,18 @@ fn light_path<L: Layout, W: Lanes>(
     let mut specular = 0u32;
     loop {
         stats.rays += 1;
-        let hit = view.geometry.intersect_with(lanes, &ray, f32::INFINITY)?;
+        let start = ray.origin;
+        let hit = if view.masked {
+            lanes.out_of_line(
+                #[inline(always)]
+                |lanes| first_present(lanes, view, &mut ray, None, (sampler, 0), stats),
+            )
+        } else {
+            view.geometry.intersect_with(lanes, &ray, f32::INFINITY)
+        }?;
         let s = view.geometry.surface(&ray, &hit);
         if !medium.is_clear() {
-            beta *= medium.transmittance((s.p - ray.origin).length());
+            beta *= medium.transmittance((s.p - start).length());
         }
         // A mix's component, picked as the path tracer picks it (see `trace_path`).
         let whole = view
@@ -374,10 +387,21 @@ fn connect<L: Layout, W: Lanes>(
         return None;
     }
     stats.rays += 1;
-    if view
-        .geometry
-        .occluded_with(lanes, &Ray::new(from, span / length), length)
-    {
+    let mut ray = Ray::new(from, span / length);
+    let occluded = if view.masked {
+        lanes
+            .out_of_line(
+                #[inline(always)]
+                |lanes| {
+                    let end = Some(camera.lens);
+                    first_present(lanes, view, &mut ray, end, (sampler, 0), stats)
+                },
+            )
+            .is_some()
+    } else {
+        view.geometry.occluded_with(lanes, &ray, length)
+    };
+    if occluded {
         return None;
     }
     let value = beta * f_cos * (s.n.dot(wo).abs() / cos_in) * (camera.importance / dist2);
