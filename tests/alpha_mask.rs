@@ -236,6 +236,60 @@ fn a_masked_emitter_lights_only_from_its_present_points() {
     }
 }
 
+#[test]
+fn a_masked_emitter_seen_in_a_mirror_sends_light_paths_from_its_present_points() {
+    // A 2 × 2 emitter at the ceiling's height lights the ceiling only through a mirror below
+    // (it is edge-on to the ceiling), so under `caustics` light tracing carries all of it. A
+    // 256 × 256 checkerboard mask, half present, on an emitter of radiance 2 must send what
+    // the same emitter without a mask sends at radiance 1 (each ceiling point sees the
+    // emitter's mirror image over thousands of texels); sending from absent points as well
+    // would double it. A Z-test of the two ceilings' means over their pixels.
+    let dir = temp_dir("alpha-emitter-mirror");
+    write_rgba(&dir, "checker.png", (256, 256), [0, 0, 0], |x, y| {
+        if (x + y) % 2 == 0 { 0 } else { 255 }
+    });
+    write_rgba(&dir, "solid.png", (2, 2), [0, 0, 0], |_, _| 255);
+    let ceiling = |texture: &str, radiance: f64| {
+        let scene = write_scene(
+            &dir,
+            "mirror.ron",
+            &format!(
+                r#"Scene(
+    camera: Camera(position: (-3, 0.2, 0), look_at: (-3, 2, 0), up: (0, 0, 1), fov: 30),
+    settings: Settings(width: 48, height: 48, max_depth: 3, background: (0, 0, 0)),
+    materials: {{
+        "ceiling": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
+        "mirror": Metal(albedo: Constant((1, 1, 1)), roughness: 0),
+        "panel": Pbr(base_color: Image(path: "{texture}"), emissive: Constant(({radiance}, {radiance}, {radiance})),
+            alpha_cutoff: 0.5),
+    }},
+    entities: [
+        Entity(material: "ceiling", shape: Quad(a: (-4, 2, -1), b: (-2, 2, -1), c: (-2, 2, 1), d: (-4, 2, 1))),
+        Entity(material: "mirror", shape: Quad(a: (-2, 0, -1.5), b: (0, 0, -1.5), c: (0, 0, 1.5), d: (-2, 0, 1.5))),
+        Entity(material: "panel", shape: Quad(a: (0, 2, -1), b: (2, 2, -1), c: (2, 2, 1), d: (0, 2, 1))),
+    ],
+)"#
+            ),
+        );
+        let r = render(&scene, with(Method::Caustics, 512), None);
+        let px: Vec<f64> = r.film().mean().iter().map(|p| f64::from(p.x)).collect();
+        let n = px.len() as f64;
+        let mean = px.iter().sum::<f64>() / n;
+        let se = (px.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+        (mean, se)
+    };
+    let (masked, se_masked) = ceiling("checker.png", 2.0);
+    let (whole, se_whole) = ceiling("solid.png", 1.0);
+    assert!(
+        whole > 0.005 && se_whole < 0.1 * whole,
+        "the ceiling is lit through the mirror: {whole} ± {se_whole}"
+    );
+    assert!(
+        (masked - whole).abs() <= 3.5 * se_masked.hypot(se_whole),
+        "masked at radiance 2: {masked} ± {se_masked}; whole at 1: {whole} ± {se_whole}"
+    );
+}
+
 /// The Cornell box (scenes/cornell.ron) with a glass ball and, if `ghosts`, two masked quads
 /// across it that are absent everywhere: one whose image has alpha 0 in every texel, one whose
 /// cutoff is above any alpha.
