@@ -133,6 +133,37 @@ fn a_mask_between_a_plane_and_the_sun_lets_through_its_open_fraction() {
     }
 }
 
+/// A scene of `tests/caustics.rs`'s mirrored-sun test, written to `dir`: a diffuse ceiling
+/// (ρ = 0.5, y = 2, x ∈ [−4, −2]) seen from below, a perfect mirror at y = 0 (x ∈ [−2, 0]),
+/// black background, paths of 3 rays; with `settings`, `materials` and `entities` added.
+fn ceiling_over_a_mirror(
+    dir: &Path,
+    settings: &str,
+    materials: &str,
+    entities: &str,
+) -> std::path::PathBuf {
+    write_scene(
+        dir,
+        "mirror.ron",
+        &format!(
+            r#"Scene(
+    camera: Camera(position: (-3, 0.2, 0), look_at: (-3, 2, 0), up: (0, 0, 1), fov: 30),
+    settings: Settings(max_depth: 3, background: (0, 0, 0), {settings}),
+    materials: {{
+        "ceiling": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
+        "mirror": Metal(albedo: Constant((1, 1, 1)), roughness: 0),
+        {materials}
+    }},
+    entities: [
+        Entity(material: "ceiling", shape: Quad(a: (-4, 2, -1), b: (-2, 2, -1), c: (-2, 2, 1), d: (-4, 2, 1))),
+        Entity(material: "mirror", shape: Quad(a: (-2, 0, -1.5), b: (0, 0, -1.5), c: (0, 0, 1.5), d: (-2, 0, 1.5))),
+        {entities}
+    ],
+)"#
+        ),
+    )
+}
+
 #[test]
 fn a_mirrored_sun_reaches_a_ceiling_through_masks_by_light_tracing() {
     // The closed-form caustic of tests/caustics.rs: a sun of irradiance E = 3 from 45° falls on
@@ -159,34 +190,18 @@ fn a_mirrored_sun_reaches_a_ceiling_through_masks_by_light_tracing() {
         } else {
             ""
         };
-        let scene = write_scene(
+        let scene = ceiling_over_a_mirror(
             &dir,
-            "caustic.ron",
+            "width: 24, height: 24, spp: 1024, sun: Sun(direction: (1, 1, 0), angular_diameter: 0.53, irradiance: 3.0, \
+             colour: (1, 1, 1))",
+            r#""pane": Pbr(base_color: Image(path: "open.png"), alpha_cutoff: 0.5),
+               "grille": Pbr(base_color: Image(path: "checker.png"), alpha_cutoff: 0.5),"#,
             &format!(
-                r#"Scene(
-    camera: Camera(position: (-3, 0.2, 0), look_at: (-3, 2, 0), up: (0, 0, 1), fov: 30),
-    settings: Settings(width: 24, height: 24, spp: 1024, max_depth: 3, background: (0, 0, 0),
-        sun: Sun(direction: (1, 1, 0), angular_diameter: 0.53, irradiance: 3.0, colour: (1, 1, 1))),
-    materials: {{
-        "ceiling": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
-        "mirror": Metal(albedo: Constant((1, 1, 1)), roughness: 0),
-        "pane": Pbr(base_color: Image(path: "open.png"), alpha_cutoff: 0.5),
-        "grille": Pbr(base_color: Image(path: "checker.png"), alpha_cutoff: 0.5),
-    }},
-    entities: [
-        Entity(material: "ceiling", shape: Quad(a: (-4, 2, -1), b: (-2, 2, -1), c: (-2, 2, 1), d: (-4, 2, 1))),
-        Entity(material: "mirror", shape: Quad(a: (-2, 0, -1.5), b: (0, 0, -1.5), c: (0, 0, 1.5), d: (-2, 0, 1.5))),
-        Entity(material: "pane", shape: Quad(a: (-4.5, 1.5, -1.5), b: (-1.5, 1.5, -1.5), c: (-1.5, 1.5, 1.5), d: (-4.5, 1.5, 1.5))),
-        {grille}
-    ],
-)"#
+                "Entity(material: \"pane\", shape: Quad(a: (-4.5, 1.5, -1.5), b: (-1.5, 1.5, -1.5), \
+                 c: (-1.5, 1.5, 1.5), d: (-4.5, 1.5, 1.5))), {grille}"
             ),
         );
-        let r = render(&scene, with(Method::Caustics, 1024), None);
-        let px: Vec<f64> = r.film().mean().iter().map(|p| f64::from(p.x)).collect();
-        let n = px.len() as f64;
-        let mean = px.iter().sum::<f64>() / n;
-        let se = (px.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+        let (mean, se) = point_estimate(&render(&scene, with(Method::Caustics, 1024), None));
         let want = open * expected;
         assert!(
             (mean / want - 1.0).abs() < 0.05,
@@ -250,33 +265,16 @@ fn a_masked_emitter_seen_in_a_mirror_sends_light_paths_from_its_present_points()
     });
     write_rgba(&dir, "solid.png", (2, 2), [0, 0, 0], |_, _| 255);
     let ceiling = |texture: &str, radiance: f64| {
-        let scene = write_scene(
+        let scene = ceiling_over_a_mirror(
             &dir,
-            "mirror.ron",
+            "width: 48, height: 48",
             &format!(
-                r#"Scene(
-    camera: Camera(position: (-3, 0.2, 0), look_at: (-3, 2, 0), up: (0, 0, 1), fov: 30),
-    settings: Settings(width: 48, height: 48, max_depth: 3, background: (0, 0, 0)),
-    materials: {{
-        "ceiling": Diffuse(albedo: Constant((0.5, 0.5, 0.5))),
-        "mirror": Metal(albedo: Constant((1, 1, 1)), roughness: 0),
-        "panel": Pbr(base_color: Image(path: "{texture}"), emissive: Constant(({radiance}, {radiance}, {radiance})),
-            alpha_cutoff: 0.5),
-    }},
-    entities: [
-        Entity(material: "ceiling", shape: Quad(a: (-4, 2, -1), b: (-2, 2, -1), c: (-2, 2, 1), d: (-4, 2, 1))),
-        Entity(material: "mirror", shape: Quad(a: (-2, 0, -1.5), b: (0, 0, -1.5), c: (0, 0, 1.5), d: (-2, 0, 1.5))),
-        Entity(material: "panel", shape: Quad(a: (0, 2, -1), b: (2, 2, -1), c: (2, 2, 1), d: (0, 2, 1))),
-    ],
-)"#
+                r#""panel": Pbr(base_color: Image(path: "{texture}"),
+                   emissive: Constant(({radiance}, {radiance}, {radiance})), alpha_cutoff: 0.5),"#
             ),
+            r#"Entity(material: "panel", shape: Quad(a: (0, 2, -1), b: (2, 2, -1), c: (2, 2, 1), d: (0, 2, 1))),"#,
         );
-        let r = render(&scene, with(Method::Caustics, 512), None);
-        let px: Vec<f64> = r.film().mean().iter().map(|p| f64::from(p.x)).collect();
-        let n = px.len() as f64;
-        let mean = px.iter().sum::<f64>() / n;
-        let se = (px.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
-        (mean, se)
+        point_estimate(&render(&scene, with(Method::Caustics, 512), None))
     };
     let (masked, se_masked) = ceiling("checker.png", 2.0);
     let (whole, se_whole) = ceiling("solid.png", 1.0);
