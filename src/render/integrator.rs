@@ -114,10 +114,10 @@ pub fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
 /// `dimension` of `sampler` at the first of them: `u < c` keeps the surface, else the ray passes
 /// and `(u − c) / (1 − c)`, again uniform in [0, 1) and independent of the choice made, serves
 /// the next one. After [`MAX_PASS_THROUGHS`] the next hit counts as present. Called through
-/// [`Lanes::out_of_line`]: the masked scenes' loop stays out of the render loop, compiled for
-/// the same instructions.
+/// [`Lanes::out_of_line`] by [`closest_present`] and [`blocked`]: the masked scenes' loop stays
+/// out of the render loop, compiled for the same instructions.
 #[inline(always)]
-pub(super) fn first_present<L: Layout, W: Lanes>(
+fn first_present<L: Layout, W: Lanes>(
     lanes: W,
     view: &SceneView<L>,
     ray: &mut Ray,
@@ -162,6 +162,53 @@ pub(super) fn first_present<L: Layout, W: Lanes>(
         stats.rays += 1;
     }
     view.geometry.intersect_with(lanes, ray, t_max)
+}
+
+/// The first hit of a surface that is present along `ray`: in a scene with alpha masks
+/// [`first_present`] (without end, out of line, `ray` left as the segment that found the hit,
+/// blended surfaces decided from `dimension` of `sampler`), else the closest hit. The one way a
+/// camera path's or a light path's ray finds its next vertex.
+#[inline(always)]
+pub(super) fn closest_present<L: Layout, W: Lanes>(
+    lanes: W,
+    view: &SceneView<L>,
+    ray: &mut Ray,
+    (sampler, dimension): (&mut impl Sampler, u32),
+    stats: &mut TraceStats,
+) -> Option<Hit> {
+    if view.masked {
+        lanes.out_of_line(
+            #[inline(always)]
+            |lanes| first_present(lanes, view, ray, None, (sampler, dimension), stats),
+        )
+    } else {
+        view.geometry.intersect_with(lanes, ray, f32::INFINITY)
+    }
+}
+
+/// Whether a present surface blocks the segment of `ray` of `length` towards `end` (a point;
+/// `None`: a direction without end): [`first_present`] in a scene with alpha masks, else an
+/// occlusion query. The one way a shadow ray or a light path's connection to the camera is
+/// tested.
+#[inline(always)]
+pub(super) fn blocked<L: Layout, W: Lanes>(
+    lanes: W,
+    view: &SceneView<L>,
+    mut ray: Ray,
+    (length, end): (f32, Option<Vec3>),
+    (sampler, dimension): (&mut impl Sampler, u32),
+    stats: &mut TraceStats,
+) -> bool {
+    if view.masked {
+        lanes
+            .out_of_line(
+                #[inline(always)]
+                |lanes| first_present(lanes, view, &mut ray, end, (sampler, dimension), stats),
+            )
+            .is_some()
+    } else {
+        view.geometry.occluded_with(lanes, &ray, length)
+    }
 }
 
 /// Radiance arriving along `ray`, by path tracing with the view's [`Method`]:
@@ -244,17 +291,8 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
     for depth in 0..view.max_depth {
         stats.rays += 1;
         let start = ray.origin;
-        let found = if view.masked {
-            lanes.out_of_line(
-                #[inline(always)]
-                |lanes| {
-                    let transparency = TRANSPARENCY_DIMENSION + 2 * depth;
-                    first_present(lanes, view, &mut ray, None, (sampler, transparency), stats)
-                },
-            )
-        } else {
-            view.geometry.intersect_with(lanes, &ray, f32::INFINITY)
-        };
+        let transparency = TRANSPARENCY_DIMENSION + 2 * depth;
+        let found = closest_present(lanes, view, &mut ray, (&mut *sampler, transparency), stats);
         let Some(hit) = found else {
             let mut seen = view.background;
             let mut light = view.background;
@@ -442,19 +480,12 @@ fn direct_light<L: Layout, W: Lanes>(
             }
             let wi = to_light / dist2.sqrt();
             let emitter = &view.materials[light.material as usize];
-            // A point where the emitter's mask says it is absent sends nothing, a blended one
-            // its coverage's share (what BSDF-sampled rays, passing with probability
-            // 1 − coverage, find on average): the light's density stays that of its whole
-            // surface.
-            let coverage = if view.masked {
-                emitter.coverage(light.uv)
+            // Only a masked scene has emitters that are absent in places.
+            let emitted = if view.masked {
+                emitter.emitted_where_present(wi, light.n, light.uv)
             } else {
-                1.0
+                emitter.emitted(wi, light.n, light.uv)
             };
-            if coverage == 0.0 {
-                return Vec3::ZERO;
-            }
-            let emitted = emitter.emitted(wi, light.n, light.uv) * coverage;
             // Shadow ray between the two offset points, so neither surface can block it.
             let from = spawn(s.p, s.n, err, wi).origin;
             let to_side = if wi.dot(light.n) < 0.0 {
@@ -513,28 +544,16 @@ fn direct_light<L: Layout, W: Lanes>(
         return Vec3::ZERO;
     }
     stats.rays += 1;
-    let (mut shadow_ray, length, end) = shadow;
-    let occluded = if view.masked {
-        lanes
-            .out_of_line(
-                #[inline(always)]
-                |lanes| {
-                    let transparency = TRANSPARENCY_DIMENSION + 2 * bounce + 1;
-                    first_present(
-                        lanes,
-                        view,
-                        &mut shadow_ray,
-                        end,
-                        (sampler, transparency),
-                        stats,
-                    )
-                },
-            )
-            .is_some()
-    } else {
-        view.geometry.occluded_with(lanes, &shadow_ray, length)
-    };
-    if occluded {
+    let (shadow_ray, length, end) = shadow;
+    let transparency = TRANSPARENCY_DIMENSION + 2 * bounce + 1;
+    if blocked(
+        lanes,
+        view,
+        shadow_ray,
+        (length, end),
+        (&mut *sampler, transparency),
+        stats,
+    ) {
         return Vec3::ZERO;
     }
     let weight = if matches!(

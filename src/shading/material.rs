@@ -268,6 +268,22 @@ impl Material {
         self.emission().map_or(Vec3::ZERO, |e| e.radiance(d, n, uv))
     }
 
+    /// Radiance a point sampled on this emitter's whole surface sends towards a ray along `d`
+    /// ([`Material::emitted`]), times the point's [`Material::coverage`]: nothing where its
+    /// alpha mask says it is absent, a blended point its coverage's share (what rays passing it
+    /// with probability 1 − coverage find on average), so that the light's density stays that
+    /// of its whole surface. The one rule light samples and light paths follow.
+    #[inline]
+    pub fn emitted_where_present(&self, d: Vec3, n: Vec3, uv: impl Into<TexCoords>) -> Vec3 {
+        let uv = uv.into();
+        let coverage = self.coverage(uv);
+        if coverage == 0.0 {
+            Vec3::ZERO
+        } else {
+            self.emitted(d, n, uv) * coverage
+        }
+    }
+
     /// Whether any lookup of the material ([`Material::bsdf`], [`Material::emitted`],
     /// [`Material::coverage`]) reads texture coordinates: false when every texture is a
     /// constant and there is no normal map nor alpha mask. A hit on a material that reads none

@@ -285,9 +285,7 @@ impl Sources {
                     .for_each_met(on.p, direction, Reach::Ray, j, |k| {
                         sum += term(k, self.targets.get(k));
                     });
-                // A masked emitter sends light from its present points only (its coverage's
-                // share where blended), as the path tracer's light samples weigh it.
-                let emitted = material.emitted(-direction, on.n, on.uv) * material.coverage(on.uv);
+                let emitted = material.emitted_where_present(-direction, on.n, on.uv);
                 let density = pmf * sum;
                 let beta = emitted * (on.n.dot(direction).abs() / density);
                 (density > 0.0 && emitted != Vec3::ZERO).then(|| Emitted {

@@ -44,9 +44,9 @@
 //! before its first hit.
 //!
 //! Alpha masks: light paths and their connections to the camera pass through surfaces where
-//! the masks say they are absent, as the camera's paths do (`first_present`: cut-outs always,
-//! blended surfaces with probability 1 − coverage, drawn from the light path's own numbers), and
-//! a masked emitter sends light from its present points only. The camera's first hit D is then
+//! the masks say they are absent, as the camera's paths do (`closest_present`, `blocked`:
+//! cut-outs always, blended surfaces with probability 1 − coverage, drawn from the light path's
+//! own numbers), and a masked emitter sends light from its present points only. The camera's first hit D is then
 //! its first present surface on both sides.
 
 mod budget;
@@ -60,7 +60,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::integrator::{first_present, is_chain_vertex, point_error, spawn};
+use super::integrator::{blocked, closest_present, is_chain_vertex, point_error, spawn};
 use super::medium::Medium;
 use super::{Cancelled, Method, SceneView, TraceStats};
 use crate::cpu::{Isa, Kernel, Lanes};
@@ -274,14 +274,8 @@ fn light_path<L: Layout, W: Lanes>(
     loop {
         stats.rays += 1;
         let start = ray.origin;
-        let hit = if view.masked {
-            lanes.out_of_line(
-                #[inline(always)]
-                |lanes| first_present(lanes, view, &mut ray, None, (sampler, 0), stats),
-            )
-        } else {
-            view.geometry.intersect_with(lanes, &ray, f32::INFINITY)
-        }?;
+        // An `Rng` has no dimensions: any will do.
+        let hit = closest_present(lanes, view, &mut ray, (&mut *sampler, 0), stats)?;
         let s = view.geometry.surface(&ray, &hit);
         if !medium.is_clear() {
             beta *= medium.transmittance((s.p - start).length());
@@ -387,21 +381,9 @@ fn connect<L: Layout, W: Lanes>(
         return None;
     }
     stats.rays += 1;
-    let mut ray = Ray::new(from, span / length);
-    let occluded = if view.masked {
-        lanes
-            .out_of_line(
-                #[inline(always)]
-                |lanes| {
-                    let end = Some(camera.lens);
-                    first_present(lanes, view, &mut ray, end, (sampler, 0), stats)
-                },
-            )
-            .is_some()
-    } else {
-        view.geometry.occluded_with(lanes, &ray, length)
-    };
-    if occluded {
+    let ray = Ray::new(from, span / length);
+    let end = (length, Some(camera.lens));
+    if blocked(lanes, view, ray, end, (&mut *sampler, 0), stats) {
         return None;
     }
     let value = beta * f_cos * (s.n.dot(wo).abs() / cos_in) * (camera.importance / dist2);
