@@ -72,8 +72,8 @@ impl Camera {
 
     /// The ray through film position `(x, y)` (as [`Camera::ray`]) from lens position `u` ∈
     /// [0, 1)², mapped onto the lens disk (concentric mapping); the pinhole ray if there is no
-    /// lens.
-    #[inline]
+    /// lens. Always inlined, as [`crate::sky::Sun::sample`] is: once per camera ray.
+    #[inline(always)]
     pub fn lens_ray(&self, x: f32, y: f32, width: u32, height: u32, u: Vec2) -> Ray {
         let pinhole = self.ray(x, y, width, height);
         if !self.has_lens() {

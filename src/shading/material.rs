@@ -444,9 +444,13 @@ impl Material {
                     }
                 };
                 let specular = Specular::new(here.specular, here.specular_color);
+                // Seen from the ray's side of the shading normal, as the lobe's evaluations
+                // and samples will see it ([`Lobe`]).
+                let facing = if d.dot(ns) < 0.0 { ns } else { -ns };
                 let base = Pbr::new(base_color.eval(uv), m, r)
                     .with_specular(specular)
-                    .with_sheen(sheen);
+                    .with_sheen(sheen)
+                    .viewed((-d).dot(facing));
                 let lobe = if coated {
                     Lobe::Coated(Coated {
                         base,

@@ -70,6 +70,20 @@ pub struct Pbr {
     pub specular: Specular,
     /// The sheen layer over it all (`KHR_materials_sheen`; [`Sheen::NONE`]: none).
     pub sheen: Sheen,
+    /// What one view fixes, computed once ([`Pbr::viewed`]); `None`: nothing kept.
+    view: Option<View>,
+}
+
+/// What the view at cosine `cos_o` fixes of a [`Pbr`]: the tables' row for its α and the
+/// channel sums of its lobes' albedos ([`Pbr::albedo_sums`]), from which the probability of
+/// sampling the specular lobe and the albedo estimate follow. A path vertex evaluates the BRDF
+/// for its light sample and samples it, each more than once where a shading normal folds the
+/// lobe ([`super::bsdf`]), always from the same view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct View {
+    cos_o: f32,
+    row: AlbedoRow,
+    sums: (f32, f32),
 }
 
 /// A sampled direction with its weight `f·cos / pdf` and its density.
@@ -108,17 +122,53 @@ impl Pbr {
             alpha: alpha_from_roughness(roughness),
             specular: Specular::PLAIN,
             sheen: Sheen::NONE,
+            view: None,
         }
     }
 
     /// This BRDF with the dielectric specular lobe `specular`.
     pub fn with_specular(self, specular: Specular) -> Self {
-        Self { specular, ..self }
+        Self {
+            specular,
+            view: None,
+            ..self
+        }
     }
 
     /// This BRDF under the sheen layer `sheen`.
     pub fn with_sheen(self, sheen: Sheen) -> Self {
-        Self { sheen, ..self }
+        Self {
+            sheen,
+            view: None,
+            ..self
+        }
+    }
+
+    /// This BRDF with what a view at cosine `cos_o` (`wo · n` of later calls) fixes computed
+    /// once ([`View`]): the evaluations and samples from that view read it instead of computing
+    /// it again (the same bits; any other view computes its own).
+    #[inline]
+    pub fn viewed(self, cos_o: f32) -> Self {
+        let row = AlbedoRow::new(self.alpha);
+        let sums = self.albedo_sums(&row, cos_o);
+        Self {
+            view: Some(View { cos_o, row, sums }),
+            ..self
+        }
+    }
+
+    /// The tables' row for α and the albedo sums at view cosine `cos_o`: the kept ones if the
+    /// view is the one [`Pbr::viewed`] was given, else computed.
+    #[inline(always)]
+    fn row_and_sums(&self, cos_o: f32) -> (AlbedoRow, (f32, f32)) {
+        match self.view {
+            Some(v) if v.cos_o.to_bits() == cos_o.to_bits() => (v.row, v.sums),
+            _ => {
+                let row = AlbedoRow::new(self.alpha);
+                let sums = self.albedo_sums(&row, cos_o);
+                (row, sums)
+            }
+        }
     }
 
     /// Whether the specular lobe is a perfect mirror (α below [`super::microfacet::SPECULAR_ALPHA`]).
@@ -157,18 +207,7 @@ impl Pbr {
     /// 1 for a white smooth conductor or a black base.
     #[inline]
     pub fn specular_probability(&self, cos_o: f32) -> f32 {
-        self.probability(&AlbedoRow::new(self.alpha), cos_o)
-    }
-
-    /// [`Pbr::specular_probability`] with the tables' row already found.
-    #[inline]
-    fn probability(&self, row: &AlbedoRow, cos_o: f32) -> f32 {
-        let (spec, rest) = self.albedo_sums(row, cos_o);
-        if rest <= 0.0 || !rest.is_finite() {
-            1.0
-        } else {
-            (spec / (spec + rest)).clamp(0.0, 1.0)
-        }
+        probability(self.row_and_sums(cos_o).1)
     }
 
     /// An estimate of the directional albedo at view cosine `cos_o`, the mean over the
@@ -187,7 +226,7 @@ impl Pbr {
     /// [`Pbr::albedo_estimate`] of the BRDF under the sheen.
     #[inline]
     fn base_albedo_estimate(&self, cos_o: f32) -> f32 {
-        let (spec, rest) = self.albedo_sums(&AlbedoRow::new(self.alpha), cos_o);
+        let (spec, rest) = self.row_and_sums(cos_o).1;
         (spec + rest) / 3.0
     }
 
@@ -264,8 +303,8 @@ impl Pbr {
         if cos_o <= 0.0 || cos_i <= 0.0 {
             return (Vec3::ZERO, 0.0);
         }
-        let row = AlbedoRow::new(self.alpha);
-        let p_spec = self.probability(&row, cos_o);
+        let (row, sums) = self.row_and_sums(cos_o);
+        let p_spec = probability(sums);
         let cosine_lobes = self.cosine_lobes(&row, cos_o, cos_i) * cos_i;
         let pdf_cosine = (1.0 - p_spec) * cos_i * FRAC_1_PI;
         if self.is_smooth() {
@@ -383,6 +422,18 @@ impl Pbr {
     }
 }
 
+/// The probability of sampling the specular lobe from the albedo sums of
+/// [`Pbr::albedo_sums`]: its share of the lobes' albedos (mean over the channels), 1 where the
+/// other lobes reflect nothing.
+#[inline]
+fn probability((spec, rest): (f32, f32)) -> f32 {
+    if rest <= 0.0 || !rest.is_finite() {
+        1.0
+    } else {
+        (spec / (spec + rest)).clamp(0.0, 1.0)
+    }
+}
+
 /// How the sheen layer splits the light from one view ([`Pbr::sheen_split`]): the white lobe's
 /// tabulated albedo E_sh(μo), the means over the channels of what the sheen reflects and of the
 /// base's albedo (before scaling), the base's weight
@@ -445,6 +496,51 @@ mod tests {
             }
         }
         sum * (1.0 / nt as f64) * (2.0 * PI / nphi as f64)
+    }
+
+    #[test]
+    fn a_viewed_brdf_evaluates_and_samples_as_the_brdf_itself() {
+        // What `viewed` keeps is read only for its own view, and is what the view computes:
+        // every evaluation and sample, from that view or another, is the same bits. A sheen and
+        // a tinted specular lobe take the other paths through the albedos.
+        let mut rng = Rng::new(8, 3);
+        let layered = [
+            Pbr::new(Vec3::new(0.9, 0.5, 0.2), 0.3, 0.4)
+                .with_sheen(Sheen::new(Vec3::new(0.8, 0.7, 0.9), 0.5)),
+            Pbr::new(Vec3::new(0.9, 0.5, 0.2), 0.3, 0.4)
+                .with_specular(Specular::new(0.7, Vec3::new(1.0, 0.6, 0.4))),
+        ];
+        for m in materials().into_iter().chain(layered) {
+            for _ in 0..50 {
+                let wo = dir(1.5 * rng.next_f32(), 6.0 * rng.next_f32());
+                let viewed = m.viewed(wo.dot(Vec3::Z));
+                let elsewhere = m.viewed(rng.next_f32());
+                for _ in 0..20 {
+                    let wi = dir(1.5 * rng.next_f32(), 6.0 * rng.next_f32());
+                    let want = m.eval(wo, wi, Vec3::Z);
+                    for got in [
+                        viewed.eval(wo, wi, Vec3::Z),
+                        elsewhere.eval(wo, wi, Vec3::Z),
+                    ] {
+                        assert_eq!(
+                            got.0.to_array().map(f32::to_bits),
+                            want.0.to_array().map(f32::to_bits)
+                        );
+                        assert_eq!(got.1.to_bits(), want.1.to_bits(), "{m:?} {wo} {wi}");
+                    }
+                    let u = Vec2::new(rng.next_f32(), rng.next_f32());
+                    assert_eq!(viewed.sample(wo, Vec3::Z, u), m.sample(wo, Vec3::Z, u));
+                }
+                assert_eq!(
+                    viewed.specular_probability(wo.z).to_bits(),
+                    m.specular_probability(wo.z).to_bits()
+                );
+                assert_eq!(
+                    viewed.albedo_estimate(wo.z).to_bits(),
+                    m.albedo_estimate(wo.z).to_bits()
+                );
+            }
+        }
     }
 
     #[test]

@@ -85,8 +85,10 @@ impl Sun {
         }
     }
 
-    /// A unit direction uniform in the disk's cone.
-    #[inline]
+    /// A unit direction uniform in the disk's cone. Always inlined: it runs once per light
+    /// sample of a sunlit scene, and inlined into the render loop it is compiled for the
+    /// loop's instructions (see [`crate::cpu`]), not the baseline's.
+    #[inline(always)]
     pub fn sample(&self, u: Vec2) -> Vec3 {
         // cos θ = 1 − u·(1 − cos max), with sin θ from the product form, exact near θ = 0.
         let a = u.x * self.one_minus_cos;
