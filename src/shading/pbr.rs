@@ -145,7 +145,7 @@ impl Pbr {
     }
 
     /// This BRDF with what a view at cosine `cos_o` (`wo · n` of later calls) fixes computed
-    /// once ([`View`]): the evaluations and samples from that view read it instead of computing
+    /// once: the evaluations and samples from that view read it instead of computing
     /// it again (the same bits; any other view computes its own).
     #[inline]
     pub fn viewed(self, cos_o: f32) -> Self {
