@@ -146,7 +146,8 @@ impl Pbr {
 
     /// This BRDF with what a view at cosine `cos_o` (`wo · n` of later calls) fixes computed
     /// once: the evaluations and samples from that view read it instead of computing
-    /// it again (the same bits; any other view computes its own).
+    /// it again (the same bits; any other view computes its own). Call it last: what it keeps
+    /// does not follow a field changed afterwards (`with_specular` and `with_sheen` drop it).
     #[inline]
     pub fn viewed(self, cos_o: f32) -> Self {
         let row = AlbedoRow::new(self.alpha);
