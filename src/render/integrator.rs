@@ -21,6 +21,7 @@ use crate::geometry::triangle::triangle_point_error;
 use crate::lights::Sampled;
 use crate::shading::bsdf::Bsdf;
 use crate::shading::sampler::Sampler;
+use crate::shading::sampling::facing;
 
 /// Bounces after which Russian roulette may end a path.
 const ROULETTE_DEPTH: u32 = 3;
@@ -338,7 +339,7 @@ pub(super) fn trace_path_with<L: Layout, S: Sampler, W: Lanes>(
             let n = bsdf.shading_normal();
             features = Some(FeatureSample {
                 albedo: feature_albedo(throughput / eta_scale * bsdf.feature_albedo()),
-                normal: if ray.direction.dot(n) < 0.0 { n } else { -n },
+                normal: facing(ray.direction, n),
             });
         }
         let specular = is_chain_vertex(&bsdf, hit.kind, view.method);

@@ -28,7 +28,7 @@ use super::microfacet::is_narrow_alpha;
 use super::pbr::Pbr;
 use super::rough_dielectric::RoughDielectric;
 use super::sampler::Sampler;
-use super::sampling::reflect;
+use super::sampling::{facing, reflect};
 use super::scatter::Scatter;
 use super::texture::TexCoords;
 
@@ -65,11 +65,11 @@ impl Lobe {
             Self::Conductor(l) => l.eval(d, wi, n),
             Self::RoughDielectric(l) => Some(l.eval(d, wi, n)),
             Self::MetallicRoughness(l) => {
-                let facing = if d.dot(n) < 0.0 { n } else { -n };
+                let facing = facing(d, n);
                 (!l.is_delta()).then(|| l.eval(-d, wi, facing))
             }
             Self::Coated(l) => {
-                let facing = if d.dot(n) < 0.0 { n } else { -n };
+                let facing = facing(d, n);
                 (!l.is_delta()).then(|| l.eval(-d, wi, facing))
             }
             Self::None | Self::Fuzzed(_) | Self::Dielectric(_) => None,
@@ -87,7 +87,7 @@ impl Lobe {
             Self::Dielectric(l) => Some(l.sample(d, n, sampler)),
             Self::RoughDielectric(l) => l.sample(d, n, sampler),
             Self::MetallicRoughness(l) => {
-                let facing = if d.dot(n) < 0.0 { n } else { -n };
+                let facing = facing(d, n);
                 let s = l.sample(-d, facing, sampler.next_2d())?;
                 Some(Scatter {
                     direction: s.wi,
@@ -97,7 +97,7 @@ impl Lobe {
                 })
             }
             Self::Coated(l) => {
-                let facing = if d.dot(n) < 0.0 { n } else { -n };
+                let facing = facing(d, n);
                 let s = l.sample(-d, facing, sampler.next_2d())?;
                 Some(Scatter {
                     direction: s.wi,
@@ -258,11 +258,7 @@ impl<'a> Bsdf<'a> {
     /// The geometric normal on the side the ray arrives from.
     #[inline]
     fn front(&self) -> Vec3 {
-        if self.d.dot(self.n) < 0.0 {
-            self.n
-        } else {
-            -self.n
-        }
+        facing(self.d, self.n)
     }
 
     /// BSDF times the cosine at the surface, and the density [`Bsdf::sample`] would give, for

@@ -24,7 +24,7 @@ use glam::{Vec2, Vec3};
 use super::energy::{AlbedoRow, compensation, multiple_scattering_fresnel};
 use super::microfacet::{Terms, is_specular_alpha, sample_visible_normal, schlick_rgb};
 use super::sampler::Sampler;
-use super::sampling::{Frame, cosine_hemisphere, reflect};
+use super::sampling::{Frame, cosine_hemisphere, facing, reflect};
 use super::scatter::Scatter;
 
 /// A GGX conductor at one surface point (its texture already looked up).
@@ -66,7 +66,7 @@ impl Conductor {
         if self.is_specular() {
             return None;
         }
-        let facing = if d.dot(n) < 0.0 { n } else { -n };
+        let facing = facing(d, n);
         let wo = -d;
         let (cos_o, cos_i) = (wo.dot(facing), wi.dot(facing));
         if cos_i <= 0.0 || cos_o <= 0.0 {
@@ -102,7 +102,7 @@ impl Conductor {
     /// a smooth lobe (no sample); `None` if it points below the surface.
     #[inline(always)]
     pub fn sample(&self, d: Vec3, n: Vec3, sampler: &mut impl Sampler) -> Option<Scatter> {
-        let facing = if d.dot(n) < 0.0 { n } else { -n };
+        let facing = facing(d, n);
         let wo = -d;
         let cos_o = wo.dot(facing);
         if self.is_specular() {

@@ -12,7 +12,7 @@ use glam::Vec3;
 
 use super::fresnel::fresnel_dielectric;
 use super::sampler::Sampler;
-use super::sampling::reflect;
+use super::sampling::{facing, reflect};
 use super::scatter::Scatter;
 
 /// Refraction of unit `d` through a surface with unit normal `n` facing against `d`, with relative
@@ -41,7 +41,7 @@ impl Dielectric {
     /// `n` (pointing outside), chosen by the exact Fresnel reflectance from one 1D sample.
     #[inline(always)]
     pub fn sample(&self, d: Vec3, n: Vec3, sampler: &mut impl Sampler) -> Scatter {
-        let facing = if d.dot(n) < 0.0 { n } else { -n };
+        let facing = facing(d, n);
         let entering = d.dot(n) < 0.0;
         let (n1, n2) = if entering {
             (1.0, self.ior)

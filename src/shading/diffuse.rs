@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::sampler::Sampler;
-use super::sampling::{Frame, cosine_hemisphere};
+use super::sampling::{Frame, cosine_hemisphere, facing};
 use super::scatter::Scatter;
 
 /// A Lambertian reflector at one surface point (its texture already looked up).
@@ -19,7 +19,7 @@ impl Diffuse {
     /// normal `n` (either side): zero below the surface on the ray's side.
     #[inline(always)]
     pub fn eval(&self, d: Vec3, wi: Vec3, n: Vec3) -> (Vec3, f32) {
-        let facing = if d.dot(n) < 0.0 { n } else { -n };
+        let facing = facing(d, n);
         let cos = wi.dot(facing);
         if cos <= 0.0 {
             return (Vec3::ZERO, 0.0);
@@ -32,7 +32,7 @@ impl Diffuse {
     /// sample); the weight f·cos/pdf is the albedo.
     #[inline(always)]
     pub fn sample(&self, d: Vec3, n: Vec3, sampler: &mut impl Sampler) -> Scatter {
-        let facing = if d.dot(n) < 0.0 { n } else { -n };
+        let facing = facing(d, n);
         let local = cosine_hemisphere(sampler.next_2d());
         let direction = Frame::from_normal(facing).to_world(local).normalize();
         Scatter {

@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use super::sampler::Sampler;
-use super::sampling::{reflect, uniform_ball};
+use super::sampling::{facing, reflect, uniform_ball};
 use super::scatter::Scatter;
 
 /// A fuzzed mirror at one surface point (its texture already looked up).
@@ -22,7 +22,7 @@ impl Fuzzed {
     /// from one 2D and one 1D sample; `None` if it points below the surface (absorbed).
     #[inline(always)]
     pub fn sample(&self, d: Vec3, n: Vec3, sampler: &mut impl Sampler) -> Option<Scatter> {
-        let facing = if d.dot(n) < 0.0 { n } else { -n };
+        let facing = facing(d, n);
         let u = sampler.next_2d();
         let fuzz = uniform_ball(u.extend(sampler.next_1d()));
         let r = reflect(d, facing) + self.roughness * fuzz;

@@ -18,6 +18,7 @@ use super::microfacet::{alpha_from_roughness, is_specular_alpha};
 use super::pbr::Pbr;
 use super::rough_dielectric::RoughDielectric;
 use super::sampler::Sampler;
+use super::sampling::facing;
 use super::scatter::Scatter;
 use super::sheen::Sheen;
 use super::specular::Specular;
@@ -446,7 +447,7 @@ impl Material {
                 let specular = Specular::new(here.specular, here.specular_color);
                 // Seen from the ray's side of the shading normal, as the lobe's evaluations
                 // and samples will see it ([`Lobe`]).
-                let facing = if d.dot(ns) < 0.0 { ns } else { -ns };
+                let facing = facing(d, ns);
                 let base = Pbr::new(base_color.eval(uv), m, r)
                     .with_specular(specular)
                     .with_sheen(sheen)

@@ -80,6 +80,13 @@ pub fn uniform_hemisphere(u: Vec2) -> Vec3 {
     Vec3::new(d.x, d.y, z)
 }
 
+/// The unit normal `n` or its opposite, whichever faces the side a ray along `d` arrives from
+/// (`-n` for a ray along a surface, `d · n = 0`): the one rule every lobe and the BSDF use.
+#[inline(always)]
+pub fn facing(d: Vec3, n: Vec3) -> Vec3 {
+    if d.dot(n) < 0.0 { n } else { -n }
+}
+
 /// Mirror reflection of `d` about `n`.
 #[inline]
 pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
