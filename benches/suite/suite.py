@@ -244,8 +244,8 @@ def cycles_retime(args, export, work, size, pts, guiding):
     their order."""
     out = run_cycles(args, export, work, size, guiding,
                      ["--spp-list", ",".join(str(p["spp"]) for p in pts)])
-    times = [json.loads(line)["seconds"] for line in out.splitlines()
-             if line.startswith("{") and "notes" not in line]
+    records = [json.loads(line) for line in out.splitlines() if line.startswith("{")]
+    times = [r["seconds"] for r in records if "seconds" in r and not r.get("denoised")]
     if len(times) != len(pts):
         sys.exit("cycles gave %d times for %d renders" % (len(times), len(pts)))
     return times
