@@ -99,8 +99,8 @@ pub fn point_error<L: Layout>(geometry: &Geometry<L>, hit: &Hit, p: Vec3) -> Vec
 /// side it leaves to: the one way the integrator starts a bounce or a shadow ray.
 #[inline(always)]
 pub fn spawn(p: Vec3, n: Vec3, err: Vec3, dir: Vec3) -> Ray {
-    let side = if dir.dot(n) > 0.0 { n } else { -n };
-    Ray::new(spawn_origin(p, side, err), dir)
+    // The side a ray along `dir` leaves to is the one a ray along `-dir` arrives from.
+    Ray::new(spawn_origin(p, facing(-dir, n), err), dir)
 }
 
 /// The first hit of a surface that is present along `ray`, up to `end` (a shadow ray's end
@@ -489,12 +489,7 @@ fn direct_light<L: Layout, W: Lanes>(
             };
             // Shadow ray between the two offset points, so neither surface can block it.
             let from = spawn(s.p, s.n, err, wi).origin;
-            let to_side = if wi.dot(light.n) < 0.0 {
-                light.n
-            } else {
-                -light.n
-            };
-            let end = spawn_origin(light.p, to_side, light.err);
+            let end = spawn_origin(light.p, facing(wi, light.n), light.err);
             let span = end - from;
             let length = span.length();
             if length.is_nan() || length <= 0.0 {

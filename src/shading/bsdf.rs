@@ -33,7 +33,7 @@ use super::scatter::Scatter;
 use super::texture::TexCoords;
 
 /// The scattering part of a BSDF at one point: one lobe, its textures already looked up.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug)]
 pub enum Lobe {
     /// Scatters nothing (a pure emitter).
     None,

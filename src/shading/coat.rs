@@ -31,7 +31,7 @@ use super::sampling::Frame;
 use super::specular::DIELECTRIC_IOR;
 
 /// A clear coat over a metallic–roughness BRDF at one surface point (textures looked up).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug)]
 pub struct Coated {
     /// The BRDF under the coat.
     pub base: Pbr,

@@ -58,7 +58,7 @@ use super::sheen::{Sheen, UNIFORM_PDF};
 use super::specular::Specular;
 
 /// The metallic–roughness BRDF at one surface point (textures already looked up).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug)]
 pub struct Pbr {
     /// Base colour: the conductor's F0, the dielectric's diffuse reflectance.
     pub base_color: Vec3,
@@ -70,7 +70,8 @@ pub struct Pbr {
     pub specular: Specular,
     /// The sheen layer over it all (`KHR_materials_sheen`; [`Sheen::NONE`]: none).
     pub sheen: Sheen,
-    /// What one view fixes, computed once ([`Pbr::viewed`]); `None`: nothing kept.
+    /// What one view fixes, computed once ([`Pbr::viewed`]); `None`: nothing kept. It is why
+    /// `Pbr` has no `PartialEq`: the same BRDF may keep different views.
     view: Option<View>,
 }
 
@@ -79,7 +80,7 @@ pub struct Pbr {
 /// sampling the specular lobe and the albedo estimate follow. A path vertex evaluates the BRDF
 /// for its light sample and samples it, each more than once where a shading normal folds the
 /// lobe ([`super::bsdf`]), always from the same view.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug)]
 struct View {
     cos_o: f32,
     row: AlbedoRow,
